@@ -1,0 +1,171 @@
+//! Batch evaluators behind one interface.
+//!
+//! An evaluator takes a scenario and a batch of designs (one GA generation) and returns one
+//! result per design. The particle engines (`listing`, `cpu`) differ only in how they follow
+//! particles; preparation (validity, profile, fill, launch points), aggregation and the
+//! performance model are shared, so both engines see the same problem.
+
+pub mod cpu;
+pub mod kernel;
+pub mod listing;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::model::collision::Restitution;
+use crate::model::outcome::{summarise, ParticleEnd};
+use crate::model::performance::{performance, Performance};
+use crate::model::rng::seed_word;
+use crate::model::{prepare, Design, Invalid, PhysicsMode, Prepared, Scenario, SimOutcome};
+
+/// Scenario-wide constants every particle engine needs, derived once per batch.
+#[derive(Clone, Debug)]
+pub struct Context {
+    pub mode: PhysicsMode,
+    pub g: f64,
+    /// 0 = vacuum.
+    pub k_drag: f64,
+    pub restitution: Restitution<f64>,
+    pub randomise: u32,
+    pub band: f64,
+    pub seed: u64,
+    pub seed_word: u32,
+    pub rest_threshold: f64,
+    pub max_bounces: u32,
+}
+
+impl Context {
+    pub fn new(s: &Scenario) -> Self {
+        let randomise = match (s.sim.randomise, s.mode) {
+            (false, _) => kernel::RANDOMISE_OFF,
+            (true, PhysicsMode::Listing) => kernel::RANDOMISE_FIRST_LAUNCH,
+            (true, PhysicsMode::Physical) => kernel::RANDOMISE_EVERY_LAUNCH,
+        };
+        Context {
+            mode: s.mode,
+            g: s.environment.g,
+            k_drag: s.environment.k_drag.unwrap_or(0.0),
+            restitution: Restitution::new(s.mode, s.collision.k_elastic, s.collision.mu_friction, &s.material),
+            randomise,
+            band: s.sim.random_band,
+            seed: s.sim.seed,
+            seed_word: seed_word(s.sim.seed),
+            rest_threshold: s.sim.rest_threshold,
+            max_bounces: s.sim.max_bounces,
+        }
+    }
+}
+
+/// One flight of one particle, for trajectory files and plots (global coordinates).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct FlightRecord {
+    pub particle: u32,
+    /// 0 = the launch from the fill.
+    pub bounce: u32,
+    pub from: [f64; 2],
+    pub vel: [f64; 2],
+    /// Flight time to the impact, s; 0 when nothing was hit.
+    pub t: f64,
+    /// State after this flight.
+    pub state: crate::model::ParticleState,
+}
+
+/// What a particle engine returns for one design.
+#[derive(Clone, Debug)]
+pub struct Run {
+    pub particles: Vec<ParticleEnd>,
+    pub iterations: u32,
+}
+
+/// A particle engine: follows one prepared design's particles.
+pub trait ParticleEngine: Sync {
+    fn name(&self) -> &'static str;
+    fn run(&self, prep: &Prepared, ctx: &Context, trace: Option<&mut Vec<FlightRecord>>) -> Run;
+}
+
+/// One evaluated design.
+#[derive(Clone, Debug, Serialize)]
+pub struct Evaluation {
+    pub sim: SimOutcome,
+    pub performance: Performance,
+}
+
+/// One evaluated design with its per-particle end states.
+#[derive(Clone, Debug)]
+pub struct Detailed {
+    pub prepared: Prepared,
+    pub evaluation: Evaluation,
+    pub particles: Vec<ParticleEnd>,
+    pub flights: Vec<FlightRecord>,
+}
+
+/// The interface every evaluator implements, GPU included: a whole generation per call.
+pub trait BatchEvaluator: Sync {
+    /// The backend's name, as `--engine` spells it.
+    fn backend(&self) -> &'static str;
+    fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>>;
+}
+
+/// Designs in parallel (rayon); each design's particles on one thread.
+pub fn evaluate_batch(engine: &dyn ParticleEngine, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
+    let ctx = Context::new(scenario);
+    designs
+        .par_iter()
+        .map(|d| {
+            let prep = prepare(scenario, d)?;
+            let run = engine.run(&prep, &ctx, None);
+            Ok(finish(scenario, &prep, &run))
+        })
+        .collect()
+}
+
+impl<E: ParticleEngine> BatchEvaluator for E {
+    fn backend(&self) -> &'static str {
+        ParticleEngine::name(self)
+    }
+    fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
+        evaluate_batch(self, scenario, designs)
+    }
+}
+
+fn finish(scenario: &Scenario, prep: &Prepared, run: &Run) -> Evaluation {
+    let sim = summarise(&prep.profile, prep.fill.area, &run.particles, run.iterations);
+    let performance = performance(scenario, &prep.design, sim.d_avg_m, prep.fill.area);
+    Evaluation { sim, performance }
+}
+
+/// Evaluate one design and keep every particle (and optionally every flight).
+pub fn evaluate_detailed(engine: &dyn ParticleEngine, scenario: &Scenario, design: &Design, trace: bool) -> Result<Detailed, Invalid> {
+    let ctx = Context::new(scenario);
+    let prepared = prepare(scenario, design)?;
+    let mut flights = Vec::new();
+    let run = engine.run(&prepared, &ctx, if trace { Some(&mut flights) } else { None });
+    let evaluation = finish(scenario, &prepared, &run);
+    Ok(Detailed { prepared, evaluation, particles: run.particles, flights })
+}
+
+/// Engines selectable by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum EngineKind {
+    /// Port of the listing's algorithm (segment scan + bisection): baseline.
+    Listing,
+    /// Fast reference: closed-form flights, reachable teeth only, f64.
+    Cpu,
+}
+
+pub fn particle_engine(kind: EngineKind) -> Box<dyn ParticleEngine + Send> {
+    match kind {
+        EngineKind::Listing => Box::new(listing::ListingEngine),
+        EngineKind::Cpu => Box::new(cpu::CpuEngine::default()),
+    }
+}
+
+impl ParticleEngine for Box<dyn ParticleEngine + Send> {
+    fn name(&self) -> &'static str {
+        self.as_ref().name()
+    }
+    fn run(&self, prep: &Prepared, ctx: &Context, trace: Option<&mut Vec<FlightRecord>>) -> Run {
+        self.as_ref().run(prep, ctx, trace)
+    }
+}

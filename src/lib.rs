@@ -1,0 +1,11 @@
+//! sawtooth: simulate and optimise a sawtooth conveyor for lunar regolith.
+//!
+//! - [`model`]: the thesis's physics (geometry, fill area, flights, restitution, performance).
+//! - [`engine`]: batch evaluators behind one interface (`listing` port, fast `cpu` reference).
+//! - [`io`]: configuration files, trajectory CSV, SVG plots.
+//! - [`cli`]: the thin command-line layer.
+
+pub mod cli;
+pub mod engine;
+pub mod io;
+pub mod model;

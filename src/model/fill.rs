@@ -1,0 +1,283 @@
+//! The regolith fill area under acceleration and the launch points inside it
+//! (4.2.3, Eq. 4.29-4.37, listing D.1 lines 109-210), and the spill check of 5.3.1.
+
+use super::design::Design;
+use super::geometry::{Profile, V2};
+use super::scenario::PhysicsMode;
+use super::validity::Invalid;
+
+/// Halton points the listing samples (D.5 line 31-32: haltonset(2,'Skip',1), net(p, 2000)).
+pub const LISTING_HALTON_POINTS: u64 = 2000;
+/// Cap on Halton points the physical mode draws to find n launch points in a small fill.
+pub const MAX_HALTON_POINTS: u64 = 20_000_000;
+/// Arc points of the physical fill polygon (the listing keeps 10 of 1000, erratum 20).
+const PHYSICAL_ARC_POINTS: usize = 512;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fill {
+    /// Angle of the fill surface, radians from the global horizontal (listing line 115).
+    pub surface_angle: f64,
+    /// Where the fill surface meets ramp 2 or the base (p_fill,2 of Figure 4.6).
+    pub p_fill: V2,
+    /// Polygon vertices (global, tooth 0's p1 at the origin).
+    pub polygon: Vec<V2>,
+    /// Cross-section A_regolith, m² (polyarea, listing line 340).
+    pub area: f64,
+}
+
+/// Fill-surface angle: direction of the effective acceleration + 90° + AOR (erratum 21,
+/// listing lines 111-115; Eq. 4.29-4.31 for the vectors). `launch_angle` is the global
+/// direction of the sled's acceleration, α + offset + δ (listing line 112).
+pub fn fill_surface_angle(g: f64, a: f64, launch_angle: f64, aor_deg: f64) -> f64 {
+    let g_eff = [-a * launch_angle.cos(), -a * launch_angle.sin() - g]; // Eq. 4.31
+    let beta = g_eff[1].atan2(g_eff[0]) + std::f64::consts::FRAC_PI_2;
+    beta + aor_deg.to_radians()
+}
+
+/// The spill check of listing D.6 lines 61-69, kept verbatim for compatibility mode
+/// (erratum 9: fixed g and (α - δ) where the simulation uses (α + δ)).
+pub fn listing_spill_check(alpha_deg: f64, aor_deg: f64, g: f64, offset_deg: f64, d: &Design) -> Result<(), Invalid> {
+    let alpha_c = alpha_deg.to_radians();
+    let mu_s = aor_deg.to_radians().tan();
+    let dr = offset_deg.to_radians();
+    let a = d.a;
+    let num = a * ((alpha_c - dr).cos() - (alpha_c - dr).sin() * mu_s) - g * mu_s;
+    let den = a * ((alpha_c - dr).cos() * mu_s + (alpha_c - dr).sin()) + g;
+    let delta_check = -(num / den).atan();
+    if delta_check > alpha_c {
+        return Err(Invalid::FillSpills {
+            detail: format!(
+                "listing D.6 check: surface angle {:.3} deg exceeds conveyor angle {:.3} deg",
+                delta_check.to_degrees(),
+                alpha_deg
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Intersection of the line through `p` with direction angle `ang` and the line through
+/// `a`-`b`; returns the parameter along `a`-`b` and the point.
+fn line_cross(p: V2, ang: f64, a: V2, b: V2) -> Option<(f64, V2)> {
+    let d = [ang.cos(), ang.sin()];
+    let e = [b[0] - a[0], b[1] - a[1]];
+    let den = d[0] * e[1] - d[1] * e[0];
+    if den.abs() < 1e-300 {
+        return None;
+    }
+    let w = [a[0] - p[0], a[1] - p[1]];
+    let s = -(d[0] * w[1] - d[1] * w[0]) / den; // along a-b
+    Some((s, [a[0] + s * e[0], a[1] + s * e[1]]))
+}
+
+/// Build the fill polygon. `alpha_sim` is the conveyor angle the simulation uses (the listing
+/// forces 35°, erratum 4), `launch_angle` the sled's acceleration direction.
+pub fn build_fill(profile: &Profile, g: f64, d: &Design, launch_angle: f64, aor_deg: f64, mode: PhysicsMode) -> Result<Fill, Invalid> {
+    let surface_angle = fill_surface_angle(g, d.a, launch_angle, aor_deg);
+    let p2_1 = profile.p2;
+    let p1_2 = profile.p1_of(1);
+    let p2_2 = profile.point_of(1, profile.p2);
+    let p4_1 = profile.p4;
+    let spill = |detail: String| Invalid::FillSpills { detail };
+
+    let p_fill = match mode {
+        PhysicsMode::Physical => {
+            // 5.3.1: the fill spills into the next tooth when its surface is steeper than the
+            // conveyor: then it leaves p2 rising relative to the base and passes over tooth 2.
+            if surface_angle >= profile.alpha {
+                return Err(spill(format!(
+                    "fill surface angle {:.3} deg is not below the conveyor angle {:.3} deg",
+                    surface_angle.to_degrees(),
+                    profile.alpha.to_degrees()
+                )));
+            }
+            let on_ramp = line_cross(p2_1, surface_angle, p1_2, p2_2).filter(|(s, _)| (0.0..=1.0).contains(s));
+            let end = profile.point_of(profile.teeth - 1, profile.p4);
+            let on_base = line_cross(p2_1, surface_angle, [0.0, 0.0], end).filter(|(_, p)| p[0] >= p2_1[0].min(p4_1[0]));
+            match (on_ramp, on_base) {
+                (Some((_, r)), Some((_, b))) => {
+                    if r[0] <= b[0] {
+                        r
+                    } else {
+                        b
+                    }
+                }
+                (Some((_, r)), None) => r,
+                (None, Some((_, b))) => b,
+                (None, None) => return Err(spill("fill surface meets neither ramp 2 nor the base".into())),
+            }
+        }
+        PhysicsMode::Listing => {
+            // Listing lines 117-162: sign changes of (fill - ramp_2) on [p2_1.x, p2_2.x] and of
+            // (fill - base) on [p2_1.x, p1_end.x]; both must exist; the smaller x wins.
+            let slope = surface_angle.tan();
+            let fill = |x: f64| p2_1[1] + slope * (x - p2_1[0]);
+            let ra = (p2_2[1] - p1_2[1]) / (p2_2[0] - p1_2[0]);
+            let ramp2 = |x: f64| p1_2[1] + ra * (x - p1_2[0]);
+            let base = |x: f64| profile.alpha.tan() * x;
+            let x_end = profile.p1_of(profile.teeth - 1)[0];
+            let fr = |x: f64| fill(x) - ramp2(x);
+            let fb = |x: f64| fill(x) - base(x);
+            if fr(p2_1[0]).signum() == fr(p2_2[0]).signum() {
+                return Err(spill("listing fill construction: fill surface does not cross ramp 2 before its peak".into()));
+            }
+            if fb(p2_1[0]).signum() == fb(x_end).signum() {
+                return Err(spill("listing fill construction: fill surface does not cross the base".into()));
+            }
+            // Both are straight lines: the root fzero brackets is the line-line crossing.
+            let xr = (ramp2(0.0) - fill(0.0)) / (slope - ra);
+            let xb = (base(0.0) - fill(0.0)) / (slope - profile.alpha.tan());
+            if xr <= xb {
+                [xr, fill(xr)]
+            } else {
+                [xb, fill(xb)]
+            }
+        }
+    };
+
+    let (a2, a4) = profile.catch_arc_angles();
+    let arc = |angle: f64| [profile.p3[0] + profile.radius * angle.cos(), profile.p3[1] + profile.radius * angle.sin()];
+    let mut polygon = vec![p4_1];
+    if p_fill[0] > p1_2[0] {
+        polygon.push(p1_2);
+    }
+    polygon.push(p_fill);
+    match mode {
+        PhysicsMode::Physical => {
+            for k in 0..PHYSICAL_ARC_POINTS {
+                let f = k as f64 / (PHYSICAL_ARC_POINTS - 1) as f64;
+                polygon.push(arc(a2 + f * (a4 - a2)));
+            }
+        }
+        PhysicsMode::Listing => {
+            // Listing lines 165-183: linspace(a2, a4 - 0.05, 1000), every 100th point.
+            let n = 1000;
+            for k in (0..n).step_by(100) {
+                let f = k as f64 / (n - 1) as f64;
+                polygon.push(arc(a2 + f * (a4 - 0.05 - a2)));
+            }
+        }
+    }
+    let area = polygon_area(&polygon);
+    Ok(Fill { surface_angle, p_fill, polygon, area })
+}
+
+/// Shoelace area (MATLAB polyarea).
+pub fn polygon_area(poly: &[V2]) -> f64 {
+    let n = poly.len();
+    let mut s = 0.0;
+    for i in 0..n {
+        let a = poly[i];
+        let b = poly[(i + 1) % n];
+        s += a[0] * b[1] - b[0] * a[1];
+    }
+    0.5 * s.abs()
+}
+
+/// Even-odd point-in-polygon test; points on an edge count as inside (MATLAB inpolygon).
+pub fn in_polygon(p: V2, poly: &[V2]) -> bool {
+    let n = poly.len();
+    let mut inside = false;
+    let mut j = n - 1;
+    for i in 0..n {
+        let (a, b) = (poly[i], poly[j]);
+        // on-edge test
+        let cross = (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
+        let within = p[0] >= a[0].min(b[0]) && p[0] <= a[0].max(b[0]) && p[1] >= a[1].min(b[1]) && p[1] <= a[1].max(b[1]);
+        if cross.abs() <= 1e-18 && within {
+            return true;
+        }
+        if (a[1] > p[1]) != (b[1] > p[1]) {
+            let x = a[0] + (p[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
+            if p[0] < x {
+                inside = !inside;
+            }
+        }
+        j = i;
+    }
+    inside
+}
+
+/// Van der Corput radical inverse of `i` in `base`.
+pub fn radical_inverse(mut i: u64, base: u64) -> f64 {
+    let inv = 1.0 / base as f64;
+    let mut f = inv;
+    let mut r = 0.0;
+    while i > 0 {
+        r += f * (i % base) as f64;
+        i /= base;
+        f *= inv;
+    }
+    r
+}
+
+/// Launch points (Eq. 4.37, listing lines 185-209): Halton bases 2 and 3 with the first
+/// point skipped, scaled to the polygon's bounding box, the first `n` inside it. The
+/// listing stops after 2000 candidates; the physical mode keeps drawing (deviation: the
+/// thesis's 2000 cannot seat 10 000 particles).
+pub fn launch_points(fill: &Fill, n: usize, mode: PhysicsMode) -> Result<Vec<V2>, Invalid> {
+    let (mut xmin, mut xmax, mut ymin, mut ymax) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for p in &fill.polygon {
+        xmin = xmin.min(p[0]);
+        xmax = xmax.max(p[0]);
+        ymin = ymin.min(p[1]);
+        ymax = ymax.max(p[1]);
+    }
+    let limit = match mode {
+        PhysicsMode::Listing => LISTING_HALTON_POINTS,
+        PhysicsMode::Physical => MAX_HALTON_POINTS.max(LISTING_HALTON_POINTS),
+    };
+    let mut out = Vec::with_capacity(n);
+    let mut i = 1u64;
+    while out.len() < n && i <= limit {
+        let p = [xmin + (xmax - xmin) * radical_inverse(i, 2), ymin + (ymax - ymin) * radical_inverse(i, 3)];
+        if in_polygon(p, &fill.polygon) {
+            out.push(p);
+        }
+        i += 1;
+        // A fill that seats no point in a million candidates is degenerate: stop early.
+        if i > 1_000_000 && out.is_empty() {
+            break;
+        }
+    }
+    if out.len() < n {
+        return Err(Invalid::FillTooSmall { found: out.len(), needed: n });
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn halton_matches_known_values() {
+        assert_eq!(radical_inverse(1, 2), 0.5);
+        assert_eq!(radical_inverse(2, 2), 0.25);
+        assert_eq!(radical_inverse(3, 2), 0.75);
+        assert!((radical_inverse(1, 3) - 1.0 / 3.0).abs() < 1e-15);
+        assert!((radical_inverse(5, 3) - (2.0 / 3.0 + 1.0 / 9.0)).abs() < 1e-15);
+    }
+
+    #[test]
+    fn square_area_and_membership() {
+        let sq = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        assert_eq!(polygon_area(&sq), 1.0);
+        assert!(in_polygon([0.5, 0.5], &sq));
+        assert!(in_polygon([1.0, 0.5], &sq));
+        assert!(!in_polygon([1.5, 0.5], &sq));
+    }
+
+    #[test]
+    fn line_cross_finds_the_middle_of_a_crossing_segment() {
+        let (s, p) = line_cross([0.0, 0.0], 0.0, [1.0, -1.0], [1.0, 1.0]).unwrap();
+        assert!((s - 0.5).abs() < 1e-15 && (p[0] - 1.0).abs() < 1e-15 && p[1].abs() < 1e-15);
+    }
+
+    #[test]
+    fn surface_at_rest_is_the_angle_of_repose() {
+        // erratum 21: with a = 0 the surface angle reduces to the AOR.
+        let ang = fill_surface_angle(9.81, 0.0, 1.0, 34.0);
+        assert!((ang.to_degrees() - 34.0).abs() < 1e-9);
+    }
+}

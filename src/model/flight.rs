@@ -1,0 +1,240 @@
+//! Closed-form flights and their crossings with a straight line (4.2.4-4.2.5).
+//!
+//! The flight is parametrised by time, not by x as Eq. 4.52/4.55 are, so vertical flights
+//! need no special case (the listing drops them, 4.2.5). For a line through A with normal n,
+//! f(t) = n·(P(t) - A) is
+//! - vacuum (Eq. 4.40-4.41, 4.52): a quadratic c0 + c1 t + c2 t², solved in closed form;
+//! - Stokes drag (Eq. 4.42-4.45, 4.53-4.55): c0 + a t + b (1 - e^{-kt})/k, whose derivative
+//!   a + b e^{-kt} changes sign at most once, so f has at most two roots, each bracketed on
+//!   a monotone interval and polished by safeguarded Newton.
+
+use super::real::Real;
+
+/// A ballistic flight from `p0` with velocity `v0` under gravity `g` (downwards) and Stokes
+/// drag `k` (1/s, 0 = vacuum).
+#[derive(Clone, Copy, Debug)]
+pub struct Flight<T> {
+    pub p0: [T; 2],
+    pub v0: [T; 2],
+    pub g: T,
+    pub k: T,
+}
+
+/// (1 - e^{-kt}) / k, accurate for small kt.
+#[inline(always)]
+fn relax<T: Real>(k: T, t: T) -> T {
+    -(-k * t).exp_m1() / k
+}
+
+impl<T: Real> Flight<T> {
+    #[inline(always)]
+    pub fn drag(&self) -> bool {
+        self.k > T::zero()
+    }
+
+    /// Position at time t.
+    #[inline(always)]
+    pub fn pos(&self, t: T) -> [T; 2] {
+        if self.drag() {
+            // Eq. 4.53-4.54: x = x0 + vx (1-e^{-kt})/k ; y = y0 - g t / k + (g/k² + vy/k)(1-e^{-kt})
+            let e = relax(self.k, t);
+            let vinf = -self.g / self.k;
+            [self.p0[0] + self.v0[0] * e, self.p0[1] + vinf * t + (self.v0[1] - vinf) * e]
+        } else {
+            let half = T::c(0.5);
+            [self.p0[0] + self.v0[0] * t, self.p0[1] + self.v0[1] * t - half * self.g * t * t]
+        }
+    }
+
+    /// Velocity at time t (Eq. 4.41 vacuum, Eq. 4.44-4.45 drag).
+    #[inline(always)]
+    pub fn vel(&self, t: T) -> [T; 2] {
+        if self.drag() {
+            let e = (-self.k * t).exp();
+            let vinf = -self.g / self.k;
+            [self.v0[0] * e, vinf + (self.v0[1] - vinf) * e]
+        } else {
+            [self.v0[0], self.v0[1] - self.g * t]
+        }
+    }
+
+    /// Times t > 0 at which the flight crosses the line through `a` with normal `n`, in
+    /// ascending order (at most two), looking no further than `t_max` (may be infinite for
+    /// vacuum). `departing` says the flight starts on this line: its root at t = 0 is
+    /// removed analytically instead of by a tolerance.
+    pub fn line_crossings(&self, a: [T; 2], n: [T; 2], departing: bool, t_max: T) -> [Option<T>; 2] {
+        let c0 = if departing { T::zero() } else { n[0] * (self.p0[0] - a[0]) + n[1] * (self.p0[1] - a[1]) };
+        let nv = n[0] * self.v0[0] + n[1] * self.v0[1];
+        let keep = |t: T| if t > T::zero() && t <= t_max { Some(t) } else { None };
+        if !self.drag() {
+            let c1 = nv;
+            let c2 = -T::c(0.5) * self.g * n[1];
+            if departing {
+                // f(t) = t (c1 + c2 t)
+                if c2 == T::zero() {
+                    return [None, None];
+                }
+                return [keep(-c1 / c2), None];
+            }
+            return sorted(quadratic_roots(c2, c1, c0), keep);
+        }
+        // Stokes: f(t) = c0 + a t + b E(t), E = (1 - e^{-kt})/k, f'(t) = a + b e^{-kt}.
+        let k = self.k;
+        let vinf_n = -self.g / k * n[1];
+        let (ca, cb) = (vinf_n, nv - vinf_n);
+        let f = |t: T| c0 + ca * t + cb * relax(k, t);
+        let df = |t: T| ca + cb * (-k * t).exp();
+        // Extremum where e^{-kt} = -a/b.
+        let ratio = -ca / cb;
+        let t_star = if cb != T::zero() && ratio > T::zero() && ratio < T::one() { Some(-ratio.ln() / k) } else { None };
+        let mut out = [None, None];
+        let mut found = 0;
+        let mut lo = T::zero();
+        let mut f_lo = c0;
+        let ends = [t_star, Some(t_max)];
+        for hi in ends.into_iter().flatten() {
+            if hi <= lo {
+                continue;
+            }
+            let hi = if hi.is_finite() { hi } else { horizon(&f, lo) };
+            let f_hi = f(hi);
+            let starts_on_line = lo == T::zero() && (departing || f_lo == T::zero());
+            if !starts_on_line && (f_lo > T::zero()) != (f_hi > T::zero()) {
+                let t = bracketed_newton(&f, &df, lo, hi, f_lo);
+                if let Some(t) = keep(t) {
+                    out[found] = Some(t);
+                    found += 1;
+                }
+            }
+            lo = hi;
+            f_lo = f_hi;
+        }
+        out
+    }
+}
+
+/// A finite time by which f (which tends to -inf or +inf linearly) has its final sign.
+fn horizon<T: Real>(f: &impl Fn(T) -> T, lo: T) -> T {
+    let mut t = lo + T::one();
+    let s0 = f(lo) > T::zero();
+    for _ in 0..64 {
+        if (f(t) > T::zero()) != s0 {
+            return t;
+        }
+        t = t + t;
+    }
+    t
+}
+
+/// Real roots of c2 t² + c1 t + c0 (numerically stable form).
+#[inline(always)]
+pub fn quadratic_roots<T: Real>(c2: T, c1: T, c0: T) -> [Option<T>; 2] {
+    if c2 == T::zero() {
+        if c1 == T::zero() {
+            return [None, None];
+        }
+        return [Some(-c0 / c1), None];
+    }
+    let disc = c1 * c1 - T::c(4.0) * c2 * c0;
+    if disc < T::zero() {
+        return [None, None];
+    }
+    let sq = disc.sqrt();
+    let q = if c1 >= T::zero() { -T::c(0.5) * (c1 + sq) } else { -T::c(0.5) * (c1 - sq) };
+    if q == T::zero() {
+        return [Some(T::zero()), None];
+    }
+    [Some(q / c2), Some(c0 / q)]
+}
+
+fn sorted<T: Real>(r: [Option<T>; 2], keep: impl Fn(T) -> Option<T>) -> [Option<T>; 2] {
+    let a = r[0].and_then(&keep);
+    let b = r[1].and_then(&keep);
+    match (a, b) {
+        (Some(x), Some(y)) if y < x => [Some(y), Some(x)],
+        (None, Some(y)) => [Some(y), None],
+        _ => [a, b],
+    }
+}
+
+/// Root of a monotone f on [lo, hi] with a sign change: Newton steps kept inside the bracket,
+/// bisection when a step leaves it (rtsafe). Fixed maximum iteration count, as a shader needs.
+pub fn bracketed_newton<T: Real>(f: &impl Fn(T) -> T, df: &impl Fn(T) -> T, mut lo: T, mut hi: T, f_lo: T) -> T {
+    let lo_positive = f_lo > T::zero();
+    let mut t = T::c(0.5) * (lo + hi);
+    for _ in 0..64 {
+        let ft = f(t);
+        if ft == T::zero() {
+            return t;
+        }
+        if (ft > T::zero()) == lo_positive {
+            lo = t;
+        } else {
+            hi = t;
+        }
+        let d = df(t);
+        let mut next = if d != T::zero() { t - ft / d } else { lo - T::one() };
+        if !(next > lo && next < hi) {
+            next = T::c(0.5) * (lo + hi);
+        }
+        if (next - t).abs() <= T::epsilon() * T::c(4.0) * t.abs().max(T::min_positive_value()) {
+            return next;
+        }
+        t = next;
+    }
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn vacuum_parabola_hits_the_ground_at_the_textbook_time() {
+        let f = Flight { p0: [0.0, 0.0], v0: [1.0, 2.0], g: 9.81, k: 0.0 };
+        let r = f.line_crossings([0.0, 0.0], [0.0, 1.0], true, f64::INFINITY);
+        assert!((r[0].unwrap() - 4.0 / 9.81).abs() < 1e-14);
+        assert!(r[1].is_none());
+    }
+
+    #[test]
+    fn stokes_flight_crossings_match_its_position() {
+        let f = Flight { p0: [0.0, 0.01], v0: [0.5, 1.0], g: 9.81, k: 5.4 };
+        // line y = 0.02 is crossed twice (up and down)
+        let r = f.line_crossings([0.0, 0.02], [0.0, 1.0], false, f64::INFINITY);
+        let (t1, t2) = (r[0].unwrap(), r[1].unwrap());
+        assert!(t1 < t2);
+        for t in [t1, t2] {
+            assert!((f.pos(t)[1] - 0.02).abs() < 1e-13, "{}", f.pos(t)[1]);
+        }
+        // velocity is the time derivative of position
+        let h = 1e-7;
+        let t = 0.05;
+        let dv = [(f.pos(t + h)[0] - f.pos(t - h)[0]) / (2.0 * h), (f.pos(t + h)[1] - f.pos(t - h)[1]) / (2.0 * h)];
+        let v = f.vel(t);
+        assert!((dv[0] - v[0]).abs() < 1e-6 && (dv[1] - v[1]).abs() < 1e-6);
+    }
+
+    #[test]
+    fn stokes_departing_flight_finds_its_return() {
+        let f = Flight { p0: [0.0, 0.0], v0: [0.3, 0.8], g: 9.81, k: 5.0 };
+        let r = f.line_crossings([0.0, 0.0], [0.0, 1.0], true, f64::INFINITY);
+        let t = r[0].unwrap();
+        assert!(t > 0.05);
+        assert!(f.pos(t)[1].abs() < 1e-12);
+        assert!(r[1].is_none());
+    }
+
+    #[test]
+    fn eq_4_55_trajectory_agrees_with_time_form() {
+        // y(x) of Eq. 4.55 evaluated at x(t) equals y(t)
+        let (k, g) = (5.347, 9.81);
+        let f = Flight { p0: [0.0, 0.0], v0: [0.4, 0.9], g, k };
+        let t = 0.08;
+        let p = f.pos(t);
+        let vx = f.v0[0];
+        let tan_d = f.v0[1] / vx;
+        let y = g / (k * k) * (1.0 - k * p[0] / vx).ln() + (g / (k * vx) + tan_d) * p[0];
+        assert!((y - p[1]).abs() < 1e-12);
+    }
+}

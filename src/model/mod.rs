@@ -1,0 +1,21 @@
+//! The physics model of the thesis, one concept per module.
+
+pub mod collision;
+pub mod design;
+pub mod fill;
+pub mod flight;
+pub mod geometry;
+pub mod outcome;
+pub mod performance;
+pub mod prepare;
+pub mod real;
+pub mod rng;
+pub mod scenario;
+pub mod validity;
+
+pub use design::Design;
+pub use outcome::{ParticleEnd, ParticleState, SimOutcome};
+pub use performance::Performance;
+pub use prepare::{prepare, Prepared};
+pub use scenario::{EnvPreset, PhysicsMode, Scenario};
+pub use validity::Invalid;

@@ -1,0 +1,359 @@
+//! Everything but the design: environment, material, collision parameters, simulation
+//! settings, performance constants and the physics mode. Presets follow listing D.5.
+
+use serde::{Deserialize, Serialize};
+
+/// Which physics the engines run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum PhysicsMode {
+    /// The thesis text's physics (Ch. 4-5), with the errata fixed. See README's deviation table.
+    #[default]
+    Physical,
+    /// What listing D.1-D.8 did, where determinable (errata 4-9, 13, 15, 16, 18-20),
+    /// so the published figures can be compared.
+    Listing,
+}
+
+/// Gravity, conveyor angle and the drag model.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Environment {
+    /// Gravitational acceleration, m/s².
+    pub g: f64,
+    /// Conveyor angle α, degrees.
+    pub alpha_deg: f64,
+    /// Stokes drag parameter k_drag = b/m (Eq. 4.20), 1/s; `None` = vacuum.
+    pub k_drag: Option<f64>,
+}
+
+/// Elastic and strength properties of one collision partner (Table 4.1).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Solid {
+    /// Young's modulus, Pa.
+    pub youngs_modulus: f64,
+    pub poisson_ratio: f64,
+    /// Yield (conveyor) or compressive (particle) strength, Pa.
+    pub strength: f64,
+    /// Density, kg/m³ (only the particle's is used).
+    pub density: f64,
+}
+
+/// The conveyed material.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    pub name: String,
+    /// Static angle of repose, degrees (4.1.1).
+    pub aor_deg: f64,
+    /// Loose bulk density, kg/m³ (rho_regolith,min, 3.4.3).
+    pub bulk_density: f64,
+    /// Particle properties (Table 4.1: basalt analogue).
+    pub particle: Solid,
+    /// Conveyor properties (Table 4.1: Al 6061-T6).
+    pub conveyor: Solid,
+}
+
+/// The two fitted collision parameters (4.1.2).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Collision {
+    /// Elastic normal COR k_elastic.
+    pub k_elastic: f64,
+    /// Friction coefficient μ_friction of Eq. 4.14.
+    pub mu_friction: f64,
+}
+
+/// Simulation settings (4.2.1).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimSettings {
+    /// Number of simulated teeth (D.5: 100).
+    pub teeth: u32,
+    /// Launched particles per design n_launch (D.5: 100).
+    pub particles: u32,
+    /// Maximum bounce iterations n_bounce (D.5: 100).
+    pub max_bounces: u32,
+    /// Randomise launch angle and speed (4.2.4).
+    pub randomise: bool,
+    /// Half-width of the randomisation band: factors in [1-band, 1+band] (D.1: 0.10).
+    pub random_band: f64,
+    pub seed: u64,
+    /// Rest threshold l_limit of Eq. 4.50, metres (D.1: 0.1 mm, erratum 15).
+    pub rest_threshold: f64,
+    /// Launch-angle offset added to α and the design's δ, degrees (erratum 10: 18.434°).
+    pub launch_offset_deg: f64,
+}
+
+/// Constants of the performance model (3.4.3, 5.3.1, listing D.5/D.7/D.8).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PerformanceParams {
+    /// Conveyor length along the slope, m (D.7: 1 m).
+    pub conveyor_length: f64,
+    /// Width of the regolith bed, m (text 0.16; the published tables used 0.15, erratum 13).
+    pub regolith_width: f64,
+    /// Sled width, m (D.5 w_sled = 0.16).
+    pub sled_width: f64,
+    /// Sled plate thickness, m (D.5: 5 mm).
+    pub sled_thickness: f64,
+    /// Sled density, kg/m³ (aluminium 2700).
+    pub sled_density: f64,
+    /// Recovery force of one SMA wire, N (D.5: 10).
+    pub wire_force: f64,
+    /// Wire diameter, m (0.25 mm).
+    pub wire_diameter: f64,
+    /// Bias stress to reset a wire, Pa (D.5: 100 MPa).
+    pub wire_bias_stress: f64,
+    /// Wire density, kg/m³ (6450).
+    pub wire_density: f64,
+    /// Wire specific heat, J/(kg K) (320).
+    pub wire_heat_capacity: f64,
+    /// Heating temperature rise ΔT, K (320).
+    pub wire_delta_t: f64,
+    /// Wire contraction ratio (0.05).
+    pub contraction_ratio: f64,
+    /// Wire emissivity (D.8: 0.17).
+    pub wire_emissivity: f64,
+    /// Martensite finish temperature, K (333).
+    pub t_low: f64,
+    /// Austenite finish temperature, K (363).
+    pub t_high: f64,
+    /// Downstroke speed v_d, m/s (0.05).
+    pub downstroke_speed: f64,
+    /// Stroke frequency limit, Hz (2).
+    pub f_max: f64,
+    /// Gravity used by the spill check; `None` = the environment's g (listing: 9.81 always, erratum 9).
+    pub spill_check_g: Option<f64>,
+}
+
+/// A complete problem statement apart from the design.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    pub mode: PhysicsMode,
+    pub environment: Environment,
+    pub material: Material,
+    pub collision: Collision,
+    pub sim: SimSettings,
+    pub performance: PerformanceParams,
+}
+
+impl Solid {
+    /// Basalt analogue of Table 4.1.
+    pub fn basalt() -> Self {
+        Solid { youngs_modulus: 80e9, poisson_ratio: 0.225, strength: 224e6, density: 2850.0 }
+    }
+    /// Al 6061-T6 of Table 4.1.
+    pub fn aluminium() -> Self {
+        Solid { youngs_modulus: 68.9e9, poisson_ratio: 0.33, strength: 276e6, density: 2700.0 }
+    }
+}
+
+impl Material {
+    /// Lunar regolith: AOR 58° (4.1.1), loose bulk density 890 kg/m³ (D.5).
+    pub fn lunar_regolith() -> Self {
+        Material {
+            name: "lunar-regolith".into(),
+            aor_deg: 58.0,
+            bulk_density: 890.0,
+            particle: Solid::basalt(),
+            conveyor: Solid::aluminium(),
+        }
+    }
+    /// Quartz sand for terrestrial runs: AOR 34° (D.5). The listing keeps ρ = 890 kg/m³ for
+    /// the mass flow in both environments, so the bulk density stays the regolith's.
+    pub fn quartz_sand() -> Self {
+        Material { name: "quartz-sand".into(), aor_deg: 34.0, ..Self::lunar_regolith() }
+    }
+    /// Glass beads of validation Test 3. The thesis selects "glass beads" but never prints
+    /// their AOR; 24° is a typical value for dry spherical soda-lime beads (assumption).
+    pub fn glass_beads() -> Self {
+        Material { name: "glass-beads".into(), aor_deg: 24.0, ..Self::lunar_regolith() }
+    }
+    pub fn by_name(name: &str) -> Option<Self> {
+        match name {
+            "lunar-regolith" | "regolith" => Some(Self::lunar_regolith()),
+            "quartz-sand" | "sand" => Some(Self::quartz_sand()),
+            "glass-beads" | "glass" => Some(Self::glass_beads()),
+            _ => None,
+        }
+    }
+}
+
+impl Default for SimSettings {
+    fn default() -> Self {
+        SimSettings {
+            teeth: 100,
+            particles: 100,
+            max_bounces: 100,
+            randomise: true,
+            random_band: 0.10,
+            seed: 0,
+            rest_threshold: 1e-4,
+            launch_offset_deg: 18.434,
+        }
+    }
+}
+
+impl Default for PerformanceParams {
+    fn default() -> Self {
+        PerformanceParams {
+            conveyor_length: 1.0,
+            regolith_width: 0.16,
+            sled_width: 0.16,
+            sled_thickness: 0.005,
+            sled_density: 2700.0,
+            wire_force: 10.0,
+            wire_diameter: 0.25e-3,
+            wire_bias_stress: 100e6,
+            wire_density: 6450.0,
+            wire_heat_capacity: 320.0,
+            wire_delta_t: 320.0,
+            contraction_ratio: 0.05,
+            wire_emissivity: 0.17,
+            t_low: 333.0,
+            t_high: 363.0,
+            downstroke_speed: 0.05,
+            f_max: 2.0,
+            spill_check_g: None,
+        }
+    }
+}
+
+/// Named environments of the CLI.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum EnvPreset {
+    Lunar,
+    Earth,
+}
+
+impl Scenario {
+    /// Listing D.5 lunar: g 1.625, vacuum, regolith AOR 58°, k_elastic 0.872, μ 0.106, α 35°.
+    pub fn lunar() -> Self {
+        Scenario {
+            mode: PhysicsMode::Physical,
+            environment: Environment { g: 1.625, alpha_deg: 35.0, k_drag: None },
+            material: Material::lunar_regolith(),
+            collision: Collision { k_elastic: 0.872, mu_friction: 0.106 },
+            sim: SimSettings::default(),
+            performance: PerformanceParams::default(),
+        }
+    }
+
+    /// Listing D.5 terrestrial: g 9.81, Stokes drag k_drag 5.439, sand AOR 34°, same coefficients.
+    pub fn earth() -> Self {
+        Scenario {
+            environment: Environment { g: 9.81, alpha_deg: 35.0, k_drag: Some(5.439) },
+            material: Material::quartz_sand(),
+            ..Self::lunar()
+        }
+    }
+
+    pub fn preset(p: EnvPreset) -> Self {
+        match p {
+            EnvPreset::Lunar => Self::lunar(),
+            EnvPreset::Earth => Self::earth(),
+        }
+    }
+
+    /// Switch to the listing's compatibility mode: the listing's constants where they differ
+    /// from the text (erratum 13: 0.15 m regolith width; erratum 9: spill check with g = 9.81).
+    pub fn into_listing_compat(mut self) -> Self {
+        self.mode = PhysicsMode::Listing;
+        self.performance.regolith_width = 0.15;
+        self.performance.spill_check_g = Some(9.81);
+        self
+    }
+
+    /// Check every number for range and finiteness; the error names the field and the rule.
+    pub fn validate(&self) -> Result<(), String> {
+        fn finite(name: &str, v: f64) -> Result<(), String> {
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err(format!("`{name}` must be a finite number, got {v}"))
+            }
+        }
+        fn positive(name: &str, v: f64) -> Result<(), String> {
+            finite(name, v)?;
+            if v > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("`{name}` must be > 0, got {v}"))
+            }
+        }
+        fn within(name: &str, v: f64, lo: f64, hi: f64) -> Result<(), String> {
+            finite(name, v)?;
+            if v >= lo && v <= hi {
+                Ok(())
+            } else {
+                Err(format!("`{name}` must lie in [{lo}, {hi}], got {v}"))
+            }
+        }
+        let e = &self.environment;
+        positive("environment.g", e.g)?;
+        within("environment.alpha_deg", e.alpha_deg, 0.0, 80.0)?;
+        if let Some(k) = e.k_drag {
+            positive("environment.k_drag", k)?;
+        }
+        let m = &self.material;
+        within("material.aor_deg", m.aor_deg, 0.0, 89.0)?;
+        positive("material.bulk_density", m.bulk_density)?;
+        for (who, s) in [("particle", &m.particle), ("conveyor", &m.conveyor)] {
+            positive(&format!("material.{who}.youngs_modulus"), s.youngs_modulus)?;
+            within(&format!("material.{who}.poisson_ratio"), s.poisson_ratio, -1.0, 0.5)?;
+            positive(&format!("material.{who}.strength"), s.strength)?;
+            positive(&format!("material.{who}.density"), s.density)?;
+        }
+        within("collision.k_elastic", self.collision.k_elastic, 0.0, 1.0)?;
+        within("collision.mu_friction", self.collision.mu_friction, 0.0, 10.0)?;
+        let s = &self.sim;
+        if !(2..=100_000).contains(&s.teeth) {
+            return Err(format!("`sim.teeth` must lie in [2, 100000], got {}", s.teeth));
+        }
+        if !(1..=10_000_000).contains(&s.particles) {
+            return Err(format!("`sim.particles` must lie in [1, 10000000], got {}", s.particles));
+        }
+        if !(1..=100_000).contains(&s.max_bounces) {
+            return Err(format!("`sim.max_bounces` must lie in [1, 100000], got {}", s.max_bounces));
+        }
+        within("sim.random_band", s.random_band, 0.0, 0.9)?;
+        within("sim.rest_threshold", s.rest_threshold, 0.0, 1.0)?;
+        within("sim.launch_offset_deg", s.launch_offset_deg, -90.0, 90.0)?;
+        let p = &self.performance;
+        for (name, v) in [
+            ("performance.conveyor_length", p.conveyor_length),
+            ("performance.regolith_width", p.regolith_width),
+            ("performance.sled_width", p.sled_width),
+            ("performance.sled_thickness", p.sled_thickness),
+            ("performance.sled_density", p.sled_density),
+            ("performance.wire_force", p.wire_force),
+            ("performance.wire_diameter", p.wire_diameter),
+            ("performance.wire_density", p.wire_density),
+            ("performance.wire_heat_capacity", p.wire_heat_capacity),
+            ("performance.wire_delta_t", p.wire_delta_t),
+            ("performance.contraction_ratio", p.contraction_ratio),
+            ("performance.wire_emissivity", p.wire_emissivity),
+            ("performance.t_low", p.t_low),
+            ("performance.t_high", p.t_high),
+            ("performance.downstroke_speed", p.downstroke_speed),
+            ("performance.f_max", p.f_max),
+        ] {
+            positive(name, v)?;
+        }
+        finite("performance.wire_bias_stress", p.wire_bias_stress)?;
+        if p.t_high <= p.t_low {
+            return Err(format!(
+                "`performance.t_high` ({}) must exceed `performance.t_low` ({})",
+                p.t_high, p.t_low
+            ));
+        }
+        if let Some(g) = p.spill_check_g {
+            positive("performance.spill_check_g", g)?;
+        }
+        Ok(())
+    }
+}
