@@ -1,1 +1,34 @@
-//! The command-line layer.
+//! The command-line layer: raw arguments (clap derive) are turned into validated settings
+//! (a `Scenario`, designs, an engine), then handed to the library. Nothing here does physics.
+
+pub mod args;
+pub mod bench;
+pub mod simulate;
+
+use std::io::Write;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Debug, Parser)]
+#[command(name = "sawtooth", version, about = "Simulate and optimise a sawtooth conveyor for lunar regolith")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Simulate one design: tooth distribution, d_avg, performance.
+    Simulate(simulate::SimulateArgs),
+    /// Measure particle-bounces per second of the engines side by side.
+    Bench(bench::BenchArgs),
+}
+
+/// Exit status: 0 success, 1 a check failed, 2 bad input or an error.
+pub fn run(cli: Cli, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    match cli.command {
+        Command::Simulate(a) => simulate::run(a, out),
+        Command::Bench(a) => bench::run(a, out),
+    }
+}

@@ -208,7 +208,7 @@ pub fn first_hit<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bo
     // Base: one line through every p1 (frame origin lies on it).
     let mut horizon = T::infinity();
     let departing_base = p.surface == SURFACE_BASE;
-    let mut roots = fl.line_crossings([T::zero(), T::zero()], d.n_base, departing_base, T::infinity());
+    let mut roots = fl.line_crossings([T::zero(), T::zero()], d.n_base, departing_base, T::zero(), T::infinity());
     if !departing_base && hop_ok(ph, p.pos, p.pos) {
         let s0 = -kf * d.pitch_len;
         let a = [s0 * d.t_base[0], s0 * d.t_base[1]];
@@ -255,7 +255,20 @@ pub fn first_hit<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bo
             };
             let departing = p.surface == surface && dj == 0;
             let t_max = if best.found { best.t } else { horizon };
-            let mut roots = fl.line_crossings(a, n, departing, t_max);
+            // Only while the flight is within the segment's x-extent can it hit the segment
+            // (x(t) is monotone): search that time window only.
+            let margin = T::c(64.0) * T::epsilon() * d.pitch_len;
+            let (xa, xb) = (a[0].min(b[0]) - margin, a[0].max(b[0]) + margin);
+            let (t_lo, t_hi) = if fl.v0[0] > T::zero() {
+                (fl.time_at_x(xa.max(p.pos[0])), fl.time_at_x(xb))
+            } else if fl.v0[0] < T::zero() {
+                (fl.time_at_x(xb.min(p.pos[0])), fl.time_at_x(xa))
+            } else if p.pos[0] >= xa && p.pos[0] <= xb {
+                (T::zero(), T::infinity())
+            } else {
+                (T::infinity(), T::infinity())
+            };
+            let mut roots = if t_lo > t_max { [None, None] } else { fl.line_crossings(a, n, departing, t_lo, t_max.min(t_hi)) };
             if !departing && hop_ok(ph, p.pos, p.pos) && contact(d, p, a, b, n) {
                 roots = [Some(T::zero()), None];
             }

@@ -1,1 +1,5 @@
 //! Files in and out: configuration, trajectories, plots.
+
+pub mod config;
+pub mod plot;
+pub mod trajectories;

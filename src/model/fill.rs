@@ -23,6 +23,58 @@ pub struct Fill {
     pub polygon: Vec<V2>,
     /// Cross-section A_regolith, m² (polyarea, listing line 340).
     pub area: f64,
+    /// The exact boundary for membership tests: straight part (from p4 round to p2) and the
+    /// catch arc (centre, radius, start and end angle) back from p2 to p4. `None` in listing
+    /// mode, whose polygon (10 arc points) is the boundary the listing tested against.
+    pub exact: Option<ExactBoundary>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExactBoundary {
+    /// p4, [p1_2], p_fill, p2: the straight edges between consecutive points.
+    pub straight: Vec<V2>,
+    pub centre: V2,
+    pub radius: f64,
+    /// Arc from angle a2 (at p2) counter-clockwise to a4 (at p4), a4 > a2.
+    pub a2: f64,
+    pub a4: f64,
+}
+
+impl ExactBoundary {
+    /// Crossing-number test of the closed curve: straight edges plus the arc, counting
+    /// crossings of the ray from `p` towards +x (O(1) per point instead of O(arc points)).
+    pub fn contains(&self, p: V2) -> bool {
+        let mut inside = false;
+        let n = self.straight.len();
+        for i in 0..n - 1 {
+            let (a, b) = (self.straight[i], self.straight[i + 1]);
+            if (a[1] > p[1]) != (b[1] > p[1]) {
+                let x = a[0] + (p[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
+                if p[0] < x {
+                    inside = !inside;
+                }
+            }
+        }
+        let dy = p[1] - self.centre[1];
+        let h2 = self.radius * self.radius - dy * dy;
+        if h2 > 0.0 {
+            let h = h2.sqrt();
+            for x in [self.centre[0] - h, self.centre[0] + h] {
+                if x <= p[0] {
+                    continue;
+                }
+                let mut ang = dy.atan2(x - self.centre[0]);
+                while ang < self.a2 {
+                    ang += 2.0 * std::f64::consts::PI;
+                }
+                // a ray through an arc end point is measure-zero for Halton points
+                if ang < self.a4 {
+                    inside = !inside;
+                }
+            }
+        }
+        inside
+    }
 }
 
 /// Fill-surface angle: direction of the effective acceleration + 90° + AOR (erratum 21,
@@ -159,7 +211,16 @@ pub fn build_fill(profile: &Profile, g: f64, d: &Design, launch_angle: f64, aor_
         }
     }
     let area = polygon_area(&polygon);
-    Ok(Fill { surface_angle, p_fill, polygon, area })
+    let exact = (mode == PhysicsMode::Physical).then(|| {
+        let mut straight = vec![p4_1];
+        if p_fill[0] > p1_2[0] {
+            straight.push(p1_2);
+        }
+        straight.push(p_fill);
+        straight.push(p2_1);
+        ExactBoundary { straight, centre: profile.p3, radius: profile.radius, a2, a4 }
+    });
+    Ok(Fill { surface_angle, p_fill, polygon, area, exact })
 }
 
 /// Shoelace area (MATLAB polyarea).
@@ -231,12 +292,17 @@ pub fn launch_points(fill: &Fill, n: usize, mode: PhysicsMode) -> Result<Vec<V2>
     let mut i = 1u64;
     while out.len() < n && i <= limit {
         let p = [xmin + (xmax - xmin) * radical_inverse(i, 2), ymin + (ymax - ymin) * radical_inverse(i, 3)];
-        if in_polygon(p, &fill.polygon) {
+        let inside = match &fill.exact {
+            Some(b) => b.contains(p),
+            None => in_polygon(p, &fill.polygon),
+        };
+        if inside {
             out.push(p);
         }
         i += 1;
-        // A fill that seats no point in a million candidates is degenerate: stop early.
-        if i > 1_000_000 && out.is_empty() {
+        // A fill that seats fewer than 1 in 1000 candidates is degenerate (a sliver): stop
+        // early instead of drawing millions of points; a usable fill seats ~20 % or more.
+        if i == 20_000 && out.len() < 20 {
             break;
         }
     }
@@ -272,6 +338,28 @@ mod tests {
     fn line_cross_finds_the_middle_of_a_crossing_segment() {
         let (s, p) = line_cross([0.0, 0.0], 0.0, [1.0, -1.0], [1.0, 1.0]).unwrap();
         assert!((s - 0.5).abs() < 1e-15 && (p[0] - 1.0).abs() < 1e-15 && p[1].abs() < 1e-15);
+    }
+
+    #[test]
+    fn exact_boundary_agrees_with_a_fine_polygon() {
+        use crate::model::{geometry::{check_design, Profile}, Design};
+        let d = Design::lunar_solution_c();
+        let prof = Profile::new(&d, check_design(&d).unwrap(), 35.0, 10);
+        let ang = (35.0f64 + 18.434 + d.delta_deg).to_radians();
+        let f = build_fill(&prof, 1.625, &d, ang, 58.0, PhysicsMode::Physical).unwrap();
+        let b = f.exact.as_ref().unwrap();
+        let (mut disagree, mut inside) = (0, 0);
+        for i in 1..20_000u64 {
+            let p = [-0.01 + 0.09 * radical_inverse(i, 2), -0.01 + 0.1 * radical_inverse(i, 3)];
+            let e = b.contains(p);
+            inside += e as u32;
+            if e != in_polygon(p, &f.polygon) {
+                disagree += 1;
+            }
+        }
+        assert!(inside > 1000, "{inside}");
+        // only points in the slivers between the arc and its 512-point chords may differ
+        assert!(disagree <= 3, "{disagree}");
     }
 
     #[test]

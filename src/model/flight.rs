@@ -58,14 +58,34 @@ impl<T: Real> Flight<T> {
         }
     }
 
-    /// Times t > 0 at which the flight crosses the line through `a` with normal `n`, in
-    /// ascending order (at most two), looking no further than `t_max` (may be infinite for
-    /// vacuum). `departing` says the flight starts on this line: its root at t = 0 is
-    /// removed analytically instead of by a tolerance.
-    pub fn line_crossings(&self, a: [T; 2], n: [T; 2], departing: bool, t_max: T) -> [Option<T>; 2] {
+    /// Time at which the flight reaches horizontal position `x` (x(t) is monotone), infinite
+    /// when it never does (behind it, or beyond the drag asymptote x0 + vx/k).
+    #[inline(always)]
+    pub fn time_at_x(&self, x: T) -> T {
+        let dx = x - self.p0[0];
+        let vx = self.v0[0];
+        if vx == T::zero() || (dx / vx) < T::zero() {
+            return if dx == T::zero() { T::zero() } else { T::infinity() };
+        }
+        if self.drag() {
+            let q = T::one() - self.k * dx / vx;
+            if q <= T::zero() {
+                return T::infinity();
+            }
+            -q.ln() / self.k
+        } else {
+            dx / vx
+        }
+    }
+
+    /// Times t in (t_min, t_max] (t > 0) at which the flight crosses the line through `a`
+    /// with normal `n`, ascending (at most two). `t_max` may be infinite. `departing` says the
+    /// flight starts on this line: its root at t = 0 is removed analytically instead of by a
+    /// tolerance.
+    pub fn line_crossings(&self, a: [T; 2], n: [T; 2], departing: bool, t_min: T, t_max: T) -> [Option<T>; 2] {
         let c0 = if departing { T::zero() } else { n[0] * (self.p0[0] - a[0]) + n[1] * (self.p0[1] - a[1]) };
         let nv = n[0] * self.v0[0] + n[1] * self.v0[1];
-        let keep = |t: T| if t > T::zero() && t <= t_max { Some(t) } else { None };
+        let keep = |t: T| if t > T::zero() && t >= t_min && t <= t_max { Some(t) } else { None };
         if !self.drag() {
             let c1 = nv;
             let c2 = -T::c(0.5) * self.g * n[1];
@@ -83,24 +103,33 @@ impl<T: Real> Flight<T> {
         let vinf_n = -self.g / k * n[1];
         let (ca, cb) = (vinf_n, nv - vinf_n);
         let f = |t: T| c0 + ca * t + cb * relax(k, t);
-        let df = |t: T| ca + cb * (-k * t).exp();
+        // f and f' share e^{-kt}: one expm1 per Newton step.
+        let fdf = |t: T| {
+            let m = (-k * t).exp_m1();
+            (c0 + ca * t - cb * m / k, ca + cb * (T::one() + m))
+        };
         // Extremum where e^{-kt} = -a/b.
         let ratio = -ca / cb;
         let t_star = if cb != T::zero() && ratio > T::zero() && ratio < T::one() { Some(-ratio.ln() / k) } else { None };
+        // Since 0 <= E < 1/k, f lies between two lines; where the bounding line reaches zero
+        // f has its final sign, so the search needs no loop to find an upper end.
+        let t_end = t_max.min(horizon(c0, ca, cb, k));
         let mut out = [None, None];
         let mut found = 0;
-        let mut lo = T::zero();
-        let mut f_lo = c0;
-        let ends = [t_star, Some(t_max)];
-        for hi in ends.into_iter().flatten() {
+        if t_min > t_end {
+            return out;
+        }
+        let mut lo = t_min.max(T::zero());
+        let mut f_lo = if lo == T::zero() { c0 } else { f(lo) };
+        for hi in [t_star, Some(t_end)].into_iter().flatten() {
             if hi <= lo {
                 continue;
             }
-            let hi = if hi.is_finite() { hi } else { horizon(&f, lo) };
+            let hi = hi.min(t_end);
             let f_hi = f(hi);
             let starts_on_line = lo == T::zero() && (departing || f_lo == T::zero());
             if !starts_on_line && (f_lo > T::zero()) != (f_hi > T::zero()) {
-                let t = bracketed_newton(&f, &df, lo, hi, f_lo);
+                let t = bracketed_newton(&fdf, lo, hi, f_lo, f_hi);
                 if let Some(t) = keep(t) {
                     out[found] = Some(t);
                     found += 1;
@@ -113,17 +142,19 @@ impl<T: Real> Flight<T> {
     }
 }
 
-/// A finite time by which f (which tends to -inf or +inf linearly) has its final sign.
-fn horizon<T: Real>(f: &impl Fn(T) -> T, lo: T) -> T {
-    let mut t = lo + T::one();
-    let s0 = f(lo) > T::zero();
-    for _ in 0..64 {
-        if (f(t) > T::zero()) != s0 {
-            return t;
-        }
-        t = t + t;
+/// A time by which f(t) = c0 + a t + b E(t) has its final sign (E in [0, 1/k)).
+#[inline(always)]
+fn horizon<T: Real>(c0: T, a: T, b: T, k: T) -> T {
+    let span = T::c(40.0) / k; // e^-40: E has converged
+    if a < T::zero() {
+        // f <= c0 + a t + max(b, 0)/k
+        ((c0 + b.max(T::zero()) / k) / -a).max(T::zero()).max(span)
+    } else if a > T::zero() {
+        // f >= c0 + a t + min(b, 0)/k
+        ((-c0 - b.min(T::zero()) / k) / a).max(T::zero()).max(span)
+    } else {
+        span
     }
-    t
 }
 
 /// Real roots of c2 t² + c1 t + c0 (numerically stable form).
@@ -158,12 +189,16 @@ fn sorted<T: Real>(r: [Option<T>; 2], keep: impl Fn(T) -> Option<T>) -> [Option<
 }
 
 /// Root of a monotone f on [lo, hi] with a sign change: Newton steps kept inside the bracket,
-/// bisection when a step leaves it (rtsafe). Fixed maximum iteration count, as a shader needs.
-pub fn bracketed_newton<T: Real>(f: &impl Fn(T) -> T, df: &impl Fn(T) -> T, mut lo: T, mut hi: T, f_lo: T) -> T {
+/// bisection when a step leaves it (rtsafe), started at the regula-falsi point. Fixed
+/// maximum iteration count, as a shader needs.
+pub fn bracketed_newton<T: Real>(fdf: &impl Fn(T) -> (T, T), mut lo: T, mut hi: T, f_lo: T, f_hi: T) -> T {
     let lo_positive = f_lo > T::zero();
-    let mut t = T::c(0.5) * (lo + hi);
-    for _ in 0..64 {
-        let ft = f(t);
+    let mut t = if f_hi != f_lo { lo - f_lo * (hi - lo) / (f_hi - f_lo) } else { T::c(0.5) * (lo + hi) };
+    if !(t > lo && t < hi) {
+        t = T::c(0.5) * (lo + hi);
+    }
+    for _ in 0..48 {
+        let (ft, d) = fdf(t);
         if ft == T::zero() {
             return t;
         }
@@ -172,7 +207,6 @@ pub fn bracketed_newton<T: Real>(f: &impl Fn(T) -> T, df: &impl Fn(T) -> T, mut 
         } else {
             hi = t;
         }
-        let d = df(t);
         let mut next = if d != T::zero() { t - ft / d } else { lo - T::one() };
         if !(next > lo && next < hi) {
             next = T::c(0.5) * (lo + hi);
@@ -192,7 +226,7 @@ mod tests {
     #[test]
     fn vacuum_parabola_hits_the_ground_at_the_textbook_time() {
         let f = Flight { p0: [0.0, 0.0], v0: [1.0, 2.0], g: 9.81, k: 0.0 };
-        let r = f.line_crossings([0.0, 0.0], [0.0, 1.0], true, f64::INFINITY);
+        let r = f.line_crossings([0.0, 0.0], [0.0, 1.0], true, 0.0, f64::INFINITY);
         assert!((r[0].unwrap() - 4.0 / 9.81).abs() < 1e-14);
         assert!(r[1].is_none());
     }
@@ -201,7 +235,7 @@ mod tests {
     fn stokes_flight_crossings_match_its_position() {
         let f = Flight { p0: [0.0, 0.01], v0: [0.5, 1.0], g: 9.81, k: 5.4 };
         // line y = 0.02 is crossed twice (up and down)
-        let r = f.line_crossings([0.0, 0.02], [0.0, 1.0], false, f64::INFINITY);
+        let r = f.line_crossings([0.0, 0.02], [0.0, 1.0], false, 0.0, f64::INFINITY);
         let (t1, t2) = (r[0].unwrap(), r[1].unwrap());
         assert!(t1 < t2);
         for t in [t1, t2] {
@@ -218,7 +252,7 @@ mod tests {
     #[test]
     fn stokes_departing_flight_finds_its_return() {
         let f = Flight { p0: [0.0, 0.0], v0: [0.3, 0.8], g: 9.81, k: 5.0 };
-        let r = f.line_crossings([0.0, 0.0], [0.0, 1.0], true, f64::INFINITY);
+        let r = f.line_crossings([0.0, 0.0], [0.0, 1.0], true, 0.0, f64::INFINITY);
         let t = r[0].unwrap();
         assert!(t > 0.05);
         assert!(f.pos(t)[1].abs() < 1e-12);
@@ -228,7 +262,7 @@ mod tests {
     #[test]
     fn eq_4_55_trajectory_agrees_with_time_form() {
         // y(x) of Eq. 4.55 evaluated at x(t) equals y(t)
-        let (k, g) = (5.347, 9.81);
+        let (k, g): (f64, f64) = (5.347, 9.81);
         let f = Flight { p0: [0.0, 0.0], v0: [0.4, 0.9], g, k };
         let t = 0.08;
         let p = f.pos(t);

@@ -10,6 +10,7 @@ pub mod performance;
 pub mod prepare;
 pub mod real;
 pub mod rng;
+pub mod sampling;
 pub mod scenario;
 pub mod validity;
 

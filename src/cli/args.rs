@@ -1,0 +1,133 @@
+//! Arguments shared by every command that evaluates designs.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context as _};
+use clap::Args;
+
+use crate::engine::EngineKind;
+use crate::io::config::ConfigFile;
+use crate::model::scenario::{EnvPreset, Material};
+use crate::model::{Design, Scenario};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Compat {
+    /// Reproduce listing D.1-D.8 where determinable (errata 4-9, 13, 15, 16, 18-20).
+    Listing,
+}
+
+#[derive(Debug, Clone, Args)]
+pub struct ScenarioArgs {
+    /// TOML file with `env`, `mode`, [design], [environment], [material], [collision], [sim],
+    /// [performance]; flags override it.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Environment preset (listing D.5).
+    #[arg(long, value_enum)]
+    pub env: Option<EnvPreset>,
+    /// Conveyor angle α, degrees.
+    #[arg(long)]
+    pub alpha: Option<f64>,
+    /// Elastic normal coefficient of restitution.
+    #[arg(long)]
+    pub k_elastic: Option<f64>,
+    /// Friction coefficient of the tangential COR (Eq. 4.14).
+    #[arg(long)]
+    pub mu_fric: Option<f64>,
+    /// Stokes drag parameter k_drag, 1/s (0 = vacuum).
+    #[arg(long)]
+    pub k_drag: Option<f64>,
+    /// Angle of repose, degrees.
+    #[arg(long)]
+    pub aor: Option<f64>,
+    /// Material preset: lunar-regolith, quartz-sand, glass-beads.
+    #[arg(long)]
+    pub material: Option<String>,
+    /// Particles per design.
+    #[arg(long)]
+    pub particles: Option<u32>,
+    /// Simulated teeth.
+    #[arg(long)]
+    pub teeth: Option<u32>,
+    /// Maximum bounce iterations.
+    #[arg(long)]
+    pub bounces: Option<u32>,
+    /// Seed of the counter-based random numbers.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Launch-angle offset added to α + δ, degrees (listing: 18.434).
+    #[arg(long)]
+    pub launch_offset: Option<f64>,
+    /// Switch off the launch randomisation.
+    #[arg(long)]
+    pub no_randomise: bool,
+    /// Compatibility mode.
+    #[arg(long, value_enum)]
+    pub compat: Option<Compat>,
+}
+
+impl ScenarioArgs {
+    /// Config file (if any), then flags; validated.
+    pub fn resolve(&self) -> anyhow::Result<(Scenario, Option<Design>)> {
+        let file = match &self.config {
+            Some(p) => ConfigFile::load(p)?,
+            None => ConfigFile::default(),
+        };
+        let mut file = file;
+        if let Some(e) = self.env {
+            file.env = Some(e);
+        }
+        if self.compat == Some(Compat::Listing) {
+            file.mode = Some(crate::model::PhysicsMode::Listing);
+        }
+        let mut s = file.scenario()?;
+        if let Some(m) = &self.material {
+            s.material = Material::by_name(m)
+                .with_context(|| format!("--material: unknown material `{m}` (known: lunar-regolith, quartz-sand, glass-beads)"))?;
+        }
+        if let Some(v) = self.alpha {
+            s.environment.alpha_deg = v;
+        }
+        if let Some(v) = self.k_elastic {
+            s.collision.k_elastic = v;
+        }
+        if let Some(v) = self.mu_fric {
+            s.collision.mu_friction = v;
+        }
+        if let Some(v) = self.k_drag {
+            s.environment.k_drag = if v == 0.0 { None } else { Some(v) };
+        }
+        if let Some(v) = self.aor {
+            s.material.aor_deg = v;
+        }
+        if let Some(v) = self.particles {
+            s.sim.particles = v;
+        }
+        if let Some(v) = self.teeth {
+            s.sim.teeth = v;
+        }
+        if let Some(v) = self.bounces {
+            s.sim.max_bounces = v;
+        }
+        if let Some(v) = self.seed {
+            s.sim.seed = v;
+        }
+        if let Some(v) = self.launch_offset {
+            s.sim.launch_offset_deg = v;
+        }
+        if self.no_randomise {
+            s.sim.randomise = false;
+        }
+        if let Err(e) = s.validate() {
+            bail!("invalid setting: {e}");
+        }
+        Ok((s, file.design()))
+    }
+}
+
+#[derive(Debug, Clone, Args)]
+pub struct EngineArgs {
+    /// Evaluation engine.
+    #[arg(long, value_enum, default_value = "cpu")]
+    pub engine: EngineKind,
+}

@@ -1,0 +1,118 @@
+//! `sawtooth bench`: particle-bounces per second of each engine on one batch, measured side
+//! by side in one run, with the ratio to the `listing` baseline.
+
+use std::io::Write;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::Context as _;
+use clap::Args;
+use serde_json::json;
+
+use crate::engine::{particle_engine, BatchEvaluator, EngineKind};
+use crate::model::sampling::neighbourhood;
+use crate::model::scenario::EnvPreset;
+use crate::model::{Design, Scenario};
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Environment preset.
+    #[arg(long, value_enum, default_value = "lunar")]
+    pub env: EnvPreset,
+    /// Designs in the batch (lunar/terrestrial solution C neighbourhood, ±5 %).
+    #[arg(long, default_value_t = 64)]
+    pub designs: usize,
+    #[arg(long, default_value_t = 100)]
+    pub particles: u32,
+    #[arg(long, default_value_t = 100)]
+    pub bounces: u32,
+    /// Engines to compare, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "listing,cpu")]
+    pub engines: Vec<EngineKind>,
+    /// Timed repetitions per engine (the best is reported).
+    #[arg(long, default_value_t = 3)]
+    pub repeats: u32,
+    /// Listing compatibility mode instead of the physical mode.
+    #[arg(long)]
+    pub compat_listing: bool,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// One engine's measurement.
+#[derive(Debug, Clone)]
+pub struct Measurement {
+    pub engine: &'static str,
+    /// Best wall time of one batch, s.
+    pub seconds: f64,
+    /// Particle flights (impacts) computed in one batch.
+    pub particle_bounces: f64,
+}
+
+/// Time `engine` on the batch; the best of `repeats` runs.
+pub fn measure(engine: &dyn BatchEvaluator, scenario: &Scenario, designs: &[Design], repeats: u32) -> Measurement {
+    let mut best = f64::INFINITY;
+    let mut pb = 0.0;
+    for _ in 0..repeats.max(1) {
+        let t = Instant::now();
+        let res = engine.evaluate(scenario, designs);
+        best = best.min(t.elapsed().as_secs_f64());
+        pb = res.iter().flatten().map(|e| e.sim.mean_bounces * scenario.sim.particles as f64).sum();
+    }
+    Measurement { engine: engine.backend(), seconds: best, particle_bounces: pb }
+}
+
+pub fn run(a: BenchArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    let mut scenario = Scenario::preset(a.env);
+    if a.compat_listing {
+        scenario = scenario.into_listing_compat();
+    }
+    scenario.sim.particles = a.particles;
+    scenario.sim.max_bounces = a.bounces;
+    scenario.validate().map_err(anyhow::Error::msg)?;
+    let centre = match a.env {
+        EnvPreset::Lunar => Design::lunar_solution_c(),
+        EnvPreset::Earth => Design::earth_solution_c(),
+    };
+    let designs = neighbourhood(&scenario, &centre, a.designs, 0.05, a.seed);
+    let results: Vec<Measurement> = a.engines.iter().map(|k| measure(&particle_engine(*k), &scenario, &designs, a.repeats)).collect();
+    let rate = |m: &Measurement| m.particle_bounces / m.seconds;
+    let base = results.iter().find(|m| m.engine == "listing").map(rate);
+    if a.json {
+        let rates: serde_json::Map<String, serde_json::Value> = results.iter().map(|m| (m.engine.to_string(), json!(rate(m)))).collect();
+        let secs: serde_json::Map<String, serde_json::Value> = results.iter().map(|m| (m.engine.to_string(), json!(m.seconds))).collect();
+        let ratios: serde_json::Map<String, serde_json::Value> =
+            results.iter().filter_map(|m| base.map(|b| (m.engine.to_string(), json!(rate(m) / b)))).collect();
+        let v = json!({
+            "particle_bounces_per_s": rates,
+            "seconds_per_batch": secs,
+            "ratio_to_listing": ratios,
+            "designs": designs.len(),
+            "particles": a.particles,
+            "max_bounces": a.bounces,
+            "env": a.env,
+            "mode": scenario.mode,
+            "threads": rayon::current_num_threads(),
+        });
+        writeln!(out, "{}", serde_json::to_string_pretty(&v)?).context("writing output")?;
+    } else {
+        writeln!(
+            out,
+            "batch: {} designs x {} particles, up to {} bounces, {:?} env, {:?} mode, {} threads",
+            designs.len(),
+            a.particles,
+            a.bounces,
+            a.env,
+            scenario.mode,
+            rayon::current_num_threads()
+        )?;
+        writeln!(out, "{:<10} {:>14} {:>16} {:>18} {:>10}", "engine", "s/batch", "particle-bounces", "particle-bounces/s", "ratio")?;
+        for m in &results {
+            let ratio = base.map_or("-".to_string(), |b| format!("{:.1}x", rate(m) / b));
+            writeln!(out, "{:<10} {:>14.5} {:>16.0} {:>18.3e} {:>10}", m.engine, m.seconds, m.particle_bounces, rate(m), ratio)?;
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,190 @@
+//! TOML configuration files for `simulate` (and later the studies). Every table and key is
+//! optional and overrides the chosen preset; unknown keys are errors that name the key.
+//! Units are in the key names where they are not SI.
+
+use std::path::Path;
+
+use anyhow::{bail, Context as _};
+use serde::Deserialize;
+
+use crate::model::scenario::{EnvPreset, Material, PhysicsMode, Scenario};
+use crate::model::Design;
+
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConfigFile {
+    /// `lunar` or `earth` (listing D.5 presets); default lunar.
+    pub env: Option<EnvPreset>,
+    /// `physical` (thesis text) or `listing` (compatibility).
+    pub mode: Option<PhysicsMode>,
+    pub design: Option<DesignTable>,
+    pub environment: Option<EnvironmentTable>,
+    pub material: Option<MaterialTable>,
+    pub collision: Option<CollisionTable>,
+    pub sim: Option<SimTable>,
+    pub performance: Option<PerformanceTable>,
+}
+
+/// The design in the units of Table 5.3.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DesignTable {
+    pub l_c_mm: f64,
+    pub l_a_mm: f64,
+    pub l_b_mm: f64,
+    pub r_mm: f64,
+    pub omega_deg: f64,
+    pub delta_deg: f64,
+    pub v0_m_s: f64,
+    pub a_m_s2: f64,
+}
+
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvironmentTable {
+    pub g_m_s2: Option<f64>,
+    pub alpha_deg: Option<f64>,
+    /// Stokes k_drag in 1/s; 0 switches drag off (vacuum).
+    pub k_drag_per_s: Option<f64>,
+}
+
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialTable {
+    /// `lunar-regolith`, `quartz-sand` or `glass-beads`.
+    pub name: Option<String>,
+    pub aor_deg: Option<f64>,
+    pub bulk_density_kg_m3: Option<f64>,
+}
+
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CollisionTable {
+    pub k_elastic: Option<f64>,
+    pub mu_friction: Option<f64>,
+}
+
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimTable {
+    pub teeth: Option<u32>,
+    pub particles: Option<u32>,
+    pub max_bounces: Option<u32>,
+    pub randomise: Option<bool>,
+    pub random_band: Option<f64>,
+    pub seed: Option<u64>,
+    pub rest_threshold_m: Option<f64>,
+    pub launch_offset_deg: Option<f64>,
+}
+
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PerformanceTable {
+    pub conveyor_length_m: Option<f64>,
+    pub regolith_width_m: Option<f64>,
+    pub sled_width_m: Option<f64>,
+    pub downstroke_speed_m_s: Option<f64>,
+    pub f_max_hz: Option<f64>,
+}
+
+impl ConfigFile {
+    pub fn load(path: &Path) -> anyhow::Result<Self> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read config file {}", path.display()))?;
+        Self::parse(&text).with_context(|| format!("in config file {}", path.display()))
+    }
+
+    pub fn parse(text: &str) -> anyhow::Result<Self> {
+        Ok(toml::from_str(text)?)
+    }
+
+    /// The scenario this file describes (preset, then mode, then overrides).
+    pub fn scenario(&self) -> anyhow::Result<Scenario> {
+        let mut s = Scenario::preset(self.env.unwrap_or(EnvPreset::Lunar));
+        if self.mode == Some(PhysicsMode::Listing) {
+            s = s.into_listing_compat();
+        }
+        if let Some(e) = &self.environment {
+            set(&mut s.environment.g, e.g_m_s2);
+            set(&mut s.environment.alpha_deg, e.alpha_deg);
+            if let Some(k) = e.k_drag_per_s {
+                s.environment.k_drag = if k == 0.0 { None } else { Some(k) };
+            }
+        }
+        if let Some(m) = &self.material {
+            if let Some(name) = &m.name {
+                match Material::by_name(name) {
+                    Some(mat) => s.material = mat,
+                    None => bail!("material.name: unknown material `{name}` (known: lunar-regolith, quartz-sand, glass-beads)"),
+                }
+            }
+            set(&mut s.material.aor_deg, m.aor_deg);
+            set(&mut s.material.bulk_density, m.bulk_density_kg_m3);
+        }
+        if let Some(c) = &self.collision {
+            set(&mut s.collision.k_elastic, c.k_elastic);
+            set(&mut s.collision.mu_friction, c.mu_friction);
+        }
+        if let Some(t) = &self.sim {
+            set(&mut s.sim.teeth, t.teeth);
+            set(&mut s.sim.particles, t.particles);
+            set(&mut s.sim.max_bounces, t.max_bounces);
+            set(&mut s.sim.randomise, t.randomise);
+            set(&mut s.sim.random_band, t.random_band);
+            set(&mut s.sim.seed, t.seed);
+            set(&mut s.sim.rest_threshold, t.rest_threshold_m);
+            set(&mut s.sim.launch_offset_deg, t.launch_offset_deg);
+        }
+        if let Some(p) = &self.performance {
+            set(&mut s.performance.conveyor_length, p.conveyor_length_m);
+            set(&mut s.performance.regolith_width, p.regolith_width_m);
+            set(&mut s.performance.sled_width, p.sled_width_m);
+            set(&mut s.performance.downstroke_speed, p.downstroke_speed_m_s);
+            set(&mut s.performance.f_max, p.f_max_hz);
+        }
+        Ok(s)
+    }
+
+    pub fn design(&self) -> Option<Design> {
+        self.design.as_ref().map(|d| {
+            Design::from_cli_units([d.l_c_mm, d.l_a_mm, d.l_b_mm, d.r_mm, d.omega_deg, d.delta_deg, d.v0_m_s, d.a_m_s2])
+        })
+    }
+}
+
+fn set<T: Copy>(slot: &mut T, v: Option<T>) {
+    if let Some(v) = v {
+        *slot = v;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unknown_key_is_named() {
+        let err = ConfigFile::parse("[sim]\nparticels = 5\n").unwrap_err();
+        assert!(format!("{err:#}").contains("particels"), "{err:#}");
+    }
+
+    #[test]
+    fn wrong_type_is_named() {
+        let err = ConfigFile::parse("[collision]\nk_elastic = \"high\"\n").unwrap_err();
+        assert!(format!("{err:#}").contains("k_elastic"), "{err:#}");
+    }
+
+    #[test]
+    fn overrides_apply_on_top_of_the_preset() {
+        let c = ConfigFile::parse("env = \"earth\"\n[environment]\nk_drag_per_s = 0\n[sim]\nseed = 7\n").unwrap();
+        let s = c.scenario().unwrap();
+        assert_eq!(s.environment.g, 9.81);
+        assert_eq!(s.environment.k_drag, None);
+        assert_eq!(s.sim.seed, 7);
+    }
+
+    #[test]
+    fn unknown_material_is_an_error() {
+        let c = ConfigFile::parse("[material]\nname = \"cheese\"\n").unwrap();
+        assert!(c.scenario().unwrap_err().to_string().contains("material.name"));
+    }
+}
