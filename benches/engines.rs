@@ -1,1 +1,29 @@
-fn main(){}
+//! Criterion bench: one batch of 64 designs around lunar solution C (±5 %), 100 particles,
+//! up to 100 bounces, each engine on the same batch. Throughput is in particle-bounces.
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use sawtooth::engine::{particle_engine, BatchEvaluator, EngineKind};
+use sawtooth::model::sampling::neighbourhood;
+use sawtooth::model::{Design, Scenario};
+
+fn engines(c: &mut Criterion) {
+    for (label, scenario, centre) in [
+        ("lunar", Scenario::lunar(), Design::lunar_solution_c()),
+        ("lunar-listing-mode", Scenario::lunar().into_listing_compat(), Design::lunar_solution_c()),
+        ("earth", Scenario::earth(), Design::earth_solution_c()),
+    ] {
+        let designs = neighbourhood(&scenario, &centre, 64, 0.05, 1);
+        let mut group = c.benchmark_group(format!("batch64/{label}"));
+        group.sample_size(10);
+        for kind in [EngineKind::Listing, EngineKind::Cpu] {
+            let engine = particle_engine(kind);
+            let bounces: f64 = engine.evaluate(&scenario, &designs).iter().flatten().map(|e| e.sim.mean_bounces * 100.0).sum();
+            group.throughput(Throughput::Elements(bounces as u64));
+            group.bench_function(engine.backend(), |b| b.iter(|| engine.evaluate(&scenario, &designs)));
+        }
+        group.finish();
+    }
+}
+
+criterion_group!(benches, engines);
+criterion_main!(benches);

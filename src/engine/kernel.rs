@@ -242,8 +242,12 @@ pub fn first_hit<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bo
     if (lo.to_i64().unwrap_or(0) + k as i64) > d.teeth as i64 - 1 || (hi.to_i64().unwrap_or(0) + k as i64) < 0 {
         return best;
     }
+    let x_far = if best.found { best.pos[0] } else { x_end };
     for j in j_lo..=j_hi {
         let dj = j - k;
+        if flies_over(d, &fl, dj, p.pos[0], x_far) {
+            continue;
+        }
         for surface in [SURFACE_RAMP, SURFACE_CATCH] {
             if surface == SURFACE_CATCH && bounce == 0 && j == 0 {
                 continue;
@@ -288,6 +292,25 @@ pub fn first_hit<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bo
         }
     }
     best
+}
+
+/// True when the flight stays above tooth `dj`'s peak over the tooth's whole x-extent
+/// (clipped to the part of the flight before `x_far`): the trajectory is concave in x, so its
+/// lowest point over an interval is at an end, and no tooth point is higher than p2.
+#[inline(always)]
+fn flies_over<T: Real>(d: &KDesign<T>, fl: &Flight<T>, dj: i32, x0: T, x_far: T) -> bool {
+    let base = T::c(dj as f64) * d.pitch[0];
+    let (lo, hi) = if x_far >= x0 { (x0, x_far) } else { (x_far, x0) };
+    let xa = (base + d.ext_min).max(lo);
+    let xb = (base + d.ext_max).min(hi);
+    if xa > xb {
+        return true; // not reached at all
+    }
+    let top = T::c(dj as f64) * d.pitch[1] + d.p2[1].max(d.p4[1]).max(T::zero());
+    match (fl.y_at_x(xa), fl.y_at_x(xb)) {
+        (Some(ya), Some(yb)) => ya > top && yb > top,
+        _ => false,
+    }
 }
 
 /// What one flight did, for trajectory output.

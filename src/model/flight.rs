@@ -78,6 +78,31 @@ impl<T: Real> Flight<T> {
         }
     }
 
+    /// Height of the flight when it is at horizontal position `x` (Eq. 4.52 vacuum, 4.55
+    /// drag); None when it never gets there. y(x) is concave in both cases.
+    #[inline(always)]
+    pub fn y_at_x(&self, x: T) -> Option<T> {
+        let vx = self.v0[0];
+        if vx == T::zero() {
+            return None;
+        }
+        let e = (x - self.p0[0]) / vx; // = E(t) for drag, = t in vacuum
+        if e < T::zero() {
+            return None;
+        }
+        if self.drag() {
+            let q = T::one() - self.k * e;
+            if q <= T::zero() {
+                return None;
+            }
+            let t = -q.ln() / self.k;
+            let vinf = -self.g / self.k;
+            Some(self.p0[1] + vinf * t + (self.v0[1] - vinf) * e)
+        } else {
+            Some(self.p0[1] + self.v0[1] * e - T::c(0.5) * self.g * e * e)
+        }
+    }
+
     /// Times t in (t_min, t_max] (t > 0) at which the flight crosses the line through `a`
     /// with normal `n`, ascending (at most two). `t_max` may be infinite. `departing` says the
     /// flight starts on this line: its root at t = 0 is removed analytically instead of by a
@@ -257,6 +282,15 @@ mod tests {
         assert!(t > 0.05);
         assert!(f.pos(t)[1].abs() < 1e-12);
         assert!(r[1].is_none());
+    }
+
+    #[test]
+    fn y_at_x_agrees_with_the_time_form() {
+        for k in [0.0f64, 5.347] {
+            let f = Flight { p0: [0.01, 0.02], v0: [0.4, 0.9], g: 9.81, k };
+            let p = f.pos(0.07);
+            assert!((f.y_at_x(p[0]).unwrap() - p[1]).abs() < 1e-12, "k {k}");
+        }
     }
 
     #[test]

@@ -1,0 +1,90 @@
+//! The binary as a user meets it: outputs, and bad input answered with a named field,
+//! a non-zero exit and no panic.
+
+use std::process::Command;
+
+fn sawtooth(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_sawtooth")).args(args).output().expect("run binary");
+    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
+}
+
+const LUNAR_C: &str = "47.346,46.898,32.183,43.687,94.42,11.964,0.840,32.051";
+
+#[test]
+fn simulate_json_has_the_documented_keys() {
+    let (code, out, err) = sawtooth(&["simulate", "--env", "lunar", "--design", LUNAR_C, "--particles", "20", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for k in ["distribution", "d_avg_m", "lost_fraction", "fill_area_mm2", "bounces"] {
+        assert!(v.get(k).is_some(), "missing {k}");
+    }
+    for k in ["stroke_m", "n_wire", "t_cool_s", "f_stroke_hz", "m_dot_kg_s", "w_spec_j_kg", "p_avg_w"] {
+        assert!(v["performance"].get(k).is_some(), "missing performance.{k}");
+    }
+    assert_eq!(v["distribution"].as_array().unwrap().len(), 100);
+}
+
+#[test]
+fn same_seed_same_output_different_seed_different_output() {
+    let run = |seed: &str| sawtooth(&["simulate", "--env", "earth", "--design", LUNAR_C, "--seed", seed, "--json"]).1;
+    assert_eq!(run("5"), run("5"));
+    assert_ne!(run("5"), run("6"));
+}
+
+#[test]
+fn example_configs_run() {
+    for f in ["examples/lunar_solution_c.toml", "examples/earth_solution_c.toml", "examples/validation_test3.toml"] {
+        let path = format!("{}/{f}", env!("CARGO_MANIFEST_DIR"));
+        let (code, out, err) = sawtooth(&["simulate", "--config", &path]);
+        assert_eq!(code, 0, "{f}: {err}");
+        assert!(out.contains("d_avg"), "{f}");
+    }
+}
+
+#[test]
+fn trajectories_and_plot_are_written() {
+    let dir = std::env::temp_dir().join(format!("sawtooth-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("t.csv");
+    let svg = dir.join("t.svg");
+    let (code, _, err) = sawtooth(&["simulate", "--design", LUNAR_C, "--particles", "8", "--trajectories", csv.to_str().unwrap(), "--plot", svg.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(text.starts_with("particle,bounce,x_m,y_m,state"));
+    assert!(text.lines().count() > 8);
+    assert!(std::fs::read_to_string(&svg).unwrap().starts_with("<svg"));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+fn assert_bad_input(args: &[&str], needle: &str) {
+    let (code, _, err) = sawtooth(args);
+    assert_eq!(code, 2, "{args:?}: {err}");
+    assert!(err.contains(needle), "{args:?}: stderr `{err}` lacks `{needle}`");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn bad_input_names_the_field_and_exits_2() {
+    assert_bad_input(&["simulate", "--design", "47,46,32"], "8 comma-separated");
+    assert_bad_input(&["simulate", "--design", "47,46,32,43,94,11,abc,32"], "v0");
+    assert_bad_input(&["simulate", "--design", "47,46,32,43,94,11,NaN,32"], "v0");
+    assert_bad_input(&["simulate", "--design", "47,46,45,43,94,11,0.84,32"], "l_b <= r");
+    assert_bad_input(&["simulate", "--design", LUNAR_C, "--k-elastic", "1.5"], "collision.k_elastic");
+    assert_bad_input(&["simulate", "--design", LUNAR_C, "--particles", "0"], "sim.particles");
+    assert_bad_input(&["simulate", "--design", LUNAR_C, "--env", "mars"], "mars");
+    assert_bad_input(&["simulate", "--design", LUNAR_C, "--material", "cheese"], "cheese");
+    assert_bad_input(&["simulate"], "no design");
+    assert_bad_input(&["simulate", "--config", "/nonexistent/x.toml"], "/nonexistent/x.toml");
+}
+
+#[test]
+fn malformed_toml_names_the_key() {
+    let dir = std::env::temp_dir().join(format!("sawtooth-toml-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "[sim]\nparticels = 10\n").unwrap();
+    assert_bad_input(&["simulate", "--config", bad.to_str().unwrap(), "--design", LUNAR_C], "particels");
+    std::fs::write(&bad, "[design\nl_c_mm = 1\n").unwrap();
+    assert_bad_input(&["simulate", "--config", bad.to_str().unwrap()], "bad.toml");
+    std::fs::remove_dir_all(&dir).ok();
+}
