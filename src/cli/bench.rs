@@ -9,7 +9,7 @@ use anyhow::Context as _;
 use clap::Args;
 use serde_json::json;
 
-use crate::engine::{particle_engine, BatchEvaluator, EngineKind};
+use crate::engine::{make_engine, BatchEvaluator, EngineKind};
 use crate::model::sampling::neighbourhood;
 use crate::model::scenario::EnvPreset;
 use crate::model::{Design, Scenario};
@@ -26,7 +26,7 @@ pub struct BenchArgs {
     pub particles: u32,
     #[arg(long, default_value_t = 100)]
     pub bounces: u32,
-    /// Engines to compare, comma-separated.
+    /// Engines to compare, comma-separated (listing, cpu, gpu, auto).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "listing,cpu")]
     pub engines: Vec<EngineKind>,
     /// Timed repetitions per engine (the best is reported).
@@ -77,7 +77,11 @@ pub fn run(a: BenchArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         EnvPreset::Earth => Design::earth_solution_c(),
     };
     let designs = neighbourhood(&scenario, &centre, a.designs, 0.05, a.seed);
-    let results: Vec<Measurement> = a.engines.iter().map(|k| measure(&particle_engine(*k), &scenario, &designs, a.repeats)).collect();
+    let mut results = Vec::new();
+    for k in &a.engines {
+        let engine = make_engine(*k)?;
+        results.push(measure(&engine, &scenario, &designs, a.repeats));
+    }
     let rate = |m: &Measurement| m.particle_bounces / m.seconds;
     let base = results.iter().find(|m| m.engine == "listing").map(rate);
     if a.json {

@@ -9,7 +9,7 @@ use clap::Args;
 use serde_json::json;
 
 use super::args::{EngineArgs, ScenarioArgs};
-use crate::engine::{evaluate_detailed, particle_engine, Detailed};
+use crate::engine::{evaluate_detailed, make_engine, Detailed, EngineKind};
 use crate::model::outcome::centre_and_dispersion;
 use crate::model::{Design, PhysicsMode, Scenario};
 
@@ -40,8 +40,11 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         (None, Some(d)) => d,
         (None, None) => bail!("no design: pass --design l_c,l_a,l_b,r,omega_deg,delta_deg,v0,a or a config file with [design]"),
     };
-    let engine = particle_engine(a.engine.engine);
     let trace = a.trajectories.is_some() || a.plot.is_some();
+    if trace && matches!(a.engine.engine, EngineKind::Gpu | EngineKind::Auto) {
+        bail!("--trajectories and --plot record every flight, which only the CPU engines do: use --engine cpu or listing");
+    }
+    let engine = make_engine(a.engine.engine)?;
     let det = match evaluate_detailed(engine.as_ref(), &scenario, &design, trace) {
         Ok(d) => d,
         Err(invalid) => bail!("invalid design ({}): {invalid}", invalid.rule()),

@@ -6,6 +6,7 @@
 //! performance model are shared, so both engines see the same problem.
 
 pub mod cpu;
+pub mod gpu;
 pub mod kernel;
 pub mod listing;
 
@@ -119,7 +120,7 @@ pub fn evaluate_batch(engine: &dyn ParticleEngine, scenario: &Scenario, designs:
         .collect()
 }
 
-impl<E: ParticleEngine> BatchEvaluator for E {
+impl BatchEvaluator for cpu::CpuEngine {
     fn backend(&self) -> &'static str {
         ParticleEngine::name(self)
     }
@@ -128,10 +129,27 @@ impl<E: ParticleEngine> BatchEvaluator for E {
     }
 }
 
-fn finish(scenario: &Scenario, prep: &Prepared, run: &Run) -> Evaluation {
-    let sim = summarise(&prep.profile, prep.fill.area, &run.particles, run.iterations);
+impl BatchEvaluator for listing::ListingEngine {
+    fn backend(&self) -> &'static str {
+        ParticleEngine::name(self)
+    }
+    fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
+        evaluate_batch(self, scenario, designs)
+    }
+}
+
+/// An engine usable both for whole generations and for one design with its particles.
+pub trait Engine: ParticleEngine + BatchEvaluator + Send {}
+impl<T: ParticleEngine + BatchEvaluator + Send> Engine for T {}
+
+/// Attach the performance model to a simulated design.
+pub fn finish_outcome(scenario: &Scenario, prep: &Prepared, sim: SimOutcome) -> Evaluation {
     let performance = performance(scenario, &prep.design, sim.d_avg_m, prep.fill.area);
     Evaluation { sim, performance }
+}
+
+fn finish(scenario: &Scenario, prep: &Prepared, run: &Run) -> Evaluation {
+    finish_outcome(scenario, prep, summarise(&prep.profile, prep.fill.area, &run.particles, run.iterations))
 }
 
 /// Evaluate one design and keep every particle (and optionally every flight).
@@ -152,20 +170,57 @@ pub enum EngineKind {
     Listing,
     /// Fast reference: closed-form flights, reachable teeth only, f64.
     Cpu,
+    /// WGSL kernels on wgpu (Vulkan); a software adapter (lavapipe) is accepted.
+    Gpu,
+    /// A hardware GPU when one exists, else `cpu`; says which on stderr.
+    Auto,
 }
 
-pub fn particle_engine(kind: EngineKind) -> Box<dyn ParticleEngine + Send> {
+/// The CPU engines, which cannot fail to start. Use `make_engine` for `gpu` and `auto`.
+pub fn particle_engine(kind: EngineKind) -> Box<dyn Engine> {
     match kind {
         EngineKind::Listing => Box::new(listing::ListingEngine),
         EngineKind::Cpu => Box::new(cpu::CpuEngine::default()),
+        EngineKind::Gpu | EngineKind::Auto => panic!("particle_engine covers the CPU engines; use make_engine for {kind:?}"),
     }
 }
 
-impl ParticleEngine for Box<dyn ParticleEngine + Send> {
+/// Any engine by name. `gpu` without an adapter is an error; `auto` falls back to `cpu`.
+pub fn make_engine(kind: EngineKind) -> anyhow::Result<Box<dyn Engine>> {
+    Ok(match kind {
+        EngineKind::Listing | EngineKind::Cpu => particle_engine(kind),
+        EngineKind::Gpu => {
+            let g = gpu::GpuEngine::new(gpu::AdapterChoice::Any)?;
+            eprintln!("engine: gpu on {}", g.describe());
+            Box::new(g)
+        }
+        EngineKind::Auto => match gpu::GpuEngine::new(gpu::AdapterChoice::HardwareOnly) {
+            Ok(g) => {
+                eprintln!("engine auto: gpu on {}", g.describe());
+                Box::new(g)
+            }
+            Err(_) => {
+                eprintln!("engine auto: no hardware GPU, using the cpu engine");
+                particle_engine(EngineKind::Cpu)
+            }
+        },
+    })
+}
+
+impl ParticleEngine for Box<dyn Engine> {
     fn name(&self) -> &'static str {
         self.as_ref().name()
     }
     fn run(&self, prep: &Prepared, ctx: &Context, trace: Option<&mut Vec<FlightRecord>>) -> Run {
         self.as_ref().run(prep, ctx, trace)
+    }
+}
+
+impl BatchEvaluator for Box<dyn Engine> {
+    fn backend(&self) -> &'static str {
+        self.as_ref().backend()
+    }
+    fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
+        self.as_ref().evaluate(scenario, designs)
     }
 }

@@ -55,9 +55,8 @@ pub fn end_tooth(profile: &Profile, end: [f64; 2]) -> u32 {
 }
 
 pub fn summarise(profile: &Profile, fill_area_m2: f64, particles: &[ParticleEnd], iterations: u32) -> SimOutcome {
-    let n = particles.len().max(1) as f64;
-    let mut distribution = vec![0.0; profile.teeth as usize];
-    let (mut lost, mut flying, mut dist, mut adv, mut bounces) = (0usize, 0usize, 0.0, 0.0, 0u64);
+    let mut counts = vec![0u32; profile.teeth as usize];
+    let (mut lost, mut flying, mut dist, mut advance, mut bounces) = (0usize, 0usize, 0.0, 0u64, 0u64);
     for p in particles {
         bounces += p.bounces as u64;
         match p.state {
@@ -69,22 +68,39 @@ pub fn summarise(profile: &Profile, fill_area_m2: f64, particles: &[ParticleEnd]
             ParticleState::Resting => {}
         }
         let j = end_tooth(profile, p.end);
-        distribution[(j - 1) as usize] += 1.0;
+        counts[(j - 1) as usize] += 1;
         dist += profile.credited_distance(j as i64);
-        adv += (j - 1) as f64 * profile.pitch_len;
+        advance += (j - 1) as u64;
     }
-    for v in distribution.iter_mut() {
-        *v /= n;
-    }
+    let advance_m = advance as f64 * profile.pitch_len;
+    from_counts(&counts, particles.len(), lost, flying, dist, advance_m, fill_area_m2, iterations, bounces)
+}
+
+/// The per-design outcome from the reduced counts (what the GPU kernel reduces, too):
+/// per-tooth counts, lost and still-flying counts, the sum of credited distances (m), the
+/// sum of advances (m), impacts.
+#[allow(clippy::too_many_arguments)]
+pub fn from_counts(
+    counts: &[u32],
+    n: usize,
+    lost: usize,
+    flying: usize,
+    distance_sum_m: f64,
+    advance_sum_m: f64,
+    fill_area_m2: f64,
+    iterations: u32,
+    bounce_sum: u64,
+) -> SimOutcome {
+    let n = n.max(1) as f64;
     SimOutcome {
-        distribution,
+        distribution: counts.iter().map(|c| *c as f64 / n).collect(),
         lost_fraction: lost as f64 / n,
         unsettled_fraction: flying as f64 / n,
-        d_avg_m: dist / n,
-        advance_m: adv / n,
+        d_avg_m: distance_sum_m / n,
+        advance_m: advance_sum_m / n,
         fill_area_mm2: fill_area_m2 * 1e6,
         bounces: iterations,
-        mean_bounces: bounces as f64 / n,
+        mean_bounces: bounce_sum as f64 / n,
     }
 }
 

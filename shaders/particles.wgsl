@@ -1,0 +1,339 @@
+// The particle kernel: one workgroup per design, its threads striding over the design's
+// particles, bounce by bounce (4.2.4), then the per-design reduction (Eq. 4.56-4.57).
+// CPU twin: src/engine/kernel.rs (same function names and structure) driven by
+// src/engine/cpu.rs. Positions are relative to a tooth's p1 so f32 suffices.
+
+#import shared/types.wgsl
+#import shared/rng.wgsl
+#import shared/flight.wgsl
+
+@group(0) @binding(0) var<uniform> ph: Physics;
+@group(0) @binding(1) var<storage, read> designs: array<Design>;
+@group(0) @binding(2) var<storage, read_write> particles: array<Particle>;
+@group(0) @binding(3) var<storage, read_write> outcomes: array<Outcome>;
+@group(0) @binding(4) var<storage, read_write> histogram: array<atomic<u32>>;
+
+const WG: u32 = 64u;
+
+var<workgroup> wg_flying: atomic<u32>;
+var<workgroup> wg_hop_n: atomic<u32>;
+var<workgroup> wg_lost: atomic<u32>;
+var<workgroup> wg_bounces: atomic<u32>;
+var<workgroup> wg_advance: atomic<u32>;
+var<workgroup> wg_sum: array<f32, 64>;
+var<workgroup> wg_go: u32;
+
+struct Hit {
+    found: bool,
+    t: f32,
+    pos: vec2<f32>,
+    tooth: i32,
+    surface: u32,
+}
+
+fn pitch(d: Design) -> vec2<f32> { return vec2<f32>(d.pitch_x, d.pitch_y); }
+
+fn offset(d: Design, dj: i32, p: vec2<f32>) -> vec2<f32> {
+    return f32(dj) * pitch(d) + p;
+}
+
+fn normal_of(d: Design, surface: u32) -> vec2<f32> {
+    if (surface == SURFACE_RAMP) { return vec2<f32>(d.n_ramp_x, d.n_ramp_y); }
+    if (surface == SURFACE_CATCH) { return vec2<f32>(d.n_catch_x, d.n_catch_y); }
+    return vec2<f32>(d.n_base_x, d.n_base_y);
+}
+
+fn randomise_launch(d: Design, p: ptr<function, Particle>, index: u32, bounce: u32) {
+    var apply = false;
+    if (ph.randomise == RANDOMISE_FIRST_LAUNCH) { apply = bounce == 0u; }
+    if (ph.randomise == RANDOMISE_EVERY_LAUNCH) { apply = true; }
+    if (!apply) { return; }
+    let fa = 1.0 - ph.band + 2.0 * ph.band * uniform01(ph.seed, index, bounce, 0u);
+    let fs = 1.0 - ph.band + 2.0 * ph.band * uniform01(ph.seed, index, bounce, 1u);
+    let v = vec2<f32>((*p).vel_x, (*p).vel_y);
+    let speed = sqrt(v.x * v.x + v.y * v.y) * fs;
+    if ((*p).surface == SURFACE_NONE) {
+        var ang = atan2(v.y, v.x);
+        if (ang < 0.0) { ang += 2.0 * PI; }
+        ang *= fa;
+        (*p).vel_x = speed * cos(ang);
+        (*p).vel_y = speed * sin(ang);
+    } else {
+        let n = normal_of(d, (*p).surface);
+        let t = vec2<f32>(n.y, -n.x);
+        let eps = 1.0e-6;
+        let ang = clamp(atan2(dot(v, n), dot(v, t)) * fa, eps, PI - eps);
+        let c = cos(ang);
+        let s = sin(ang);
+        (*p).vel_x = speed * (c * t.x + s * n.x);
+        (*p).vel_y = speed * (c * t.y + s * n.y);
+    }
+}
+
+fn hop_ok(start: vec2<f32>, to: vec2<f32>) -> bool {
+    if (ph.min_hop == 0.0) { return true; }
+    let dx = to.x - start.x;
+    if (ph.min_hop_horizontal != 0u) { return abs(dx) > ph.min_hop; }
+    let dy = to.y - start.y;
+    return dx * dx + dy * dy > ph.min_hop * ph.min_hop;
+}
+
+fn contact(d: Design, pos: vec2<f32>, vel: vec2<f32>, a: vec2<f32>, b: vec2<f32>, n: vec2<f32>) -> bool {
+    let c0 = dot(pos - a, n);
+    let tol = 64.0 * EPS * max(max(d.pitch_len, abs(pos.x)), abs(pos.y));
+    if (abs(c0) > tol || dot(vel, n) >= 0.0) { return false; }
+    let e = b - a;
+    let s = dot(pos - a, e) / dot(e, e);
+    return s >= 0.0 && s <= 1.0;
+}
+
+fn flies_over(d: Design, fl: Flight, dj: i32, x0: f32, x_far: f32) -> bool {
+    let base = f32(dj) * d.pitch_x;
+    let lo = min(x0, x_far);
+    let hi = max(x0, x_far);
+    let xa = max(base + d.ext_min, lo);
+    let xb = min(base + d.ext_max, hi);
+    if (xa > xb) { return true; }
+    let top = f32(dj) * d.pitch_y + max(max(d.p2_y, d.p4_y), 0.0);
+    let ya = y_at_x(fl, xa);
+    let yb = y_at_x(fl, xb);
+    if (ya.y == 0.0 || yb.y == 0.0) { return false; }
+    return ya.x > top && yb.x > top;
+}
+
+fn to_index(x: f32) -> i32 {
+    return i32(clamp(x, -1.0e9, 1.0e9));
+}
+
+fn first_hit(d: Design, p: Particle, bounce: u32) -> Hit {
+    let pos = vec2<f32>(p.pos_x, p.pos_y);
+    let vel = vec2<f32>(p.vel_x, p.vel_y);
+    let fl = Flight(pos, vel, ph.g, ph.k_drag);
+    var best = Hit(false, INF, vec2<f32>(0.0), 0, SURFACE_NONE);
+    let k = p.tooth;
+    let kf = f32(k);
+    let n_base = vec2<f32>(d.n_base_x, d.n_base_y);
+    let t_base = vec2<f32>(d.t_base_x, d.t_base_y);
+
+    // Base: one line through every p1.
+    var horizon = INF;
+    let departing_base = p.surface == SURFACE_BASE;
+    var roots = line_crossings(fl, vec2<f32>(0.0), n_base, departing_base, 0.0, INF);
+    if (!departing_base && hop_ok(pos, pos)) {
+        let s0 = -kf * d.pitch_len;
+        let a = s0 * t_base;
+        let b = (s0 + d.base_length) * t_base;
+        if (contact(d, pos, vel, a, b, n_base)) { roots = Roots(1u, 0.0, 0.0); }
+    }
+    for (var i = 0u; i < roots.n; i++) {
+        var t = roots.t0;
+        if (i == 1u) { t = roots.t1; }
+        let q = flight_pos(fl, t);
+        if (!hop_ok(pos, q)) { continue; }
+        horizon = t;
+        let s = dot(q, t_base);
+        let s_lo = -kf * d.pitch_len;
+        if (s >= s_lo && s <= d.base_length + s_lo) {
+            let j = clamp(to_index(floor(s / d.pitch_len)) + k, 0, d.teeth - 1);
+            best = Hit(true, t, q, j, SURFACE_BASE);
+        }
+        break;
+    }
+
+    // Teeth whose x-extent overlaps the flight before the horizon.
+    var x_end: f32;
+    if (horizon < INF) { x_end = flight_pos(fl, horizon).x; } else if (vel.x >= 0.0) { x_end = INF; } else { x_end = -INF; }
+    let xmin = min(pos.x, x_end);
+    let xmax = max(pos.x, x_end);
+    let lo = to_index(ceil((xmin - d.ext_max) / d.pitch_x));
+    let hi = to_index(floor((xmax - d.ext_min) / d.pitch_x));
+    if (lo + k > d.teeth - 1 || hi + k < 0) { return best; }
+    let j_lo = clamp(lo + k, 0, d.teeth - 1);
+    let j_hi = clamp(hi + k, 0, d.teeth - 1);
+    var x_far = x_end;
+    if (best.found) { x_far = best.pos.x; }
+    let p2 = vec2<f32>(d.p2_x, d.p2_y);
+    let p4 = vec2<f32>(d.p4_x, d.p4_y);
+    let margin = 64.0 * EPS * d.pitch_len;
+    for (var j = j_lo; j <= j_hi; j++) {
+        let dj = j - k;
+        if (flies_over(d, fl, dj, pos.x, x_far)) { continue; }
+        for (var si = 0u; si < 2u; si++) {
+            var surface = SURFACE_RAMP;
+            if (si == 1u) { surface = SURFACE_CATCH; }
+            if (surface == SURFACE_CATCH && bounce == 0u && j == 0) { continue; }
+            var a: vec2<f32>;
+            var b: vec2<f32>;
+            var n: vec2<f32>;
+            if (surface == SURFACE_RAMP) {
+                a = offset(d, dj, vec2<f32>(0.0));
+                b = offset(d, dj, p2);
+                n = vec2<f32>(d.n_ramp_x, d.n_ramp_y);
+            } else {
+                a = offset(d, dj, p2);
+                b = offset(d, dj, p4);
+                n = vec2<f32>(d.n_catch_x, d.n_catch_y);
+            }
+            let departing = p.surface == surface && dj == 0;
+            var t_max = horizon;
+            if (best.found) { t_max = best.t; }
+            let xa = min(a.x, b.x) - margin;
+            let xb = max(a.x, b.x) + margin;
+            var t_lo = INF;
+            var t_hi = INF;
+            if (vel.x > 0.0) {
+                t_lo = time_at_x(fl, max(xa, pos.x));
+                t_hi = time_at_x(fl, xb);
+            } else if (vel.x < 0.0) {
+                t_lo = time_at_x(fl, min(xb, pos.x));
+                t_hi = time_at_x(fl, xa);
+            } else if (pos.x >= xa && pos.x <= xb) {
+                t_lo = 0.0;
+            }
+            var rs = Roots(0u, 0.0, 0.0);
+            if (!(t_lo > t_max)) { rs = line_crossings(fl, a, n, departing, t_lo, min(t_max, t_hi)); }
+            if (!departing && hop_ok(pos, pos) && contact(d, pos, vel, a, b, n)) { rs = Roots(1u, 0.0, 0.0); }
+            let e = b - a;
+            let ee = dot(e, e);
+            for (var i = 0u; i < rs.n; i++) {
+                var t = rs.t0;
+                if (i == 1u) { t = rs.t1; }
+                let q = flight_pos(fl, t);
+                let s = dot(q - a, e) / ee;
+                if (s < 0.0 || s > 1.0 || !hop_ok(pos, q)) { continue; }
+                if (t < best.t) { best = Hit(true, t, q, j, surface); }
+                break;
+            }
+        }
+    }
+    return best;
+}
+
+fn bounce_velocity(v: vec2<f32>, n: vec2<f32>) -> vec2<f32> {
+    let vn_s = dot(v, n);                      // Eq. 4.47
+    let vn = vn_s * n;
+    let vt = v - vn;                           // Eq. 4.48
+    let vn_abs = abs(vn_s);
+    let vt_abs = sqrt(dot(vt, vt));
+    var k_norm = ph.k_elastic;                 // Eq. 4.9 above v_limit
+    if (ph.plastic != 0u && vn_abs > ph.v_limit) { k_norm = ph.k_elastic * sqrt(sqrt(ph.v_limit / vn_abs)); }
+    var k_tang = 0.0;                          // Eq. 4.14
+    if (vt_abs > 0.0) { k_tang = 1.0 - ph.tangential_factor * ph.mu_friction * (k_norm + 1.0) * vn_abs / vt_abs; }
+    if (ph.clamp_tangential != 0u) { k_tang = clamp(k_tang, 0.0, 1.0); }
+    return k_tang * vt - k_norm * vn;          // Eq. 4.49
+}
+
+fn step_particle(d: Design, p: ptr<function, Particle>, index: u32, bounce: u32) {
+    randomise_launch(d, p, index, bounce);
+    let hit = first_hit(d, *p, bounce);
+    if (!hit.found) {
+        (*p).state = STATE_LOST;
+        return;
+    }
+    let pos = vec2<f32>((*p).pos_x, (*p).pos_y);
+    let fl = Flight(pos, vec2<f32>((*p).vel_x, (*p).vel_y), ph.g, ph.k_drag);
+    let v_in = flight_vel(fl, hit.t);
+    let v_out = bounce_velocity(v_in, normal_of(d, hit.surface));
+    (*p).hop = abs(hit.pos.x - pos.x);         // Eq. 4.50 per particle
+    let back = offset(d, hit.tooth - (*p).tooth, vec2<f32>(0.0));
+    (*p).pos_x = hit.pos.x - back.x;
+    (*p).pos_y = hit.pos.y - back.y;
+    (*p).tooth = hit.tooth;
+    (*p).vel_x = v_out.x;
+    (*p).vel_y = v_out.y;
+    (*p).surface = hit.surface;
+    (*p).bounces += 1u;
+    if ((*p).bounces == 1u) {
+        let g = offset(d, (*p).tooth, vec2<f32>((*p).pos_x, (*p).pos_y));
+        (*p).first_x = g.x;
+        (*p).first_y = g.y;
+    }
+    if (ph.per_particle_rest != 0u && (*p).hop < ph.rest_threshold) {
+        (*p).state = STATE_RESTING;
+    }
+}
+
+// Eq. 4.56 (1-based tooth, clamped) for a final position.
+fn end_tooth(d: Design, p: Particle) -> i32 {
+    let j = p.tooth + to_index(floor((p.pos_x - d.p2_x) / d.pitch_x)) + 1;
+    return clamp(j, 1, d.teeth);
+}
+
+@compute @workgroup_size(64)
+fn simulate(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let design = wid.x;
+    let d = designs[design];
+    let first = design * ph.n_particles;
+    var iterations = 0u;
+    for (var bounce = 0u; bounce < ph.max_bounces; bounce++) {
+        if (lid == 0u) {
+            atomicStore(&wg_flying, 0u);
+            atomicStore(&wg_hop_n, 0u);
+        }
+        workgroupBarrier();
+        var hop_sum = 0.0;
+        for (var i = lid; i < ph.n_particles; i += WG) {
+            var p = particles[first + i];
+            if (p.state != STATE_FLYING) { continue; }
+            step_particle(d, &p, i, bounce);
+            particles[first + i] = p;
+            if (p.state != STATE_LOST) {
+                hop_sum += p.hop;
+                atomicAdd(&wg_hop_n, 1u);
+            }
+            if (p.state == STATE_FLYING) { atomicAdd(&wg_flying, 1u); }
+        }
+        wg_sum[lid] = hop_sum;
+        workgroupBarrier();
+        iterations = bounce + 1u;
+        if (lid == 0u) {
+            var go = 1u;
+            if (ph.per_particle_rest != 0u) {
+                if (atomicLoad(&wg_flying) == 0u) { go = 0u; }
+            } else {
+                // listing D.1 l.328-336: all gone, or mean hop below l_limit (Eq. 4.50)
+                var total = 0.0;
+                for (var i = 0u; i < WG; i++) { total += wg_sum[i]; }
+                let n = atomicLoad(&wg_hop_n);
+                if (n == 0u || total / f32(n) < ph.rest_threshold) { go = 0u; }
+            }
+            wg_go = go;
+        }
+        if (workgroupUniformLoad(&wg_go) == 0u) { break; }
+    }
+
+    // Reduction: tooth histogram, lost and still-flying counts, impacts, distances.
+    if (lid == 0u) {
+        atomicStore(&wg_flying, 0u);
+        atomicStore(&wg_lost, 0u);
+        atomicStore(&wg_bounces, 0u);
+        atomicStore(&wg_advance, 0u);
+    }
+    workgroupBarrier();
+    var dist = 0.0;
+    for (var i = lid; i < ph.n_particles; i += WG) {
+        var p = particles[first + i];
+        atomicAdd(&wg_bounces, p.bounces);
+        if (p.state == STATE_LOST) {
+            atomicAdd(&wg_lost, 1u);
+            continue;
+        }
+        if (p.state == STATE_FLYING && p.bounces > 0u && p.hop < ph.rest_threshold) {
+            p.state = STATE_RESTING; // listing mode: hopping below l_limit when the loop stopped
+            particles[first + i] = p;
+        }
+        if (p.state == STATE_FLYING) { atomicAdd(&wg_flying, 1u); }
+        let j = end_tooth(d, p);
+        atomicAdd(&histogram[design * ph.teeth_hist + u32(j - 1)], 1u);
+        atomicAdd(&wg_advance, u32(j - 1));
+        if (j > 1) { dist += d.pitch_x * f32(j - 1) + d.p4_x; } // listing D.1 l.347-351
+    }
+    wg_sum[lid] = dist;
+    workgroupBarrier();
+    if (lid == 0u) {
+        var total = 0.0;
+        for (var i = 0u; i < WG; i++) { total += wg_sum[i]; }
+        outcomes[design] = Outcome(iterations, atomicLoad(&wg_lost), atomicLoad(&wg_flying), atomicLoad(&wg_bounces),
+                                   atomicLoad(&wg_advance), total, 0u, 0u);
+    }
+}

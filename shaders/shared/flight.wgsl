@@ -1,0 +1,185 @@
+// Closed-form flights and their line crossings. Twin of src/model/flight.rs (f32).
+
+struct Flight {
+    p0: vec2<f32>,
+    v0: vec2<f32>,
+    g: f32,
+    k: f32,
+}
+
+struct Roots {
+    n: u32,
+    t0: f32,
+    t1: f32,
+}
+
+// e^x - 1 without cancellation near 0 (WGSL has no expm1).
+fn expm1_(x: f32) -> f32 {
+    if (abs(x) < 0.1) {
+        return x * (1.0 + x * (0.5 + x * (1.0 / 6.0 + x * (1.0 / 24.0 + x * (1.0 / 120.0 + x * (1.0 / 720.0))))));
+    }
+    return exp(x) - 1.0;
+}
+
+fn relax(k: f32, t: f32) -> f32 {
+    return -expm1_(-k * t) / k;
+}
+
+fn flight_pos(f: Flight, t: f32) -> vec2<f32> {
+    if (f.k > 0.0) {
+        let e = relax(f.k, t);
+        let vinf = -f.g / f.k;
+        return vec2<f32>(f.p0.x + f.v0.x * e, f.p0.y + vinf * t + (f.v0.y - vinf) * e);
+    }
+    return vec2<f32>(f.p0.x + f.v0.x * t, f.p0.y + f.v0.y * t - 0.5 * f.g * t * t);
+}
+
+fn flight_vel(f: Flight, t: f32) -> vec2<f32> {
+    if (f.k > 0.0) {
+        let e = exp(-f.k * t);
+        let vinf = -f.g / f.k;
+        return vec2<f32>(f.v0.x * e, vinf + (f.v0.y - vinf) * e);
+    }
+    return vec2<f32>(f.v0.x, f.v0.y - f.g * t);
+}
+
+fn time_at_x(f: Flight, x: f32) -> f32 {
+    let dx = x - f.p0.x;
+    let vx = f.v0.x;
+    if (vx == 0.0 || (dx / vx) < 0.0) {
+        if (dx == 0.0) { return 0.0; }
+        return INF;
+    }
+    if (f.k > 0.0) {
+        let q = 1.0 - f.k * dx / vx;
+        if (q <= 0.0) { return INF; }
+        return -log(q) / f.k;
+    }
+    return dx / vx;
+}
+
+// Height at horizontal position x; returns INF's negative when unreachable (flag in .y).
+fn y_at_x(f: Flight, x: f32) -> vec2<f32> {
+    let vx = f.v0.x;
+    if (vx == 0.0) { return vec2<f32>(0.0, 0.0); }
+    let e = (x - f.p0.x) / vx;
+    if (e < 0.0) { return vec2<f32>(0.0, 0.0); }
+    if (f.k > 0.0) {
+        let q = 1.0 - f.k * e;
+        if (q <= 0.0) { return vec2<f32>(0.0, 0.0); }
+        let t = -log(q) / f.k;
+        let vinf = -f.g / f.k;
+        return vec2<f32>(f.p0.y + vinf * t + (f.v0.y - vinf) * e, 1.0);
+    }
+    return vec2<f32>(f.p0.y + f.v0.y * e - 0.5 * f.g * e * e, 1.0);
+}
+
+fn push_root(r: ptr<function, Roots>, t: f32, t_min: f32, t_max: f32) {
+    if (t > 0.0 && t >= t_min && t <= t_max) {
+        if ((*r).n == 0u) { (*r).t0 = t; } else { (*r).t1 = t; }
+        (*r).n += 1u;
+    }
+}
+
+fn quadratic_roots(c2: f32, c1: f32, c0: f32, t_min: f32, t_max: f32) -> Roots {
+    var r = Roots(0u, 0.0, 0.0);
+    if (c2 == 0.0) {
+        if (c1 != 0.0) { push_root(&r, -c0 / c1, t_min, t_max); }
+        return r;
+    }
+    let disc = c1 * c1 - 4.0 * c2 * c0;
+    if (disc < 0.0) { return r; }
+    let sq = sqrt(disc);
+    var q: f32;
+    if (c1 >= 0.0) { q = -0.5 * (c1 + sq); } else { q = -0.5 * (c1 - sq); }
+    if (q == 0.0) { return r; }
+    var a = q / c2;
+    var b = c0 / q;
+    if (b < a) { let tmp = a; a = b; b = tmp; }
+    push_root(&r, a, t_min, t_max);
+    push_root(&r, b, t_min, t_max);
+    return r;
+}
+
+fn stokes_f(c0: f32, ca: f32, cb: f32, k: f32, t: f32) -> f32 {
+    return c0 + ca * t + cb * relax(k, t);
+}
+
+// Safeguarded Newton on a monotone bracket, started at the regula-falsi point.
+fn bracketed_newton(c0: f32, ca: f32, cb: f32, k: f32, lo_in: f32, hi_in: f32, f_lo: f32, f_hi: f32) -> f32 {
+    var lo = lo_in;
+    var hi = hi_in;
+    let lo_positive = f_lo > 0.0;
+    var t = 0.5 * (lo + hi);
+    if (f_hi != f_lo) {
+        t = lo - f_lo * (hi - lo) / (f_hi - f_lo);
+    }
+    if (!(t > lo && t < hi)) { t = 0.5 * (lo + hi); }
+    for (var i = 0; i < 48; i++) {
+        let m = expm1_(-k * t);
+        let ft = c0 + ca * t - cb * m / k;
+        let d = ca + cb * (1.0 + m);
+        if (ft == 0.0) { return t; }
+        if ((ft > 0.0) == lo_positive) { lo = t; } else { hi = t; }
+        var next = lo - 1.0;
+        if (d != 0.0) { next = t - ft / d; }
+        if (!(next > lo && next < hi)) { next = 0.5 * (lo + hi); }
+        if (abs(next - t) <= EPS * 4.0 * max(abs(t), 1.0e-30)) { return next; }
+        t = next;
+    }
+    return t;
+}
+
+fn stokes_horizon(c0: f32, a: f32, b: f32, k: f32) -> f32 {
+    let span = 40.0 / k;
+    if (a < 0.0) { return max(max((c0 + max(b, 0.0) / k) / -a, 0.0), span); }
+    if (a > 0.0) { return max(max((-c0 - min(b, 0.0) / k) / a, 0.0), span); }
+    return span;
+}
+
+// Crossings in (t_min, t_max] (t > 0) of the line through a with normal n; departing
+// removes the root at t = 0 analytically.
+fn line_crossings(f: Flight, a: vec2<f32>, n: vec2<f32>, departing: bool, t_min: f32, t_max: f32) -> Roots {
+    var c0 = 0.0;
+    if (!departing) { c0 = dot(n, f.p0 - a); }
+    let nv = dot(n, f.v0);
+    var r = Roots(0u, 0.0, 0.0);
+    if (f.k <= 0.0) {
+        let c1 = nv;
+        let c2 = -0.5 * f.g * n.y;
+        if (departing) {
+            if (c2 != 0.0) { push_root(&r, -c1 / c2, t_min, t_max); }
+            return r;
+        }
+        return quadratic_roots(c2, c1, c0, t_min, t_max);
+    }
+    let k = f.k;
+    let ca = -f.g / k * n.y;
+    let cb = nv - ca;
+    let ratio = -ca / cb;
+    var t_star = -1.0;
+    if (cb != 0.0 && ratio > 0.0 && ratio < 1.0) { t_star = -log(ratio) / k; }
+    let t_end = min(t_max, stokes_horizon(c0, ca, cb, k));
+    if (t_min > t_end) { return r; }
+    var lo = max(t_min, 0.0);
+    var f_lo = c0;
+    if (lo != 0.0) { f_lo = stokes_f(c0, ca, cb, k, lo); }
+    for (var piece = 0; piece < 2; piece++) {
+        var hi = t_end;
+        if (piece == 0) {
+            if (t_star < 0.0) { continue; }
+            hi = t_star;
+        }
+        if (hi <= lo) { continue; }
+        hi = min(hi, t_end);
+        let f_hi = stokes_f(c0, ca, cb, k, hi);
+        let starts_on_line = lo == 0.0 && (departing || f_lo == 0.0);
+        if (!starts_on_line && (f_lo > 0.0) != (f_hi > 0.0)) {
+            let t = bracketed_newton(c0, ca, cb, k, lo, hi, f_lo, f_hi);
+            push_root(&r, t, t_min, t_max);
+        }
+        lo = hi;
+        f_lo = f_hi;
+    }
+    return r;
+}

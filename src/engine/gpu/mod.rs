@@ -1,0 +1,354 @@
+//! The `gpu` engine: WGSL kernels on wgpu.
+
+pub mod layout;
+pub mod shaders;
+
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use anyhow::{anyhow, bail, Context as _};
+use rayon::prelude::*;
+use wgpu::util::DeviceExt;
+
+use self::layout::{GpuDesign, GpuOutcome, GpuParticle, GpuPhysics};
+use super::cpu::{kernel_design, kernel_physics, CpuEngine, Precision};
+use super::kernel::init_particle;
+use super::{finish_outcome, BatchEvaluator, Context, Evaluation, FlightRecord, ParticleEngine, Run};
+use crate::model::outcome::{from_counts, ParticleEnd, ParticleState, SimOutcome};
+use crate::model::{prepare, Design, Invalid, Prepared, Scenario};
+
+/// Which adapters the engine may take.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AdapterChoice {
+    /// Any Vulkan adapter, software (Mesa lavapipe) included: `--engine gpu`, CI conformance.
+    Any,
+    /// Only a hardware GPU: `--engine auto`.
+    HardwareOnly,
+}
+
+/// A batch that has not finished after this long counts as a GPU failure.
+const TIMEOUT: Duration = Duration::from_secs(120);
+
+pub struct GpuEngine {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    pipeline: wgpu::ComputePipeline,
+    bind_layout: wgpu::BindGroupLayout,
+    info: wgpu::AdapterInfo,
+    limits: wgpu::Limits,
+    /// Errors the device reported outside an error scope (e.g. device loss).
+    uncaptured: Arc<Mutex<Option<String>>>,
+}
+
+/// What one dispatch of a chunk of designs returns.
+struct ChunkResult {
+    outcomes: Vec<GpuOutcome>,
+    histogram: Vec<u32>,
+    particles: Option<Vec<GpuParticle>>,
+}
+
+impl GpuEngine {
+    pub fn new(choice: AdapterChoice) -> anyhow::Result<Self> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+        let hardware = |a: &wgpu::Adapter| a.get_info().device_type != wgpu::DeviceType::Cpu;
+        let adapter = match choice {
+            AdapterChoice::HardwareOnly => adapters.into_iter().find(hardware),
+            AdapterChoice::Any => {
+                let mut all = adapters;
+                all.sort_by_key(|a| !hardware(a)); // hardware first
+                all.into_iter().next()
+            }
+        };
+        let adapter = adapter.ok_or_else(|| match choice {
+            AdapterChoice::Any => anyhow!(
+                "no Vulkan adapter found: install a GPU driver, or Mesa's software Vulkan \
+                 (`apt-get install mesa-vulkan-drivers libvulkan1`), or use --engine cpu"
+            ),
+            AdapterChoice::HardwareOnly => anyhow!("no hardware GPU adapter"),
+        })?;
+        let info = adapter.get_info();
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("sawtooth"),
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .with_context(|| format!("cannot open GPU device {}", info.name))?;
+        let uncaptured = Arc::new(Mutex::new(None));
+        let sink = uncaptured.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            *sink.lock().unwrap() = Some(e.to_string());
+        }));
+        let source = shaders::compose("particles.wgsl").map_err(anyhow::Error::msg)?;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("particles.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+        let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let bind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("particles"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
+                    count: None,
+                },
+                storage(1, true),
+                storage(2, false),
+                storage(3, false),
+                storage(4, false),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("particles"),
+            bind_group_layouts: &[Some(&bind_layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("simulate"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("simulate"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        if let Some(e) = uncaptured.lock().unwrap().take() {
+            bail!("GPU pipeline creation failed: {e}");
+        }
+        Ok(GpuEngine { device, queue, pipeline, bind_layout, info, limits, uncaptured })
+    }
+
+    /// "name (backend, device type)" for logs and run manifests.
+    pub fn describe(&self) -> String {
+        format!("{} ({:?}, {:?}, driver {})", self.info.name, self.info.backend, self.info.device_type, self.info.driver_info)
+    }
+
+    pub fn is_hardware(&self) -> bool {
+        self.info.device_type != wgpu::DeviceType::Cpu
+    }
+
+    /// Designs per dispatch: workgroups per dimension and storage binding size respected.
+    fn chunk_designs(&self, n_particles: u32, teeth: u32) -> usize {
+        let per_design_particles = n_particles as u64 * std::mem::size_of::<GpuParticle>() as u64;
+        let per_design_hist = teeth as u64 * 4;
+        let binding = self.limits.max_storage_buffer_binding_size.min(self.limits.max_buffer_size);
+        let by_storage = (binding / per_design_particles.max(per_design_hist).max(1)).max(1);
+        (self.limits.max_compute_workgroups_per_dimension as u64).min(by_storage).max(1) as usize
+    }
+
+    fn run_chunk(&self, phys: &GpuPhysics, designs: &[GpuDesign], particles: &[GpuParticle], want_particles: bool) -> anyhow::Result<ChunkResult> {
+        let dev = &self.device;
+        let n = designs.len();
+        let scope = dev.push_error_scope(wgpu::ErrorFilter::Validation);
+        let oom = dev.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let uniform = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("physics"),
+            contents: bytemuck::bytes_of(phys),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let design_buf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("designs"),
+            contents: bytemuck::cast_slice(designs),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let particle_buf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("particles"),
+            contents: bytemuck::cast_slice(particles),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        });
+        let outcome_size = (n * std::mem::size_of::<GpuOutcome>()) as u64;
+        let outcome_buf = dev.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("outcomes"),
+            size: outcome_size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let hist_size = (n * phys.teeth_hist as usize * 4) as u64;
+        let hist_buf = dev.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("histogram"),
+            size: hist_size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let particle_size = std::mem::size_of_val(particles) as u64;
+        let read_size = outcome_size + hist_size + if want_particles { particle_size } else { 0 };
+        let readback = dev.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: read_size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind = dev.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("particles"),
+            layout: &self.bind_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: design_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: particle_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: outcome_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: hist_buf.as_entire_binding() },
+            ],
+        });
+        let mut enc = dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("simulate") });
+        enc.clear_buffer(&hist_buf, 0, None);
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("simulate"), timestamp_writes: None });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &bind, &[]);
+            pass.dispatch_workgroups(n as u32, 1, 1);
+        }
+        enc.copy_buffer_to_buffer(&outcome_buf, 0, &readback, 0, outcome_size);
+        enc.copy_buffer_to_buffer(&hist_buf, 0, &readback, outcome_size, hist_size);
+        if want_particles {
+            enc.copy_buffer_to_buffer(&particle_buf, 0, &readback, outcome_size + hist_size, particle_size);
+        }
+        let index = self.queue.submit([enc.finish()]);
+        if let Some(e) = pollster::block_on(oom.pop()) {
+            bail!("GPU out of memory: {e}");
+        }
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            bail!("GPU validation error: {e}");
+        }
+        let slice = readback.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        dev.poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: Some(TIMEOUT) }).map_err(|e| anyhow!("GPU batch did not finish: {e}"))?;
+        rx.recv_timeout(TIMEOUT).map_err(|_| anyhow!("GPU readback never completed"))?.map_err(|e| anyhow!("GPU readback failed: {e}"))?;
+        if let Some(e) = self.uncaptured.lock().unwrap().take() {
+            bail!("GPU error: {e}");
+        }
+        let view = slice.get_mapped_range().map_err(|e| anyhow!("GPU readback mapping failed: {e:?}"))?;
+        let bytes: &[u8] = &view;
+        let (o, rest) = bytes.split_at(outcome_size as usize);
+        let (h, p) = rest.split_at(hist_size as usize);
+        let result = ChunkResult {
+            outcomes: bytemuck::pod_collect_to_vec(o),
+            histogram: bytemuck::pod_collect_to_vec(h),
+            particles: want_particles.then(|| bytemuck::pod_collect_to_vec(p)),
+        };
+        drop(view);
+        readback.unmap();
+        Ok(result)
+    }
+
+    /// Simulate prepared designs; per design the outcome and (optionally) every particle.
+    /// A chunk the GPU fails on is re-run on the `cpu` engine (f32, the kernel's twin) with a
+    /// warning, so a failure loses no work.
+    pub fn run_prepared(&self, ctx: &Context, preps: &[&Prepared], want_particles: bool) -> Vec<(SimOutcome, Option<Vec<ParticleEnd>>)> {
+        let Some(first) = preps.first() else { return Vec::new() };
+        let n_particles = first.launches.len() as u32;
+        let teeth = first.profile.teeth;
+        let kp = kernel_physics::<f32>(ctx);
+        let mut out = Vec::with_capacity(preps.len());
+        for chunk in preps.chunks(self.chunk_designs(n_particles, teeth)) {
+            let designs: Vec<GpuDesign> = chunk.iter().map(|p| GpuDesign::from(&kernel_design::<f32>(p))).collect();
+            let particles: Vec<GpuParticle> = chunk
+                .iter()
+                .zip(&designs)
+                .flat_map(|(p, _)| {
+                    let kd = kernel_design::<f32>(p);
+                    p.launches.iter().map(move |l| GpuParticle::from(&init_particle(&kd, [l[0] as f32, l[1] as f32])))
+                })
+                .collect();
+            let phys = GpuPhysics::from_kernel(&kp, ctx.max_bounces, n_particles, chunk.len() as u32, teeth);
+            match self.run_chunk(&phys, &designs, &particles, want_particles) {
+                Ok(r) => {
+                    for (i, prep) in chunk.iter().enumerate() {
+                        let o = &r.outcomes[i];
+                        let hist = &r.histogram[i * teeth as usize..(i + 1) * teeth as usize];
+                        let sim = from_counts(
+                            hist,
+                            n_particles as usize,
+                            o.lost as usize,
+                            o.flying as usize,
+                            o.distance_sum as f64,
+                            o.advance_teeth as f64 * prep.profile.pitch_len,
+                            prep.fill.area,
+                            o.iterations,
+                            o.bounce_sum as u64,
+                        );
+                        let parts = r.particles.as_ref().map(|ps| {
+                            ps[i * n_particles as usize..(i + 1) * n_particles as usize].iter().map(|p| particle_end(prep, p)).collect()
+                        });
+                        out.push((sim, parts));
+                    }
+                }
+                Err(e) => {
+                    eprintln!("warning: GPU failed on a batch of {} designs ({e:#}); re-running it on the cpu engine", chunk.len());
+                    let cpu = CpuEngine { precision: Precision::F32 };
+                    let redo: Vec<_> = chunk
+                        .par_iter()
+                        .map(|prep| {
+                            let run = cpu.run(prep, ctx, None);
+                            let sim = crate::model::outcome::summarise(&prep.profile, prep.fill.area, &run.particles, run.iterations);
+                            (sim, want_particles.then_some(run.particles))
+                        })
+                        .collect();
+                    out.extend(redo);
+                }
+            }
+        }
+        out
+    }
+}
+
+fn particle_end(prep: &Prepared, p: &GpuParticle) -> ParticleEnd {
+    let state = match p.state {
+        1 => ParticleState::Resting,
+        2 => ParticleState::Lost,
+        _ => ParticleState::Flying,
+    };
+    let pitch = prep.profile.pitch;
+    // same arithmetic as the kernel's `offset` (f32), then widened
+    let o = [(p.tooth as f32) * pitch[0] as f32 + p.pos[0], (p.tooth as f32) * pitch[1] as f32 + p.pos[1]];
+    ParticleEnd {
+        state,
+        end: if state == ParticleState::Lost { [f64::NAN; 2] } else { [o[0] as f64, o[1] as f64] },
+        first_impact: (p.bounces > 0).then(|| [p.first[0] as f64, p.first[1] as f64]),
+        bounces: p.bounces,
+    }
+}
+
+impl BatchEvaluator for GpuEngine {
+    fn backend(&self) -> &'static str {
+        "gpu"
+    }
+    /// The whole generation in one job (split only where device limits demand it).
+    fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
+        let ctx = Context::new(scenario);
+        let prepared: Vec<Result<Prepared, Invalid>> = designs.par_iter().map(|d| prepare(scenario, d)).collect();
+        let ok: Vec<&Prepared> = prepared.iter().filter_map(|p| p.as_ref().ok()).collect();
+        let mut sims = self.run_prepared(&ctx, &ok, false).into_iter();
+        prepared
+            .iter()
+            .map(|p| match p {
+                Ok(prep) => Ok(finish_outcome(scenario, prep, sims.next().expect("one outcome per valid design").0)),
+                Err(e) => Err(e.clone()),
+            })
+            .collect()
+    }
+}
+
+impl ParticleEngine for GpuEngine {
+    fn name(&self) -> &'static str {
+        "gpu"
+    }
+    /// One design with every particle read back. Flights are not recorded on the GPU.
+    fn run(&self, prep: &Prepared, ctx: &Context, _trace: Option<&mut Vec<FlightRecord>>) -> Run {
+        let (sim, parts) = self.run_prepared(ctx, &[prep], true).pop().expect("one design");
+        Run { particles: parts.expect("particles requested"), iterations: sim.bounces }
+    }
+}
