@@ -1,7 +1,22 @@
 #!/usr/bin/env bash
 # The test command of the README: installs what the tests need, then runs them all.
-# Usage: bash scripts/test.sh
+# The GPU tests need a Vulkan adapter; without a GPU driver, Mesa's software Vulkan
+# (lavapipe) is installed from Debian's packages. Usage: bash scripts/test.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export CARGO_TERM_COLOR=never
+
+have_vulkan_icd() {
+    ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json >/dev/null 2>&1
+}
+if ! have_vulkan_icd; then
+    echo "test.sh: no Vulkan driver found; installing Mesa lavapipe (mesa-vulkan-drivers libvulkan1)"
+    SUDO=""
+    if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+    $SUDO apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq mesa-vulkan-drivers libvulkan1 >/dev/null
+fi
+# lavapipe's WSI probing warns without a runtime dir; the tests draw nothing on screen.
+export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
+
 cargo test --release --locked --all-targets

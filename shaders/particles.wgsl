@@ -5,6 +5,7 @@
 
 #import shared/types.wgsl
 #import shared/rng.wgsl
+#import shared/trig.wgsl
 #import shared/flight.wgsl
 
 @group(0) @binding(0) var<uniform> ph: Physics;
@@ -53,18 +54,19 @@ fn randomise_launch(d: Design, p: ptr<function, Particle>, index: u32, bounce: u
     let v = vec2<f32>((*p).vel_x, (*p).vel_y);
     let speed = sqrt(v.x * v.x + v.y * v.y) * fs;
     if ((*p).surface == SURFACE_NONE) {
-        var ang = atan2(v.y, v.x);
+        var ang = katan2(v.y, v.x);
         if (ang < 0.0) { ang += 2.0 * PI; }
-        ang *= fa;
-        (*p).vel_x = speed * cos(ang);
-        (*p).vel_y = speed * sin(ang);
+        let sc = ksin_cos(ang * fa);
+        (*p).vel_x = speed * sc.y;
+        (*p).vel_y = speed * sc.x;
     } else {
         let n = normal_of(d, (*p).surface);
         let t = vec2<f32>(n.y, -n.x);
         let eps = 1.0e-6;
-        let ang = clamp(atan2(dot(v, n), dot(v, t)) * fa, eps, PI - eps);
-        let c = cos(ang);
-        let s = sin(ang);
+        let ang = clamp(katan2(dot(v, n), dot(v, t)) * fa, eps, PI - eps);
+        let sc = ksin_cos(ang);
+        let s = sc.x;
+        let c = sc.y;
         (*p).vel_x = speed * (c * t.x + s * n.x);
         (*p).vel_y = speed * (c * t.y + s * n.y);
     }

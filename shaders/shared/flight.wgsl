@@ -21,6 +21,14 @@ fn expm1_(x: f32) -> f32 {
     return exp(x) - 1.0;
 }
 
+// ln(1 + x) without cancellation near 0 (WGSL has no log1p).
+fn log1p_(x: f32) -> f32 {
+    if (abs(x) < 0.01) {
+        return x * (1.0 - x * (0.5 - x * (1.0 / 3.0 - x * (0.25 - x * 0.2))));
+    }
+    return log(1.0 + x);
+}
+
 fn relax(k: f32, t: f32) -> f32 {
     return -expm1_(-k * t) / k;
 }
@@ -156,9 +164,11 @@ fn line_crossings(f: Flight, a: vec2<f32>, n: vec2<f32>, departing: bool, t_min:
     let k = f.k;
     let ca = -f.g / k * n.y;
     let cb = nv - ca;
-    let ratio = -ca / cb;
+    // t* = ln(1 + x)/k with x = n.v/(-a): accurate for near-tangential lift-off.
+    var x = 0.0;
+    if (ca != 0.0) { x = nv / -ca; }
     var t_star = -1.0;
-    if (cb != 0.0 && ratio > 0.0 && ratio < 1.0) { t_star = -log(ratio) / k; }
+    if (x > 0.0 && x < INF) { t_star = log1p_(x) / k; }
     let t_end = min(t_max, stokes_horizon(c0, ca, cb, k));
     if (t_min > t_end) { return r; }
     var lo = max(t_min, 0.0);
@@ -174,7 +184,9 @@ fn line_crossings(f: Flight, a: vec2<f32>, n: vec2<f32>, departing: bool, t_min:
         hi = min(hi, t_end);
         let f_hi = stokes_f(c0, ca, cb, k, hi);
         let starts_on_line = lo == 0.0 && (departing || f_lo == 0.0);
-        if (!starts_on_line && (f_lo > 0.0) != (f_hi > 0.0)) {
+        if (departing && lo > 0.0 && f_lo <= 0.0 && r.n == 0u) {
+            push_root(&r, lo, t_min, t_max);   // lift-off below rounding: back at t*
+        } else if (!starts_on_line && (f_lo > 0.0) != (f_hi > 0.0)) {
             let t = bracketed_newton(c0, ca, cb, k, lo, hi, f_lo, f_hi);
             push_root(&r, t, t_min, t_max);
         }

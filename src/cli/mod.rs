@@ -3,6 +3,7 @@
 
 pub mod args;
 pub mod bench;
+pub mod conformance;
 pub mod simulate;
 
 use std::io::Write;
@@ -23,6 +24,8 @@ pub enum Command {
     Simulate(simulate::SimulateArgs),
     /// Measure particle-bounces per second of the engines side by side.
     Bench(bench::BenchArgs),
+    /// Compare the GPU engine with the CPU reference on random designs; exit 1 on failure.
+    Conformance(conformance::ConformanceArgs),
 }
 
 /// Exit status: 0 success, 1 a check failed, 2 bad input or an error.
@@ -30,5 +33,6 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Simulate(a) => simulate::run(a, out),
         Command::Bench(a) => bench::run(a, out),
+        Command::Conformance(a) => conformance::run_cli(a, out),
     }
 }

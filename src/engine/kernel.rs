@@ -121,7 +121,10 @@ pub fn init_particle<T: Real>(d: &KDesign<T>, launch: [T; 2]) -> KParticle<T> {
     KParticle {
         tooth: 0,
         pos: launch,
-        vel: [d.v0 * d.launch_angle.cos(), d.v0 * d.launch_angle.sin()],
+        vel: {
+            let (s, c) = d.launch_angle.ksin_cos();
+            [d.v0 * c, d.v0 * s]
+        },
         surface: SURFACE_NONE,
         state: STATE_FLYING,
         ..Default::default()
@@ -147,19 +150,19 @@ pub fn randomise_launch<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KPart
     let fs = T::one() - ph.band + two * ph.band * T::c(uniform(ph.seed, index, bounce, DRAW_SPEED));
     let speed = (p.vel[0] * p.vel[0] + p.vel[1] * p.vel[1]).sqrt() * fs;
     if p.surface == SURFACE_NONE {
-        let mut ang = p.vel[1].atan2(p.vel[0]);
+        let mut ang = p.vel[1].katan2(p.vel[0]);
         if ang < T::zero() {
             ang = ang + two * T::PI(); // listing keeps angles in [0, 2π)
         }
-        let ang = ang * fa;
-        p.vel = [speed * ang.cos(), speed * ang.sin()];
+        let (s, c) = (ang * fa).ksin_cos();
+        p.vel = [speed * c, speed * s];
     } else {
         let n = normal_of(d, p.surface);
         let t = [n[1], -n[0]];
         let eps = T::c(1e-6);
-        let ang = dot(p.vel, n).atan2(dot(p.vel, t)) * fa;
+        let ang = dot(p.vel, n).katan2(dot(p.vel, t)) * fa;
         let ang = ang.max(eps).min(T::PI() - eps);
-        let (s, c) = ang.sin_cos();
+        let (s, c) = ang.ksin_cos();
         p.vel = [speed * (c * t[0] + s * n[0]), speed * (c * t[1] + s * n[1])];
     }
 }

@@ -5,6 +5,7 @@
 //! particles; preparation (validity, profile, fill, launch points), aggregation and the
 //! performance model are shared, so both engines see the same problem.
 
+pub mod conformance;
 pub mod cpu;
 pub mod gpu;
 pub mod kernel;

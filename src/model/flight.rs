@@ -133,9 +133,11 @@ impl<T: Real> Flight<T> {
             let m = (-k * t).exp_m1();
             (c0 + ca * t - cb * m / k, ca + cb * (T::one() + m))
         };
-        // Extremum where e^{-kt} = -a/b.
-        let ratio = -ca / cb;
-        let t_star = if cb != T::zero() && ratio > T::zero() && ratio < T::one() { Some(-ratio.ln() / k) } else { None };
+        // Extremum where e^{-kt} = -a/b, i.e. t* = ln(b/(-a))/k = ln(1 + x)/k with
+        // x = n·v/(-a) (b + a = n·v); it exists for x > 0. log1p keeps t* accurate when a
+        // flight leaves a surface almost tangentially (x tiny), where ln(-a/b) rounds to 0.
+        let x = if ca != T::zero() { nv / -ca } else { T::zero() };
+        let t_star = if x > T::zero() && x.is_finite() { Some(x.ln_1p() / k) } else { None };
         // Since 0 <= E < 1/k, f lies between two lines; where the bounding line reaches zero
         // f has its final sign, so the search needs no loop to find an upper end.
         let t_end = t_max.min(horizon(c0, ca, cb, k));
@@ -153,7 +155,13 @@ impl<T: Real> Flight<T> {
             let hi = hi.min(t_end);
             let f_hi = f(hi);
             let starts_on_line = lo == T::zero() && (departing || f_lo == T::zero());
-            if !starts_on_line && (f_lo > T::zero()) != (f_hi > T::zero()) {
+            if departing && lo > T::zero() && f_lo <= T::zero() && found == 0 {
+                // lift-off below rounding: the flight is back on its surface at t*
+                if let Some(t) = keep(lo) {
+                    out[found] = Some(t);
+                    found += 1;
+                }
+            } else if !starts_on_line && (f_lo > T::zero()) != (f_hi > T::zero()) {
                 let t = bracketed_newton(&fdf, lo, hi, f_lo, f_hi);
                 if let Some(t) = keep(t) {
                     out[found] = Some(t);

@@ -7,6 +7,7 @@ pub const FILES: &[(&str, &str)] = &[
     ("shared/types.wgsl", include_str!("../../../shaders/shared/types.wgsl")),
     ("shared/rng.wgsl", include_str!("../../../shaders/shared/rng.wgsl")),
     ("shared/flight.wgsl", include_str!("../../../shaders/shared/flight.wgsl")),
+    ("shared/trig.wgsl", include_str!("../../../shaders/shared/trig.wgsl")),
 ];
 
 /// Entry-point files (the others are only imported).
