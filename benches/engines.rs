@@ -2,6 +2,7 @@
 //! up to 100 bounces, each engine on the same batch. Throughput is in particle-bounces.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use sawtooth::engine::gpu::{AdapterChoice, GpuEngine};
 use sawtooth::engine::{particle_engine, BatchEvaluator, EngineKind};
 use sawtooth::model::sampling::neighbourhood;
 use sawtooth::model::{Design, Scenario};
@@ -15,8 +16,15 @@ fn engines(c: &mut Criterion) {
         let designs = neighbourhood(&scenario, &centre, 64, 0.05, 1);
         let mut group = c.benchmark_group(format!("batch64/{label}"));
         group.sample_size(10);
-        for kind in [EngineKind::Listing, EngineKind::Cpu] {
-            let engine = particle_engine(kind);
+        let mut engines: Vec<Box<dyn BatchEvaluator>> = vec![Box::new(particle_engine(EngineKind::Listing)), Box::new(particle_engine(EngineKind::Cpu))];
+        match GpuEngine::new(AdapterChoice::Any) {
+            Ok(g) => {
+                eprintln!("gpu: {}", g.describe());
+                engines.push(Box::new(g));
+            }
+            Err(e) => eprintln!("no GPU adapter, gpu not benchmarked: {e}"),
+        }
+        for engine in &engines {
             let bounces: f64 = engine.evaluate(&scenario, &designs).iter().flatten().map(|e| e.sim.mean_bounces * 100.0).sum();
             group.throughput(Throughput::Elements(bounces as u64));
             group.bench_function(engine.backend(), |b| b.iter(|| engine.evaluate(&scenario, &designs)));

@@ -10,18 +10,30 @@ use clap::Args;
 use serde_json::json;
 
 use crate::engine::{make_engine, BatchEvaluator, EngineKind};
-use crate::model::sampling::neighbourhood;
+use crate::model::sampling::{neighbourhood, random_valid_designs};
+use crate::model::prepare;
+use rayon::prelude::*;
 use crate::model::scenario::EnvPreset;
 use crate::model::{Design, Scenario};
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum Sample {
+    Neighbourhood,
+    Random,
+}
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
     /// Environment preset.
     #[arg(long, value_enum, default_value = "lunar")]
     pub env: EnvPreset,
-    /// Designs in the batch (lunar/terrestrial solution C neighbourhood, ±5 %).
+    /// Designs in the batch.
     #[arg(long, default_value_t = 64)]
     pub designs: usize,
+    /// Where the batch comes from: the solution-C neighbourhood (±5 %, issue 2's batch) or
+    /// random valid designs from the optimisation bounds (a GA generation).
+    #[arg(long, value_enum, default_value = "neighbourhood")]
+    pub sample: Sample,
     #[arg(long, default_value_t = 100)]
     pub particles: u32,
     #[arg(long, default_value_t = 100)]
@@ -76,7 +88,14 @@ pub fn run(a: BenchArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         EnvPreset::Lunar => Design::lunar_solution_c(),
         EnvPreset::Earth => Design::earth_solution_c(),
     };
-    let designs = neighbourhood(&scenario, &centre, a.designs, 0.05, a.seed);
+    let designs = match a.sample {
+        Sample::Neighbourhood => neighbourhood(&scenario, &centre, a.designs, 0.05, a.seed),
+        Sample::Random => random_valid_designs(&scenario, a.designs, a.seed),
+    };
+    // The CPU-side preparation (validity, fill area, launch points) every engine pays.
+    let t = Instant::now();
+    let _: Vec<_> = designs.par_iter().map(|d| prepare(&scenario, d)).collect();
+    let prepare_s = t.elapsed().as_secs_f64();
     let mut results = Vec::new();
     for k in &a.engines {
         let engine = make_engine(*k)?;
@@ -99,6 +118,8 @@ pub fn run(a: BenchArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
             "env": a.env,
             "mode": scenario.mode,
             "threads": rayon::current_num_threads(),
+            "prepare_seconds_per_batch": prepare_s,
+            "sample": format!("{:?}", a.sample).to_lowercase(),
         });
         writeln!(out, "{}", serde_json::to_string_pretty(&v)?).context("writing output")?;
     } else {
@@ -112,6 +133,7 @@ pub fn run(a: BenchArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
             scenario.mode,
             rayon::current_num_threads()
         )?;
+        writeln!(out, "preparation (validity, fill, launch points; in every engine's time): {prepare_s:.5} s/batch")?;
         writeln!(out, "{:<10} {:>14} {:>16} {:>18} {:>10}", "engine", "s/batch", "particle-bounces", "particle-bounces/s", "ratio")?;
         for m in &results {
             let ratio = base.map_or("-".to_string(), |b| format!("{:.1}x", rate(m) / b));

@@ -148,6 +148,7 @@ impl GpuEngine {
     }
 
     fn run_chunk(&self, phys: &GpuPhysics, designs: &[GpuDesign], particles: &[GpuParticle], want_particles: bool) -> anyhow::Result<ChunkResult> {
+        let t_chunk = std::time::Instant::now();
         let dev = &self.device;
         let n = designs.len();
         let scope = dev.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -213,6 +214,7 @@ impl GpuEngine {
         if want_particles {
             enc.copy_buffer_to_buffer(&particle_buf, 0, &readback, outcome_size + hist_size, particle_size);
         }
+        let t_submit = std::time::Instant::now();
         let index = self.queue.submit([enc.finish()]);
         if let Some(e) = pollster::block_on(oom.pop()) {
             bail!("GPU out of memory: {e}");
@@ -230,6 +232,7 @@ impl GpuEngine {
         if let Some(e) = self.uncaptured.lock().unwrap().take() {
             bail!("GPU error: {e}");
         }
+        let waited = t_submit.elapsed();
         let view = slice.get_mapped_range().map_err(|e| anyhow!("GPU readback mapping failed: {e:?}"))?;
         let bytes: &[u8] = &view;
         let (o, rest) = bytes.split_at(outcome_size as usize);
@@ -241,6 +244,15 @@ impl GpuEngine {
         };
         drop(view);
         readback.unmap();
+        if std::env::var_os("SAWTOOTH_PROFILE").is_some() {
+            eprintln!(
+                "profile gpu: {} designs, {} particles: submit-to-readback {:.3} ms (kernel + copies), total in run_chunk {:.3} ms",
+                n,
+                particles.len(),
+                waited.as_secs_f64() * 1e3,
+                t_chunk.elapsed().as_secs_f64() * 1e3
+            );
+        }
         Ok(result)
     }
 
