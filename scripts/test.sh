@@ -19,4 +19,12 @@ fi
 # lavapipe's WSI probing warns without a runtime dir; the tests draw nothing on screen.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 
-cargo test --release --locked --all-targets
+log=$(mktemp)
+trap 'rm -f "$log"' EXIT
+status=0
+cargo test --release --locked --all-targets 2>&1 | tee "$log" || status=$?
+# One closing line over every test binary (cargo's own last line belongs to whichever
+# target ran last, possibly one without tests).
+awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^failed/) f += $i } }
+     END { printf "tests: %d passed, %d failed\n", p, f }' "$log"
+exit $status

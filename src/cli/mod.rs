@@ -4,6 +4,8 @@
 pub mod args;
 pub mod bench;
 pub mod conformance;
+pub mod optimize;
+pub mod pareto;
 pub mod simulate;
 
 use std::io::Write;
@@ -26,6 +28,8 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// Compare the GPU engine with the CPU reference on random designs; exit 1 on failure.
     Conformance(conformance::ConformanceArgs),
+    /// Constrained multi-objective optimisation (NSGA-II), resumable.
+    Optimize(optimize::OptimizeArgs),
 }
 
 /// Exit status: 0 success, 1 a check failed, 2 bad input or an error.
@@ -34,5 +38,6 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         Command::Simulate(a) => simulate::run(a, out),
         Command::Bench(a) => bench::run(a, out),
         Command::Conformance(a) => conformance::run_cli(a, out),
+        Command::Optimize(a) => optimize::run(a, out),
     }
 }

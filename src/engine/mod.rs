@@ -105,6 +105,10 @@ pub struct Detailed {
 pub trait BatchEvaluator: Sync {
     /// The backend's name, as `--engine` spells it.
     fn backend(&self) -> &'static str;
+    /// What runs it, for run manifests (the GPU's name and driver for `gpu`).
+    fn device(&self) -> String {
+        format!("{} engine on the host CPU ({} threads)", self.backend(), rayon::current_num_threads())
+    }
     fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>>;
 }
 
@@ -164,7 +168,7 @@ pub fn evaluate_detailed(engine: &dyn ParticleEngine, scenario: &Scenario, desig
 }
 
 /// Engines selectable by name.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum EngineKind {
     /// Port of the listing's algorithm (segment scan + bisection): baseline.
@@ -220,6 +224,9 @@ impl ParticleEngine for Box<dyn Engine> {
 impl BatchEvaluator for Box<dyn Engine> {
     fn backend(&self) -> &'static str {
         self.as_ref().backend()
+    }
+    fn device(&self) -> String {
+        self.as_ref().device()
     }
     fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
         self.as_ref().evaluate(scenario, designs)

@@ -23,6 +23,9 @@ pub struct ConfigFile {
     pub collision: Option<CollisionTable>,
     pub sim: Option<SimTable>,
     pub performance: Option<PerformanceTable>,
+    /// How a validation setup was measured (App. B, 4.3.2); descriptive only, it does not
+    /// change the scenario.
+    pub measurement: Option<MeasurementTable>,
 }
 
 /// The design in the units of Table 5.3.
@@ -87,6 +90,42 @@ pub struct PerformanceTable {
     pub f_max_hz: Option<f64>,
 }
 
+/// Metadata of a measured validation setup (`data/validation/testN.toml`).
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeasurementTable {
+    /// Resolution of the scale in grams: 0.1 for Tests 1-2, 0.01 for Test 3 (4.3.3).
+    pub scale_resolution_g: Option<f64>,
+    /// Mass loaded into the first tooth per run, in grams ("ca. 2 g", 4.3.2).
+    pub particle_mass_g: Option<f64>,
+    /// `poc` (single cycle of the proof-of-concept profile, Test 1) or `delayed` (delayed,
+    /// decelerated downstroke, Tests 2-3); Table 4.2.
+    pub motion_profile: Option<String>,
+    pub description: Option<String>,
+}
+
+impl MeasurementTable {
+    /// Numbers must be finite and > 0; `motion_profile` must be `poc` or `delayed`.
+    pub fn validate(&self) -> anyhow::Result<()> {
+        for (key, v) in [("scale_resolution_g", self.scale_resolution_g), ("particle_mass_g", self.particle_mass_g)] {
+            if let Some(v) = v {
+                if !v.is_finite() {
+                    bail!("measurement.{key} must be finite, got {v}");
+                }
+                if v <= 0.0 {
+                    bail!("measurement.{key} must be > 0, got {v}");
+                }
+            }
+        }
+        if let Some(p) = &self.motion_profile {
+            if p != "poc" && p != "delayed" {
+                bail!("measurement.motion_profile must be `poc` or `delayed`, got `{p}`");
+            }
+        }
+        Ok(())
+    }
+}
+
 impl ConfigFile {
     pub fn load(path: &Path) -> anyhow::Result<Self> {
         let text = std::fs::read_to_string(path).with_context(|| format!("cannot read config file {}", path.display()))?;
@@ -94,7 +133,11 @@ impl ConfigFile {
     }
 
     pub fn parse(text: &str) -> anyhow::Result<Self> {
-        Ok(toml::from_str(text)?)
+        let c: Self = toml::from_str(text)?;
+        if let Some(m) = &c.measurement {
+            m.validate()?;
+        }
+        Ok(c)
     }
 
     /// The scenario this file describes (preset, then mode, then overrides).
@@ -186,5 +229,42 @@ mod tests {
     fn unknown_material_is_an_error() {
         let c = ConfigFile::parse("[material]\nname = \"cheese\"\n").unwrap();
         assert!(c.scenario().unwrap_err().to_string().contains("material.name"));
+    }
+
+    #[test]
+    fn measurement_table_parses_and_validates() {
+        let c = ConfigFile::parse(
+            "[measurement]\nscale_resolution_g = 0.01\nparticle_mass_g = 2.0\nmotion_profile = \"delayed\"\ndescription = \"Test 3\"\n",
+        )
+        .unwrap();
+        let m = c.measurement.unwrap();
+        assert_eq!(m.scale_resolution_g, Some(0.01));
+        assert_eq!(m.motion_profile.as_deref(), Some("delayed"));
+        for (text, key) in [
+            ("scale_resolution_g = 0.0", "measurement.scale_resolution_g must be > 0"),
+            ("particle_mass_g = -2.0", "measurement.particle_mass_g must be > 0"),
+            ("particle_mass_g = nan", "measurement.particle_mass_g must be finite"),
+            ("scale_resolution_g = inf", "measurement.scale_resolution_g must be finite"),
+            ("motion_profile = \"fast\"", "measurement.motion_profile must be `poc` or `delayed`"),
+            ("scale = 0.1", "scale"),
+        ] {
+            let err = ConfigFile::parse(&format!("[measurement]\n{text}\n")).unwrap_err();
+            assert!(format!("{err:#}").contains(key), "{text}: {err:#}");
+        }
+    }
+
+    #[test]
+    fn validation_setup_files_load() {
+        for n in 1..=3 {
+            let path = format!("{}/data/validation/test{n}.toml", env!("CARGO_MANIFEST_DIR"));
+            let c = ConfigFile::load(Path::new(&path)).unwrap();
+            let s = c.scenario().unwrap();
+            assert_eq!(s.material.name, if n == 3 { "glass-beads" } else { "quartz-sand" });
+            assert_eq!(s.sim.teeth, 20);
+            assert!(c.design().is_some());
+            let m = c.measurement.unwrap();
+            assert_eq!(m.motion_profile.as_deref(), Some(if n == 1 { "poc" } else { "delayed" }));
+            assert_eq!(m.scale_resolution_g, Some(if n == 3 { 0.01 } else { 0.1 }));
+        }
     }
 }

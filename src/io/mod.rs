@@ -3,3 +3,4 @@
 pub mod config;
 pub mod plot;
 pub mod trajectories;
+pub mod measured;

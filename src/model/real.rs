@@ -58,6 +58,7 @@ impl Real for f64 {
 /// arithmetic: Vulkan only promises sin/cos to 2^-11 absolute and atan2 to 4096 ulp, which
 /// moved first impacts by up to 19 µm. These are Cephes' sinf/cosf/atanf forms (about
 /// 1-2 ulp on the kernels' arguments). Twin: shaders/shared/trig.wgsl.
+#[allow(clippy::approx_constant, clippy::excessive_precision)] // Cephes' coefficients, as printed
 pub mod ktrig {
     const PIO2_HI: f32 = 1.570_796_3;
     const PIO2_LO: f32 = -4.371_139e-8;

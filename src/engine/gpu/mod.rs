@@ -338,6 +338,9 @@ impl BatchEvaluator for GpuEngine {
     fn backend(&self) -> &'static str {
         "gpu"
     }
+    fn device(&self) -> String {
+        self.describe()
+    }
     /// The whole generation in one job (split only where device limits demand it).
     fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
         let ctx = Context::new(scenario);

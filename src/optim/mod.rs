@@ -1,0 +1,17 @@
+//! Multi-objective optimisation of conveyor designs.
+//!
+//! - [`nsga2`]: constrained NSGA-II (Deb et al. 2002; constraint handling after Deb 2000) with
+//!   whole-generation batch evaluation and exact checkpoint/resume.
+//! - [`hypervolume`]: exact 2-D hypervolume, the quality measure used by the tests.
+//! - [`test_problems`]: ZDT1, ZDT2 and BNH with their known Pareto fronts.
+
+pub mod hypervolume;
+pub mod nsga2;
+pub mod test_problems;
+
+pub use hypervolume::hypervolume_2d;
+pub use nsga2::{
+    constrained_dominates, load_checkpoint, pareto_front, save_checkpoint, BatchProblem, Config,
+    Evaluation, GenerationStats, Individual, Mode, Nsga2, State, Termination,
+};
+pub mod sawtooth;
