@@ -4,6 +4,7 @@
 pub mod args;
 pub mod bench;
 pub mod conformance;
+pub mod fit;
 pub mod optimize;
 pub mod pareto;
 pub mod simulate;
@@ -30,6 +31,8 @@ pub enum Command {
     Conformance(conformance::ConformanceArgs),
     /// Constrained multi-objective optimisation (NSGA-II), resumable.
     Optimize(optimize::OptimizeArgs),
+    /// Calibrate collision and drag parameters against measured tooth masses.
+    Fit(fit::FitArgs),
 }
 
 /// Exit status: 0 success, 1 a check failed, 2 bad input or an error.
@@ -39,5 +42,6 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         Command::Bench(a) => bench::run(a, out),
         Command::Conformance(a) => conformance::run_cli(a, out),
         Command::Optimize(a) => optimize::run(a, out),
+        Command::Fit(a) => fit::run(a, out),
     }
 }
