@@ -6,7 +6,6 @@ pub mod bench;
 pub mod conformance;
 pub mod fit;
 pub mod optimize;
-pub mod pareto;
 pub mod simulate;
 
 use std::io::Write;

@@ -14,4 +14,6 @@ pub use nsga2::{
     constrained_dominates, load_checkpoint, pareto_front, save_checkpoint, BatchProblem, Config,
     Evaluation, GenerationStats, Individual, Mode, Nsga2, State, Termination,
 };
+pub mod front;
+pub mod runner;
 pub mod sawtooth;

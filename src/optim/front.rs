@@ -7,11 +7,11 @@ use std::path::Path;
 
 use anyhow::Context as _;
 
-use super::optimize::{write_atomic, Manifest};
+use super::runner::{write_atomic, Manifest};
 use crate::engine::BatchEvaluator;
 use crate::model::Design;
-use crate::optim::nsga2::{Nsga2, State};
-use crate::optim::sawtooth::design_of;
+use super::nsga2::{Nsga2, State};
+use super::sawtooth::design_of;
 
 /// Target mass flow of solution A (5.5): 48 kg/h.
 pub const TARGET_MASS_FLOW_KG_S: f64 = 48.0 / 3600.0;

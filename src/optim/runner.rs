@@ -1,0 +1,288 @@
+//! One optimisation run in a directory: manifest, incremental CSVs, checkpoints, resume,
+//! final front. The CLI commands (`optimize`, `gpu-sweep`, `study`) are thin layers on it.
+//!
+//! Output directory: run.toml (manifest: version, engine, device, seed, every setting),
+//! evaluations.csv (every evaluation, appended per generation), generations.csv,
+//! checkpoint.json (atomic, every N generations and on Ctrl-C), and at the end pareto.csv
+//! (re-evaluated with more particles, with Monte-Carlo standard errors), pareto.svg.
+
+use std::fs::OpenOptions;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use anyhow::{bail, Context as _};
+use serde::{Deserialize, Serialize};
+
+use super::front::{final_front, write_outputs, FrontPoint};
+use super::hypervolume::hypervolume_2d;
+use super::nsga2::{load_checkpoint, save_checkpoint, Config, Nsga2, State};
+use super::sawtooth::{Logged, SawtoothProblem};
+use crate::engine::{BatchEvaluator, EngineKind};
+use crate::model::Scenario;
+
+/// Hypervolume reference point (f_stroke Hz, W_spec J/kg): the 2 Hz limit and a specific
+/// energy well above every published front point.
+pub const HV_REFERENCE: [f64; 2] = [2.0, 20_000.0];
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Algorithm {
+    /// NSGA-II (Deb et al. 2002) with Deb's constraint domination; stops at --generations.
+    Nsga2,
+    /// gamultiobj-like: ParetoFraction 0.35, stops when the average relative change of the
+    /// front's spread over --stall-generations falls below --tol (or at --generations).
+    MatlabLike,
+}
+
+/// Everything that determines a run: written to run.toml, read back by --resume.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Manifest {
+    pub version: String,
+    pub engine: EngineKind,
+    pub device: String,
+    pub seed: u64,
+    pub algorithm: Algorithm,
+    pub config: Config,
+    pub final_particles: u32,
+    pub replicates: u32,
+    pub scenario: Scenario,
+    pub termination: Option<String>,
+}
+
+/// How a run reports and checkpoints.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    pub checkpoint_every: u64,
+    /// Progress bar (false: one stderr line per 10 generations).
+    pub progress: bool,
+    /// Prefix for progress output (e.g. the sweep's angle).
+    pub label: String,
+}
+
+/// The end of a run.
+#[derive(Debug, Clone)]
+pub struct RunOutcome {
+    pub dir: PathBuf,
+    pub manifest: Manifest,
+    pub front: Vec<FrontPoint>,
+    pub termination: String,
+    pub generations: u64,
+    /// Stopped by Ctrl-C (checkpoint saved; front empty).
+    pub interrupted: bool,
+}
+
+/// Set by the Ctrl-C handler: every running optimisation saves its checkpoint and stops.
+pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Install the Ctrl-C handler once (later calls are no-ops).
+pub fn install_interrupt_handler() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
+    });
+}
+
+fn csv_header_evaluations() -> &'static str {
+    "generation,l_c_mm,l_a_mm,l_b_mm,r_mm,omega_deg,delta_deg,v0_m_s,a_m_s2,objective_1,objective_2,violation,f_stroke_hz,w_spec_j_kg,m_dot_kg_s,stroke_m,n_wire,d_avg_m,lost_fraction,invalid"
+}
+
+fn evaluation_row(l: &Logged) -> String {
+    let x = l.x;
+    let mut row = format!(
+        "{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.9e},{:.9e},{:.6e}",
+        l.generation, x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], l.objectives[0], l.objectives[1], l.violation
+    );
+    match &l.evaluation {
+        Some(e) => {
+            let p = &e.performance;
+            row.push_str(&format!(
+                ",{:.9e},{},{:.9e},{:.9e},{},{:.9e},{:.6},",
+                p.f_dynamic_hz,
+                p.w_spec_j_kg.map_or(String::new(), |w| format!("{w:.9e}")),
+                p.m_dot_kg_s,
+                p.stroke_m,
+                p.n_wire,
+                e.sim.d_avg_m,
+                e.sim.lost_fraction
+            ));
+        }
+        None => row.push_str(&format!(",,,,,,,,{}", l.invalid.as_deref().unwrap_or(if l.violation > 0.0 { "infeasible" } else { "" }))),
+    }
+    row
+}
+
+/// Keep the header and the rows of generations <= `last` (a crash may have logged a
+/// generation that the checkpoint does not hold yet).
+fn truncate_csv(path: &Path, last: u64) -> anyhow::Result<()> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let mut out = String::with_capacity(text.len());
+    for (i, line) in text.lines().enumerate() {
+        let keep = i == 0 || line.split(',').next().and_then(|g| g.parse::<u64>().ok()).is_some_and(|g| g <= last);
+        if keep {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    write_atomic(path, out.as_bytes())
+}
+
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let tmp = path.with_extension("tmp");
+    {
+        let mut f = std::fs::File::create(&tmp).with_context(|| format!("writing {}", tmp.display()))?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+    }
+    std::fs::rename(&tmp, path).with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
+    Ok(())
+}
+
+fn append(path: &Path, lines: &str) -> anyhow::Result<()> {
+    let mut f = OpenOptions::new().append(true).create(true).open(path).with_context(|| format!("appending to {}", path.display()))?;
+    f.write_all(lines.as_bytes())?;
+    f.flush()?;
+    Ok(())
+}
+
+/// The front's objective points that count for the hypervolume.
+fn front_points(state: &State) -> Vec<[f64; 2]> {
+    Nsga2::pareto_front(state)
+        .iter()
+        .filter(|i| i.eval.violation == 0.0)
+        .map(|i| [i.eval.objectives[0], i.eval.objectives[1]])
+        .collect()
+}
+
+
+/// Paths of a run directory.
+struct Paths {
+    manifest: PathBuf,
+    checkpoint: PathBuf,
+    evaluations: PathBuf,
+    generations: PathBuf,
+}
+
+impl Paths {
+    fn new(dir: &Path) -> Self {
+        Paths {
+            manifest: dir.join("run.toml"),
+            checkpoint: dir.join("checkpoint.json"),
+            evaluations: dir.join("evaluations.csv"),
+            generations: dir.join("generations.csv"),
+        }
+    }
+}
+
+/// Read a run's manifest (for --resume).
+pub fn read_manifest(dir: &Path) -> anyhow::Result<Manifest> {
+    let path = dir.join("run.toml");
+    let text = std::fs::read_to_string(&path).with_context(|| format!("--resume: no run manifest at {}", path.display()))?;
+    toml::from_str(&text).with_context(|| format!("--resume: reading {}", path.display()))
+}
+
+/// True when `dir` holds a finished run (its pareto.csv exists).
+pub fn is_finished(dir: &Path) -> bool {
+    dir.join("pareto.csv").exists() && read_manifest(dir).is_ok_and(|m| m.termination.is_some())
+}
+
+/// Run (or with `resume`, continue) the optimisation in `dir`. `manifest` describes a new
+/// run; with `resume` it is read from the directory instead.
+pub fn run(dir: &Path, manifest: Option<Manifest>, resume: bool, engine: &dyn BatchEvaluator, opts: &RunOptions) -> anyhow::Result<RunOutcome> {
+    let paths = Paths::new(dir);
+    let (mut manifest, state) = if resume {
+        let m = read_manifest(dir)?;
+        let state = load_checkpoint(&paths.checkpoint).with_context(|| format!("--resume: reading {}", paths.checkpoint.display()))?;
+        truncate_csv(&paths.evaluations, state.generation)?;
+        truncate_csv(&paths.generations, state.generation)?;
+        (m, Some(state))
+    } else {
+        if paths.checkpoint.exists() {
+            bail!("{} already holds a run: pass --resume to continue it, or choose another --out", dir.display());
+        }
+        let m = manifest.context("a new run needs its settings")?;
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        (m, None)
+    };
+    manifest.device = engine.device();
+    if state.is_none() {
+        write_atomic(&paths.manifest, toml::to_string_pretty(&manifest)?.as_bytes())?;
+        write_atomic(&paths.evaluations, format!("{}\n", csv_header_evaluations()).as_bytes())?;
+        write_atomic(&paths.generations, b"generation,hypervolume,spread,feasible_fraction,front_size,evaluations,elapsed_s\n")?;
+    }
+
+    let log_error: std::cell::RefCell<Option<anyhow::Error>> = std::cell::RefCell::new(None);
+    let log = |rows: &[Logged]| {
+        let text: String = rows.iter().map(|r| evaluation_row(r) + "\n").collect();
+        if let Err(e) = append(&paths.evaluations, &text) {
+            log_error.borrow_mut().get_or_insert(e);
+        }
+    };
+    let mut problem = SawtoothProblem { scenario: manifest.scenario.clone(), engine, base_seed: manifest.seed, log: Some(Box::new(log)) };
+    let ga = Nsga2 { config: manifest.config.clone() };
+    install_interrupt_handler();
+    let start = Instant::now();
+    let mut state = match state {
+        Some(s) => s,
+        None => {
+            let s = ga.init(&mut problem);
+            save_checkpoint(&paths.checkpoint, &s)?;
+            s
+        }
+    };
+    let bar = if opts.progress {
+        let b = indicatif::ProgressBar::new(manifest.config.max_generations);
+        b.set_style(indicatif::ProgressStyle::with_template("{prefix}{bar:30} gen {pos}/{len} {msg} eta {eta}").expect("valid template"));
+        b.set_prefix(opts.label.clone());
+        b.set_position(state.generation);
+        b
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let termination = loop {
+        if let Some(t) = ga.should_stop(&state) {
+            break format!("{t:?}");
+        }
+        let stats = ga.step(&mut state, &mut problem);
+        if let Some(e) = log_error.borrow_mut().take() {
+            return Err(e);
+        }
+        let hv = hypervolume_2d(&front_points(&state), HV_REFERENCE);
+        append(
+            &paths.generations,
+            &format!(
+                "{},{:.9e},{:.6e},{:.4},{},{},{:.3}\n",
+                stats.generation,
+                hv,
+                stats.spread,
+                stats.feasible_fraction,
+                stats.front_size,
+                stats.evaluations,
+                start.elapsed().as_secs_f64()
+            ),
+        )?;
+        if state.generation % opts.checkpoint_every.max(1) == 0 {
+            save_checkpoint(&paths.checkpoint, &state)?;
+        }
+        bar.set_position(state.generation);
+        bar.set_message(format!("HV {hv:.4e} feasible {:.0}% front {}", stats.feasible_fraction * 100.0, stats.front_size));
+        if !opts.progress && state.generation % 10 == 0 {
+            eprintln!("{}generation {} HV {hv:.4e} feasible {:.0}%", opts.label, state.generation, stats.feasible_fraction * 100.0);
+        }
+        if INTERRUPTED.load(Ordering::SeqCst) {
+            save_checkpoint(&paths.checkpoint, &state)?;
+            bar.abandon();
+            eprintln!("{}interrupted: checkpoint saved at generation {}; continue with --resume", opts.label, state.generation);
+            return Ok(RunOutcome { dir: dir.to_path_buf(), manifest, front: Vec::new(), termination: "Interrupted".into(), generations: state.generation, interrupted: true });
+        }
+    };
+    save_checkpoint(&paths.checkpoint, &state)?;
+    bar.finish_and_clear();
+    drop(problem);
+    let front = final_front(engine, &manifest, &state)?;
+    write_outputs(dir, &front, &paths.evaluations)?;
+    manifest.termination = Some(termination.clone());
+    write_atomic(&paths.manifest, toml::to_string_pretty(&manifest)?.as_bytes())?;
+    Ok(RunOutcome { dir: dir.to_path_buf(), manifest, front, termination, generations: state.generation, interrupted: false })
+}
