@@ -7,6 +7,7 @@
 
 pub mod cli;
 pub mod engine;
+pub mod fit;
 pub mod io;
 pub mod model;
 pub mod optim;

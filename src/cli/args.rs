@@ -25,9 +25,9 @@ pub struct ScenarioArgs {
     /// Environment preset (listing D.5).
     #[arg(long, value_enum)]
     pub env: Option<EnvPreset>,
-    /// Conveyor angle α, degrees.
-    #[arg(long)]
-    pub alpha: Option<f64>,
+    /// Conveyor angle α, degrees (`gpu-sweep` takes a range `FROM..TO`).
+    #[arg(long, value_parser = parse_alpha)]
+    pub alpha: Option<(f64, f64)>,
     /// Elastic normal coefficient of restitution.
     #[arg(long)]
     pub k_elastic: Option<f64>,
@@ -85,8 +85,11 @@ impl ScenarioArgs {
             s.material = Material::by_name(m)
                 .with_context(|| format!("--material: unknown material `{m}` (known: lunar-regolith, quartz-sand, glass-beads)"))?;
         }
-        if let Some(v) = self.alpha {
-            s.environment.alpha_deg = v;
+        if let Some((a, b)) = self.alpha {
+            if a != b {
+                bail!("--alpha: a range ({a}..{b}) is only for gpu-sweep; give one angle here");
+            }
+            s.environment.alpha_deg = a;
         }
         if let Some(v) = self.k_elastic {
             s.collision.k_elastic = v;
@@ -130,4 +133,20 @@ pub struct EngineArgs {
     /// Evaluation engine.
     #[arg(long, value_enum, default_value = "cpu")]
     pub engine: EngineKind,
+}
+
+/// `35` or `1..40` (degrees, inclusive range).
+pub fn parse_alpha(v: &str) -> Result<(f64, f64), String> {
+    let num = |t: &str| t.trim().parse::<f64>().map_err(|_| format!("`{t}` is not a number of degrees"));
+    let (a, b) = match v.split_once("..") {
+        Some((a, b)) => (num(a)?, num(b)?),
+        None => {
+            let a = num(v)?;
+            (a, a)
+        }
+    };
+    if !(a.is_finite() && b.is_finite()) || a > b {
+        return Err(format!("`{v}`: expected DEG or FROM..TO with FROM <= TO"));
+    }
+    Ok((a, b))
 }

@@ -5,8 +5,11 @@ pub mod args;
 pub mod bench;
 pub mod conformance;
 pub mod fit;
+pub mod multi;
 pub mod optimize;
 pub mod simulate;
+pub mod study;
+pub mod sweep;
 
 use std::io::Write;
 use std::process::ExitCode;
@@ -32,6 +35,12 @@ pub enum Command {
     Optimize(optimize::OptimizeArgs),
     /// Calibrate collision and drag parameters against measured tooth masses.
     Fit(fit::FitArgs),
+    /// One optimisation per conveyor angle (--alpha FROM..TO), angles batched per generation.
+    #[command(name = "gpu-sweep")]
+    GpuSweep(sweep::SweepArgs),
+    /// Repeatability and sensitivity studies of the optimiser (5.4.1-5.4.2).
+    #[command(subcommand)]
+    Study(study::StudyCommand),
 }
 
 /// Exit status: 0 success, 1 a check failed, 2 bad input or an error.
@@ -42,5 +51,7 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         Command::Conformance(a) => conformance::run_cli(a, out),
         Command::Optimize(a) => optimize::run(a, out),
         Command::Fit(a) => fit::run(a, out),
+        Command::GpuSweep(a) => sweep::run(a, out),
+        Command::Study(c) => study::run(c, out),
     }
 }

@@ -21,7 +21,7 @@ use crate::model::rng::seed_word;
 use crate::model::{prepare, Design, Invalid, PhysicsMode, Prepared, Scenario, SimOutcome};
 
 /// Scenario-wide constants every particle engine needs, derived once per batch.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Context {
     pub mode: PhysicsMode,
     pub g: f64,
@@ -110,6 +110,11 @@ pub trait BatchEvaluator: Sync {
         format!("{} engine on the host CPU ({} threads)", self.backend(), rayon::current_num_threads())
     }
     fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>>;
+    /// Several (scenario, designs) groups, e.g. the populations of several conveyor angles.
+    /// The GPU runs them as one job when their particle physics is the same.
+    fn evaluate_groups(&self, groups: &[(Scenario, Vec<Design>)]) -> Vec<Vec<Result<Evaluation, Invalid>>> {
+        groups.iter().map(|(s, d)| self.evaluate(s, d)).collect()
+    }
 }
 
 /// Designs in parallel (rayon); each design's particles on one thread.
@@ -230,5 +235,8 @@ impl BatchEvaluator for Box<dyn Engine> {
     }
     fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
         self.as_ref().evaluate(scenario, designs)
+    }
+    fn evaluate_groups(&self, groups: &[(Scenario, Vec<Design>)]) -> Vec<Vec<Result<Evaluation, Invalid>>> {
+        self.as_ref().evaluate_groups(groups)
     }
 }

@@ -13,7 +13,7 @@ use crate::model::Design;
 use super::nsga2::{Nsga2, State};
 use super::sawtooth::design_of;
 
-/// Target mass flow of solution A (5.5): 48 kg/h.
+/// Target mass flow of solution A (5.5): 48 kg/h, in kg/s.
 pub const TARGET_MASS_FLOW_KG_S: f64 = 48.0 / 3600.0;
 
 #[derive(Clone, Debug)]
@@ -186,4 +186,35 @@ pub fn print_picks(out: &mut dyn Write, front: &[FrontPoint], termination: &str,
         writeln!(out, "{name}: --design {:.3},{:.3},{:.3},{:.3},{:.2},{:.2},{:.3},{:.2}", x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7])?;
     }
     Ok(())
+}
+
+/// Read a finished run's pareto.csv back (resuming sweeps and studies skip finished runs).
+pub fn read_pareto_csv(path: &Path) -> anyhow::Result<Vec<FrontPoint>> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate().skip(1) {
+        let v: Vec<f64> = line.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().with_context(|| format!("{}:{}: not a number", path.display(), i + 1))?;
+        if v.len() < 17 {
+            anyhow::bail!("{}:{}: expected 17 columns, got {}", path.display(), i + 1, v.len());
+        }
+        out.push(FrontPoint {
+            design: Design::from_cli_units([v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]]),
+            f_stroke_hz: v[8],
+            w_spec_j_kg: v[9],
+            m_dot_kg_s: v[10],
+            stroke_m: v[11],
+            n_wire: v[12] as u32,
+            d_avg_m: v[13],
+            w_spec_se: v[14],
+            m_dot_se: v[15],
+            d_avg_se: v[16],
+        });
+    }
+    Ok(out)
+}
+
+/// The front point whose mass flow is closest to `target` (kg/s): how 5.4 and Tables
+/// C.1-C.5 compare runs.
+pub fn closest_to_mass_flow(front: &[FrontPoint], target: f64) -> Option<&FrontPoint> {
+    front.iter().min_by(|a, b| (a.m_dot_kg_s - target).abs().total_cmp(&(b.m_dot_kg_s - target).abs()))
 }

@@ -15,5 +15,6 @@ pub use nsga2::{
     Evaluation, GenerationStats, Individual, Mode, Nsga2, State, Termination,
 };
 pub mod front;
+pub mod lockstep;
 pub mod runner;
 pub mod sawtooth;

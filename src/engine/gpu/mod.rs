@@ -343,15 +343,34 @@ impl BatchEvaluator for GpuEngine {
     }
     /// The whole generation in one job (split only where device limits demand it).
     fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
-        let ctx = Context::new(scenario);
-        let prepared: Vec<Result<Prepared, Invalid>> = designs.par_iter().map(|d| prepare(scenario, d)).collect();
-        let ok: Vec<&Prepared> = prepared.iter().filter_map(|p| p.as_ref().ok()).collect();
+        self.evaluate_groups(&[(scenario.clone(), designs.to_vec())]).pop().unwrap_or_default()
+    }
+
+    /// Groups whose particle physics (Context), particle count and tooth count agree run as
+    /// one job: the conveyor angle lives in each design's geometry, not in the kernel's
+    /// uniforms. Other groups are run one after another.
+    fn evaluate_groups(&self, groups: &[(Scenario, Vec<Design>)]) -> Vec<Vec<Result<Evaluation, Invalid>>> {
+        let Some((first, _)) = groups.first() else { return Vec::new() };
+        let ctx = Context::new(first);
+        let same = groups.iter().all(|(s, _)| Context::new(s) == ctx && s.sim.particles == first.sim.particles && s.sim.teeth == first.sim.teeth);
+        if !same {
+            return groups.iter().map(|(s, d)| self.evaluate_groups(&[(s.clone(), d.clone())]).pop().unwrap_or_default()).collect();
+        }
+        let prepared: Vec<Vec<Result<Prepared, Invalid>>> =
+            groups.iter().map(|(s, designs)| designs.par_iter().map(|d| prepare(s, d)).collect()).collect();
+        let ok: Vec<&Prepared> = prepared.iter().flatten().filter_map(|p| p.as_ref().ok()).collect();
         let mut sims = self.run_prepared(&ctx, &ok, false).into_iter();
-        prepared
+        groups
             .iter()
-            .map(|p| match p {
-                Ok(prep) => Ok(finish_outcome(scenario, prep, sims.next().expect("one outcome per valid design").0)),
-                Err(e) => Err(e.clone()),
+            .zip(&prepared)
+            .map(|((s, _), preps)| {
+                preps
+                    .iter()
+                    .map(|p| match p {
+                        Ok(prep) => Ok(finish_outcome(s, prep, sims.next().expect("one outcome per valid design").0)),
+                        Err(e) => Err(e.clone()),
+                    })
+                    .collect()
             })
             .collect()
     }

@@ -1,0 +1,235 @@
+//! `sawtooth study repeatability|sensitivity` (5.4.1-5.4.2, Tables C.1-C.3, Figure 5.3):
+//! many optimisation runs in lockstep, each compared at the target mass flow.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{bail, Context as _};
+use clap::{Args, Subcommand};
+
+use super::args::{EngineArgs, ScenarioArgs};
+use super::multi::{panels_svg, run_all, Planned};
+use super::optimize::GaArgs;
+use crate::engine::make_engine;
+use crate::model::Scenario;
+use crate::optim::front::{closest_to_mass_flow, FrontPoint};
+use crate::optim::runner::write_atomic;
+
+#[derive(Debug, Subcommand)]
+pub enum StudyCommand {
+    /// Independent seeds; spread of f_stroke and W_spec at the target mass flow (Table C.1).
+    Repeatability(RepeatabilityArgs),
+    /// k_elastic, μ (and k_drag with drag) at ±5/10 % (Tables C.2-C.3).
+    Sensitivity(SensitivityArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct Common {
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    #[command(flatten)]
+    pub engine: EngineArgs,
+    #[command(flatten)]
+    pub ga: GaArgs,
+    /// Mass flow the runs are compared at, kg/s (default: 0.022 lunar, 0.008 terrestrial,
+    /// as Tables C.2-C.3; erratum 17).
+    #[arg(long)]
+    pub target_mass_flow: Option<f64>,
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+#[derive(Debug, Args)]
+pub struct RepeatabilityArgs {
+    #[command(flatten)]
+    pub common: Common,
+    /// Independent runs (thesis: 45).
+    #[arg(long, default_value_t = 45)]
+    pub runs: u32,
+}
+
+#[derive(Debug, Args)]
+pub struct SensitivityArgs {
+    #[command(flatten)]
+    pub common: Common,
+    /// A finished repeatability study whose confidence interval the grid is judged against.
+    #[arg(long)]
+    pub repeatability: Option<PathBuf>,
+}
+
+pub fn run(c: StudyCommand, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    match c {
+        StudyCommand::Repeatability(a) => repeatability(a, out),
+        StudyCommand::Sensitivity(a) => sensitivity(a, out),
+    }
+}
+
+fn target(c: &Common, s: &Scenario) -> anyhow::Result<f64> {
+    let t = c.target_mass_flow.unwrap_or(if s.environment.k_drag.is_some() { 0.008 } else { 0.022 });
+    if !(t > 0.0 && t.is_finite()) {
+        bail!("--target-mass-flow must be > 0 kg/s, got {t}");
+    }
+    Ok(t)
+}
+
+/// Mean, sample standard deviation, coefficient of variation, half-width of the 95 %
+/// confidence interval of the mean (normal approximation).
+fn stats(v: &[f64]) -> (f64, f64, f64, f64) {
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let sd = if v.len() > 1 { (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() } else { f64::NAN };
+    (m, sd, sd / m, 1.96 * sd / n.sqrt())
+}
+
+fn point_row(p: Option<&FrontPoint>) -> String {
+    match p {
+        Some(p) => {
+            let x = p.design.to_cli_units();
+            format!(
+                "{:.6e},{:.4},{:.6e},{:.6e},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
+                p.f_stroke_hz, p.w_spec_j_kg, p.m_dot_kg_s, p.d_avg_m, p.n_wire, x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]
+            )
+        }
+        None => ",,,,,,,,,,,,".into(),
+    }
+}
+
+const POINT_HEADER: &str = "f_stroke_hz,w_spec_j_kg,m_dot_kg_s,d_avg_m,n_wire,l_c_mm,l_a_mm,l_b_mm,r_mm,omega_deg,delta_deg,v0_m_s,a_m_s2";
+
+fn finish(fronts: Vec<Option<Vec<FrontPoint>>>) -> Option<Vec<Vec<FrontPoint>>> {
+    fronts.into_iter().collect()
+}
+
+fn repeatability(a: RepeatabilityArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    let c = &a.common;
+    let (base, _) = c.scenario.resolve()?;
+    let t = target(c, &base)?;
+    if a.runs < 2 {
+        bail!("--runs must be at least 2, got {}", a.runs);
+    }
+    let plans: Vec<Planned> = (0..a.runs)
+        .map(|i| {
+            let mut s = base.clone();
+            s.sim.seed = base.sim.seed.wrapping_add(i as u64);
+            Ok(Planned { label: format!("run {i:>3}"), dir: c.out.join(format!("run_{i:03}")), manifest: c.ga.manifest(s, c.engine.engine)? })
+        })
+        .collect::<anyhow::Result<_>>()?;
+    std::fs::create_dir_all(&c.out).with_context(|| format!("creating {}", c.out.display()))?;
+    let engine = make_engine(c.engine.engine)?;
+    let mut opts = c.ga.options("");
+    opts.progress = false;
+    let Some(fronts) = finish(run_all(&engine, &plans, &opts)?) else {
+        eprintln!("interrupted: rerun the same command to resume");
+        return Ok(ExitCode::from(130));
+    };
+    let mut csv = format!("run,seed,{POINT_HEADER}\n");
+    let (mut f, mut w, mut m) = (Vec::new(), Vec::new(), Vec::new());
+    for (i, front) in fronts.iter().enumerate() {
+        let p = closest_to_mass_flow(front, t);
+        csv.push_str(&format!("{i},{},{}\n", base.sim.seed.wrapping_add(i as u64), point_row(p)));
+        if let Some(p) = p {
+            f.push(p.f_stroke_hz);
+            w.push(p.w_spec_j_kg);
+            m.push(p.m_dot_kg_s);
+        }
+    }
+    write_atomic(&c.out.join("runs.csv"), csv.as_bytes())?;
+    let mut summary = String::from("metric,mean,sd,cv,ci95_half_width,n\n");
+    writeln!(out, "{} runs compared at {t} kg/s:", f.len())?;
+    for (name, v) in [("f_stroke_hz", &f), ("w_spec_j_kg", &w), ("m_dot_kg_s", &m)] {
+        let (mean, sd, cv, ci) = stats(v);
+        summary.push_str(&format!("{name},{mean:.6e},{sd:.6e},{cv:.6e},{ci:.6e},{}\n", v.len()));
+        writeln!(out, "  {name:<12} mean {mean:.5e}  sd {sd:.3e}  CV {:.3} %  95% CI ± {ci:.3e}", cv * 100.0)?;
+    }
+    write_atomic(&c.out.join("summary.csv"), summary.as_bytes())?;
+    let idx: Vec<f64> = (0..f.len()).map(|i| i as f64).collect();
+    let svg = panels_svg(
+        &format!("repeatability: {} runs at {t} kg/s", f.len()),
+        "run",
+        &idx,
+        &[("f_stroke [Hz]", vec![("run", f)]), ("W_spec [J/kg]", vec![("run", w)]), ("mass flow [kg/s]", vec![("run", m)])],
+    );
+    write_atomic(&c.out.join("repeatability.svg"), svg.as_bytes())?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Mean and CI half-width of W_spec from a repeatability study's summary.csv.
+fn read_ci(dir: &Path) -> anyhow::Result<(f64, f64)> {
+    let path = dir.join("summary.csv");
+    let text = std::fs::read_to_string(&path).with_context(|| format!("--repeatability: reading {}", path.display()))?;
+    for line in text.lines() {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.first() == Some(&"w_spec_j_kg") && f.len() >= 5 {
+            let p = |s: &str| s.parse::<f64>().with_context(|| format!("{}: `{s}` is not a number", path.display()));
+            return Ok((p(f[1])?, p(f[4])?));
+        }
+    }
+    bail!("{}: no w_spec_j_kg row", path.display())
+}
+
+fn sensitivity(a: SensitivityArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    let c = &a.common;
+    let (base, _) = c.scenario.resolve()?;
+    let t = target(c, &base)?;
+    let ci = a.repeatability.as_deref().map(read_ci).transpose()?;
+    // Tables C.2 (5x5 over k_elastic, mu at ±5/10 %) and C.3 (3x3x3 with k_drag at ±10 %).
+    let grid: Vec<[f64; 3]> = match base.environment.k_drag {
+        None => {
+            let f = [0.9, 0.95, 1.0, 1.05, 1.1];
+            f.iter().flat_map(|&ke| f.iter().map(move |&mu| [ke, mu, 1.0])).collect()
+        }
+        Some(_) => {
+            let f = [0.9, 1.0, 1.1];
+            let mut g = Vec::new();
+            for ke in f {
+                for mu in f {
+                    for kd in f {
+                        g.push([ke, mu, kd]);
+                    }
+                }
+            }
+            g
+        }
+    };
+    let plans: Vec<Planned> = grid
+        .iter()
+        .enumerate()
+        .map(|(i, g)| {
+            let mut s = base.clone();
+            s.collision.k_elastic *= g[0];
+            s.collision.mu_friction *= g[1];
+            s.environment.k_drag = s.environment.k_drag.map(|k| k * g[2]);
+            s.validate().map_err(|e| anyhow::anyhow!("grid point {i}: {e}"))?;
+            Ok(Planned { label: format!("grid {i:>2}"), dir: c.out.join(format!("grid_{i:02}")), manifest: c.ga.manifest(s, c.engine.engine)? })
+        })
+        .collect::<anyhow::Result<_>>()?;
+    std::fs::create_dir_all(&c.out).with_context(|| format!("creating {}", c.out.display()))?;
+    let engine = make_engine(c.engine.engine)?;
+    let mut opts = c.ga.options("");
+    opts.progress = false;
+    let Some(fronts) = finish(run_all(&engine, &plans, &opts)?) else {
+        eprintln!("interrupted: rerun the same command to resume");
+        return Ok(ExitCode::from(130));
+    };
+    let mut csv = format!("point,k_elastic,mu_friction,k_drag,{POINT_HEADER},w_spec_within_repeatability_ci\n");
+    let mut w = Vec::new();
+    writeln!(out, "{:>5} {:>9} {:>9} {:>9} {:>14} {:>12}", "point", "k_elastic", "mu", "k_drag", "W_spec [J/kg]", "in CI")?;
+    for (i, (plan, front)) in plans.iter().zip(&fronts).enumerate() {
+        let s = &plan.manifest.scenario;
+        let p = closest_to_mass_flow(front, t);
+        let within = match (ci, p) {
+            (Some((mean, half)), Some(p)) => ((p.w_spec_j_kg - mean).abs() <= half).to_string(),
+            _ => String::new(),
+        };
+        csv.push_str(&format!("{i},{},{},{},{},{within}\n", s.collision.k_elastic, s.collision.mu_friction, s.environment.k_drag.unwrap_or(0.0), point_row(p)));
+        let wv = p.map_or(f64::NAN, |p| p.w_spec_j_kg);
+        w.push(wv);
+        writeln!(out, "{i:>5} {:>9.4} {:>9.4} {:>9.3} {:>14.1} {:>12}", s.collision.k_elastic, s.collision.mu_friction, s.environment.k_drag.unwrap_or(0.0), wv, within)?;
+    }
+    write_atomic(&c.out.join("grid.csv"), csv.as_bytes())?;
+    let idx: Vec<f64> = (0..w.len()).map(|i| i as f64).collect();
+    let svg = panels_svg(&format!("sensitivity at {t} kg/s"), "grid point (see grid.csv)", &idx, &[("W_spec [J/kg]", vec![("grid", w)])]);
+    write_atomic(&c.out.join("sensitivity.svg"), svg.as_bytes())?;
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,97 @@
+//! `sawtooth gpu-sweep --alpha 1..40`: one optimisation per conveyor angle (5.4.3, Figure
+//! 5.5, Tables C.4-C.5), the angles' populations evaluated together each generation (one GPU
+//! job: the angle lives in each design's geometry). Resumable per angle.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{bail, Context as _};
+use clap::Args;
+
+use super::args::{EngineArgs, ScenarioArgs};
+use super::multi::{panels_svg, run_all, Planned};
+use super::optimize::GaArgs;
+use crate::engine::make_engine;
+use crate::optim::front::{closest_to_mass_flow, picks, FrontPoint, TARGET_MASS_FLOW_KG_S};
+use crate::optim::runner::write_atomic;
+
+#[derive(Debug, Args)]
+pub struct SweepArgs {
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    #[command(flatten)]
+    pub engine: EngineArgs,
+    #[command(flatten)]
+    pub ga: GaArgs,
+    /// Angle step, degrees.
+    #[arg(long, default_value_t = 1.0)]
+    pub step: f64,
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+pub fn run(a: SweepArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    let Some((from, to)) = a.scenario.alpha else { bail!("gpu-sweep needs --alpha FROM..TO (degrees), e.g. --alpha 1..40") };
+    if !(a.step > 0.0 && a.step.is_finite()) {
+        bail!("--step must be a positive number of degrees, got {}", a.step);
+    }
+    let mut single = a.scenario.clone();
+    single.alpha = None;
+    let (base, _) = single.resolve()?;
+    let n = ((to - from) / a.step + 1e-9).floor() as usize + 1;
+    let angles: Vec<f64> = (0..n).map(|i| from + i as f64 * a.step).collect();
+    let mut plans = Vec::new();
+    for &alpha in &angles {
+        let mut s = base.clone();
+        s.environment.alpha_deg = alpha;
+        s.validate().map_err(|e| anyhow::anyhow!("--alpha {alpha}: {e}"))?;
+        plans.push(Planned { label: format!("alpha {alpha:>5.1}"), dir: a.out.join(format!("alpha_{alpha:06.2}")), manifest: a.ga.manifest(s, a.engine.engine)? });
+    }
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let engine = make_engine(a.engine.engine)?;
+    let mut opts = a.ga.options("");
+    opts.progress = false; // one bar per angle would interleave; log lines instead
+    let fronts = run_all(&engine, &plans, &opts)?;
+    if fronts.iter().any(|f| f.is_none()) {
+        eprintln!("interrupted: rerun the same command to resume every unfinished angle");
+        return Ok(ExitCode::from(130));
+    }
+    let fronts: Vec<Vec<FrontPoint>> = fronts.into_iter().map(|f| f.expect("finished")).collect();
+    let mut csv = String::from("alpha_deg,pick,f_stroke_hz,w_spec_j_kg,w_spec_se_j_kg,m_dot_kg_s,m_dot_se_kg_s,d_avg_m,n_wire,l_c_mm,l_a_mm,l_b_mm,r_mm,omega_deg,delta_deg,v0_m_s,a_m_s2\n");
+    let mut series: [Vec<f64>; 6] = Default::default();
+    writeln!(out, "{:>6} {:>4} {:>12} {:>14} {:>12}", "alpha", "pick", "f [Hz e-2]", "W_spec [J/kg]", "m_dot [kg/h]")?;
+    for (alpha, front) in angles.iter().zip(&fronts) {
+        let ps = picks(front);
+        for (name, p) in &ps {
+            let x = p.design.to_cli_units();
+            csv.push_str(&format!(
+                "{alpha},{name},{:.6e},{:.4},{:.4},{:.6e},{:.3e},{:.6e},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}\n",
+                p.f_stroke_hz, p.w_spec_j_kg, p.w_spec_se, p.m_dot_kg_s, p.m_dot_se, p.d_avg_m, p.n_wire, x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]
+            ));
+            writeln!(out, "{alpha:>6.1} {name:>4} {:>12.3} {:>14.1} {:>12.2}", p.f_stroke_hz * 100.0, p.w_spec_j_kg, p.m_dot_kg_s * 3600.0)?;
+        }
+        let c = ps.iter().find(|(n, _)| *n == "C").map(|(_, p)| *p);
+        let t = closest_to_mass_flow(front, TARGET_MASS_FLOW_KG_S);
+        for (k, p) in [c, t].into_iter().enumerate() {
+            series[3 * k].push(p.map_or(f64::NAN, |p| p.f_stroke_hz));
+            series[3 * k + 1].push(p.map_or(f64::NAN, |p| p.w_spec_j_kg));
+            series[3 * k + 2].push(p.map_or(f64::NAN, |p| p.m_dot_kg_s * 3600.0));
+        }
+    }
+    write_atomic(&a.out.join("summary.csv"), csv.as_bytes())?;
+    let [f_c, w_c, m_c, f_a, w_a, m_a] = series;
+    let svg = panels_svg(
+        &format!("conveyor-angle sweep ({:?} mode)", base.mode),
+        "conveyor angle alpha [deg]",
+        &angles,
+        &[
+            ("f_stroke [Hz]", vec![("lowest W_spec (C)", f_c), ("closest to 48 kg/h (A)", f_a)]),
+            ("W_spec [J/kg]", vec![("lowest W_spec (C)", w_c), ("closest to 48 kg/h (A)", w_a)]),
+            ("mass flow [kg/h]", vec![("lowest W_spec (C)", m_c), ("closest to 48 kg/h (A)", m_a)]),
+        ],
+    );
+    write_atomic(&a.out.join("sweep.svg"), svg.as_bytes())?;
+    writeln!(out, "wrote {} and {}", a.out.join("summary.csv").display(), a.out.join("sweep.svg").display())?;
+    Ok(ExitCode::SUCCESS)
+}

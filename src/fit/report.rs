@@ -1,0 +1,398 @@
+//! Outputs of `fit`: the JSON object, the stdout table, fit.csv and fit.svg (a bar chart like
+//! the thesis's Figure 4.14), files written atomically.
+
+use std::fmt::Write as _;
+use std::io::Write;
+use std::path::Path;
+
+use anyhow::Context as _;
+use serde_json::{json, Map, Value};
+
+use super::{FitReport, ObjectiveKind};
+use crate::model::outcome::centre_and_dispersion;
+
+/// Where the numbers came from.
+#[derive(Clone, Debug)]
+pub struct Meta {
+    pub data: String,
+    pub setup: String,
+    pub engine: String,
+    pub particles: u32,
+    pub seed: u64,
+    pub teeth: usize,
+    pub measured_teeth: usize,
+    pub run_ids: Vec<String>,
+}
+
+fn pct(v: &[f64]) -> Vec<f64> {
+    v.iter().map(|x| 100.0 * x).collect()
+}
+
+/// JSON numbers cannot be NaN/inf: those become null.
+fn num(v: f64) -> Value {
+    if v.is_finite() {
+        json!(v)
+    } else {
+        Value::Null
+    }
+}
+
+fn nums(v: &[f64]) -> Value {
+    Value::Array(v.iter().map(|x| num(*x)).collect())
+}
+
+fn params_object(r: &FitReport, x: &[f64]) -> Value {
+    let mut m = Map::new();
+    for (p, v) in r.params.iter().zip(x) {
+        m.insert(p.name().to_string(), num(*v));
+    }
+    Value::Object(m)
+}
+
+/// Centre of mass and dispersion (Eq. 4.58-4.59) of the teeth (lost excluded).
+fn centre(teeth: &[f64]) -> Value {
+    let (e, s) = centre_and_dispersion(teeth);
+    json!({"centre_of_mass_teeth": num(e), "dispersion_teeth": num(s)})
+}
+
+/// The `--json` object (also fit.json).
+pub fn to_json(r: &FitReport, meta: &Meta) -> Value {
+    let teeth = meta.teeth;
+    let uncertainty = match &r.uncertainty {
+        Some(u) => {
+            let mut m = Map::new();
+            for (j, p) in r.params.iter().enumerate() {
+                m.insert(
+                    p.name().to_string(),
+                    json!({"sd": num(u.sd[j]), "interval": [num(u.interval[j][0]), num(u.interval[j][1])]}),
+                );
+            }
+            Value::Object(m)
+        }
+        None => json!({}),
+    };
+    let heldout = match &r.heldout {
+        Some(h) => json!({
+            "k": h.k,
+            "heldout_runs": h.heldout_runs,
+            "fit_runs": h.fit_runs,
+            "params": params_object(r, &h.params),
+            "sse_in_sample_percent2": num(h.sse_in_sample_percent2),
+            "sse_heldout_percent2": num(h.sse_heldout_percent2),
+            "sse_measured_fit_vs_heldout_percent2": num(h.sse_measured_fit_vs_heldout_percent2),
+            "nll_heldout": num(h.nll_heldout),
+            "nll_heldout_per_run": num(h.nll_heldout_per_run),
+            "nll_in_sample_per_run": num(h.nll_in_sample_per_run),
+            "evaluations": h.evaluations,
+        }),
+        None => Value::Null,
+    };
+    let fitted_teeth = &r.fitted[..teeth];
+    json!({
+        "params": params_object(r, &r.x),
+        "objective": num(r.objective_value),
+        "objective_kind": r.objective,
+        "sse_percent2": num(r.sse_percent2),
+        "heldout": heldout,
+        "uncertainty": uncertainty,
+        "distribution": {
+            "unit": "percent",
+            "teeth": teeth,
+            "measured": pct(&r.measured.mean),
+            "measured_sd": nums(&pct(&r.measured.sd)),
+            "measured_min": pct(&r.measured.min),
+            "measured_max": pct(&r.measured.max),
+            "fitted": pct(fitted_teeth),
+            "lost": {"measured": 0.0, "fitted": 100.0 * r.fitted[teeth]},
+        },
+        "metrics": {
+            "measured": centre(&r.measured.mean),
+            "fitted": centre(fitted_teeth),
+            "sse_percent2": num(r.sse_percent2),
+            "mae_percent": num(r.mae_percent),
+            "nll": num(r.likelihood.nll),
+            "nll_per_run": num(r.likelihood.nll / r.runs as f64),
+            "concentration": num(r.likelihood.concentration),
+            "lost_fraction": r.fitted[teeth],
+        },
+        "setup_values": params_object(r, &r.setup_values),
+        "settings": {
+            "data": meta.data,
+            "setup": meta.setup,
+            "runs": r.runs,
+            "measured_teeth": meta.measured_teeth,
+            "scale_resolution_g": r.resolution_g,
+            "engine": meta.engine,
+            "particles": meta.particles,
+            "seed": meta.seed,
+            "pop": r.ga.pop,
+            "generations": r.ga.generations,
+            "evaluations": r.evaluations,
+            "bootstrap": r.uncertainty.as_ref().map_or(0, |u| u.replicates),
+            "bootstrap_evaluations": r.uncertainty.as_ref().map_or(0, |u| u.evaluations),
+            "holdout": r.heldout.as_ref().map_or(0, |h| h.k),
+        },
+    })
+}
+
+/// Teeth shown in the table and the chart: the measured ones and every tooth the fit puts
+/// at least 0.05 % in.
+fn shown_teeth(r: &FitReport, meta: &Meta) -> usize {
+    let last_fitted = r.fitted[..meta.teeth].iter().rposition(|v| *v >= 5e-4).map_or(0, |i| i + 1);
+    meta.measured_teeth.max(last_fitted).max(1)
+}
+
+/// The human-readable table.
+pub fn write_table(out: &mut dyn Write, r: &FitReport, meta: &Meta) -> std::io::Result<()> {
+    let kind = match r.objective {
+        ObjectiveKind::Sse => "sse (Eq. 4.62, %²)",
+        ObjectiveKind::Likelihood => "likelihood (Dirichlet-multinomial NLL)",
+    };
+    writeln!(out, "data       {} ({} runs, {} teeth, scale {} g)", meta.data, r.runs, meta.measured_teeth, r.resolution_g)?;
+    writeln!(out, "setup      {} ({} teeth simulated)", meta.setup, meta.teeth)?;
+    writeln!(
+        out,
+        "settings   objective {kind}, engine {}, {} particles, seed {}, GA pop {} x {} generations ({} simulations)",
+        meta.engine, meta.particles, meta.seed, r.ga.pop, r.ga.generations, r.evaluations
+    )?;
+    writeln!(out)?;
+    writeln!(out, "parameter        fitted        sd    68 % interval          bounds       setup")?;
+    for (j, p) in r.params.iter().enumerate() {
+        let (lo, hi) = p.bounds();
+        let (sd, iv) = match &r.uncertainty {
+            Some(u) => (format!("{:>9.4}", u.sd[j]), format!("[{:.4}, {:.4}]", u.interval[j][0], u.interval[j][1])),
+            None => (format!("{:>9}", "-"), "-".to_string()),
+        };
+        writeln!(
+            out,
+            "{:<12} {:>10.4} {} {:<22} {:<12} {:.4}",
+            p.name(),
+            r.x[j],
+            sd,
+            iv,
+            format!("[{lo}, {hi}]"),
+            r.setup_values[j]
+        )?;
+    }
+    if let Some(u) = &r.uncertainty {
+        writeln!(out, "(uncertainty: {} bootstrap resamples of the runs, each refitted locally; {} simulations)", u.replicates, u.evaluations)?;
+    }
+    writeln!(out)?;
+    writeln!(out, "tooth   measured %      sd     min     max   fitted %")?;
+    let m = &r.measured;
+    for j in 0..shown_teeth(r, meta) {
+        let sd = if m.sd[j].is_finite() { format!("{:>7.2}", 100.0 * m.sd[j]) } else { format!("{:>7}", "-") };
+        writeln!(
+            out,
+            "{:>5}   {:>10.2} {} {:>7.2} {:>7.2} {:>10.2}",
+            j + 1,
+            100.0 * m.mean[j],
+            sd,
+            100.0 * m.min[j],
+            100.0 * m.max[j],
+            100.0 * r.fitted[j]
+        )?;
+    }
+    let rest: f64 = r.fitted[shown_teeth(r, meta)..meta.teeth].iter().sum();
+    if rest > 0.0 {
+        writeln!(out, " rest   {:>10.2} {:>7} {:>7} {:>7} {:>10.2}", 0.0, "", "", "", 100.0 * rest)?;
+    }
+    writeln!(out, " lost   {:>10.2} {:>7} {:>7} {:>7} {:>10.2}", 0.0, "", "", "", 100.0 * r.fitted[meta.teeth])?;
+    writeln!(out)?;
+    let (em, sm) = centre_and_dispersion(&m.mean);
+    let (ef, sf) = centre_and_dispersion(&r.fitted[..meta.teeth]);
+    writeln!(out, "                        measured    fitted")?;
+    writeln!(out, "centre of mass (teeth) {:>9.3} {:>9.3}", em, ef)?;
+    writeln!(out, "dispersion (teeth)     {:>9.3} {:>9.3}", sm, sf)?;
+    writeln!(out)?;
+    writeln!(out, "SSE (in-sample)        {:>9.1} %²   (MAE {:.2} %)", r.sse_percent2, r.mae_percent)?;
+    writeln!(
+        out,
+        "neg. log-likelihood    {:>9.1}      ({:.2} per run, concentration {:.3e})",
+        r.likelihood.nll,
+        r.likelihood.nll / r.runs as f64,
+        r.likelihood.concentration
+    )?;
+    if let Some(h) = &r.heldout {
+        writeln!(out)?;
+        writeln!(out, "held out   last {} runs ({}); fit on the other {}:", h.k, h.heldout_runs.join(", "), h.fit_runs.len())?;
+        let params: Vec<String> = r.params.iter().zip(&h.params).map(|(p, v)| format!("{} {:.4}", p.name(), v)).collect();
+        writeln!(out, "           {}", params.join(", "))?;
+        writeln!(out, "SSE in-sample (fit runs)      {:>9.1} %²", h.sse_in_sample_percent2)?;
+        writeln!(out, "SSE held-out                  {:>9.1} %²", h.sse_heldout_percent2)?;
+        writeln!(out, "SSE measured fit vs held-out  {:>9.1} %²   (run-to-run floor)", h.sse_measured_fit_vs_heldout_percent2)?;
+        writeln!(out, "NLL per run in-sample / held-out {:.2} / {:.2}", h.nll_in_sample_per_run, h.nll_heldout_per_run)?;
+    }
+    Ok(())
+}
+
+/// fit.csv: one row per simulated tooth and one `lost` row, percentages.
+pub fn to_csv(r: &FitReport, meta: &Meta) -> String {
+    let mut s = String::from("tooth,measured_mean_percent,measured_sd_percent,measured_min_percent,measured_max_percent,fitted_percent\n");
+    let m = &r.measured;
+    let f = |v: f64| if v.is_finite() { format!("{v}") } else { String::new() };
+    for j in 0..meta.teeth {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{}",
+            j + 1,
+            f(100.0 * m.mean[j]),
+            f(100.0 * m.sd[j]),
+            f(100.0 * m.min[j]),
+            f(100.0 * m.max[j]),
+            f(100.0 * r.fitted[j])
+        );
+    }
+    let _ = writeln!(s, "lost,0,,,,{}", f(100.0 * r.fitted[meta.teeth]));
+    s
+}
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+/// fit.svg: measured mean per tooth as bars, ±1 sd as a light band, min/max as error bars,
+/// the fitted distribution as red diamonds (like Figure 4.14), plus a `lost` category when
+/// the fit loses particles.
+pub fn to_svg(r: &FitReport, meta: &Meta) -> String {
+    let shown = shown_teeth(r, meta);
+    let lost = r.fitted[meta.teeth];
+    let mut cats: Vec<(String, f64, f64, f64, f64, f64)> = (0..shown)
+        .map(|j| {
+            let m = &r.measured;
+            (format!("{}", j + 1), m.mean[j], m.sd[j], m.min[j], m.max[j], r.fitted[j])
+        })
+        .collect();
+    if lost > 0.0 {
+        cats.push(("lost".into(), 0.0, 0.0, 0.0, 0.0, lost));
+    }
+    let (w, h) = (720.0, 440.0);
+    let (left, right, top, bottom) = (70.0, 20.0, 50.0, 60.0);
+    let (pw, ph) = (w - left - right, h - top - bottom);
+    let ymax_data = cats.iter().map(|c| c.4.max(c.5).max(c.1 + if c.2.is_finite() { c.2 } else { 0.0 })).fold(0.0, f64::max);
+    let step = if ymax_data > 0.5 { 0.2 } else if ymax_data > 0.2 { 0.1 } else { 0.05 };
+    let ymax = ((ymax_data / step).ceil() * step).max(step);
+    let y = |v: f64| top + ph * (1.0 - v / ymax);
+    let slot = pw / cats.len() as f64;
+    let bar = slot * 0.5;
+    let mut s = String::new();
+    let _ = writeln!(s, r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="12">"#);
+    let _ = writeln!(s, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
+    let params: Vec<String> = r.params.iter().zip(&r.x).map(|(p, v)| format!("{} {:.3}", p.name(), v)).collect();
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="20" text-anchor="middle" font-size="14">{}</text>"#,
+        w / 2.0,
+        esc(&format!("Measured vs fitted distribution ({} runs) — {}", r.runs, meta.data))
+    );
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="38" text-anchor="middle">{}</text>"#,
+        w / 2.0,
+        esc(&format!("{}; SSE {:.1} %²", params.join(", "), r.sse_percent2))
+    );
+    // grid and y axis
+    let mut v = 0.0;
+    while v <= ymax + 1e-9 {
+        let yy = y(v);
+        let _ = writeln!(s, r##"<line x1="{left}" y1="{yy:.1}" x2="{:.1}" y2="{yy:.1}" stroke="#ddd"/>"##, left + pw);
+        let _ = writeln!(s, r#"<text x="{:.1}" y="{:.1}" text-anchor="end">{:.0}</text>"#, left - 6.0, yy + 4.0, 100.0 * v);
+        v += step;
+    }
+    let _ = writeln!(
+        s,
+        r#"<text x="18" y="{:.1}" text-anchor="middle" transform="rotate(-90 18 {:.1})">particle fraction (%)</text>"#,
+        top + ph / 2.0,
+        top + ph / 2.0
+    );
+    let _ = writeln!(s, r#"<line x1="{left}" y1="{top}" x2="{left}" y2="{:.1}" stroke="black"/>"#, top + ph);
+    let _ = writeln!(s, r#"<line x1="{left}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="black"/>"#, top + ph, left + pw, top + ph);
+    for (i, (label, mean, sd, min, max, fitted)) in cats.iter().enumerate() {
+        let cx = left + slot * (i as f64 + 0.5);
+        if *mean > 0.0 {
+            let _ = writeln!(
+                s,
+                r##"<rect x="{:.1}" y="{:.1}" width="{bar:.1}" height="{:.1}" fill="#1f5fa8"><title>measured {:.2} %</title></rect>"##,
+                cx - bar / 2.0,
+                y(*mean),
+                y(0.0) - y(*mean),
+                100.0 * mean
+            );
+        }
+        if sd.is_finite() && *sd > 0.0 {
+            let (a, b) = ((mean - sd).max(0.0), mean + sd);
+            let _ = writeln!(
+                s,
+                r##"<rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="#8cc4f0" fill-opacity="0.7"><title>±1 sd {:.2} %</title></rect>"##,
+                cx - bar * 0.3,
+                y(b),
+                bar * 0.6,
+                y(a) - y(b),
+                100.0 * sd
+            );
+        }
+        if *max > 0.0 {
+            let _ = writeln!(s, r#"<line x1="{cx:.1}" y1="{:.1}" x2="{cx:.1}" y2="{:.1}" stroke="black"/>"#, y(*min), y(*max));
+            for e in [min, max] {
+                let _ = writeln!(s, r#"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="black"/>"#, cx - 6.0, y(*e), cx + 6.0, y(*e));
+            }
+        }
+        let (fx, fy) = (cx, y(*fitted));
+        let _ = writeln!(
+            s,
+            r##"<path d="M {:.1} {fy:.1} L {fx:.1} {:.1} L {:.1} {fy:.1} L {fx:.1} {:.1} Z" fill="#d62728" stroke="black" stroke-width="0.5"><title>fitted {:.2} %</title></path>"##,
+            fx - 6.0,
+            fy - 6.0,
+            fx + 6.0,
+            fy + 6.0,
+            100.0 * fitted
+        );
+        let _ = writeln!(s, r#"<text x="{cx:.1}" y="{:.1}" text-anchor="middle">{}</text>"#, top + ph + 18.0, esc(label));
+    }
+    let _ = writeln!(s, r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">tooth</text>"#, left + pw / 2.0, h - 18.0);
+    // legend
+    let lx = left + pw - 190.0;
+    let _ = writeln!(s, r##"<rect x="{lx:.1}" y="{}" width="14" height="10" fill="#1f5fa8"/><text x="{:.1}" y="{}">measured mean</text>"##, top + 4.0, lx + 20.0, top + 13.0);
+    let _ = writeln!(s, r##"<rect x="{lx:.1}" y="{}" width="14" height="10" fill="#8cc4f0"/><text x="{:.1}" y="{}">±1 sd of the runs</text>"##, top + 20.0, lx + 20.0, top + 29.0);
+    let _ = writeln!(s, r#"<line x1="{:.1}" y1="{}" x2="{:.1}" y2="{}" stroke="black"/><text x="{:.1}" y="{}">min / max of the runs</text>"#, lx + 7.0, top + 36.0, lx + 7.0, top + 46.0, lx + 20.0, top + 45.0);
+    let _ = writeln!(
+        s,
+        r##"<path d="M {:.1} {} L {:.1} {} L {:.1} {} L {:.1} {} Z" fill="#d62728"/><text x="{:.1}" y="{}">fitted simulation</text>"##,
+        lx + 1.0,
+        top + 57.0,
+        lx + 7.0,
+        top + 51.0,
+        lx + 13.0,
+        top + 57.0,
+        lx + 7.0,
+        top + 63.0,
+        lx + 20.0,
+        top + 61.0
+    );
+    s.push_str("</svg>\n");
+    s
+}
+
+/// Write `bytes` to a temporary file next to `path`, then rename it over `path`.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
+    let tmp = path.with_file_name(format!(".{name}.tmp{}", std::process::id()));
+    let result = (|| -> std::io::Result<()> {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.with_context(|| format!("writing {}", path.display()))
+}
+
+/// fit.json, fit.csv and fit.svg into `dir` (created if missing).
+pub fn write_dir(dir: &Path, r: &FitReport, meta: &Meta, json: &Value) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("--out: cannot create directory {}", dir.display()))?;
+    write_atomic(&dir.join("fit.json"), format!("{}\n", serde_json::to_string_pretty(json)?).as_bytes())?;
+    write_atomic(&dir.join("fit.csv"), to_csv(r, meta).as_bytes())?;
+    write_atomic(&dir.join("fit.svg"), to_svg(r, meta).as_bytes())
+}

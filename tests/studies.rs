@@ -1,0 +1,74 @@
+//! gpu-sweep and the studies end to end with tiny settings: outputs, and a rerun that
+//! reads finished runs back instead of recomputing them.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn run(args: &[&str]) -> (i32, String, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_sawtooth")).args(args).output().unwrap();
+    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stdout).into(), String::from_utf8_lossy(&o.stderr).into())
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("sawtooth-study-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+const GA: &[&str] = &["--pop", "16", "--generations", "4", "--algorithm", "nsga2", "--particles", "40", "--final-particles", "60", "--replicates", "2", "--quiet"];
+
+#[test]
+fn sweep_writes_a_summary_per_angle_and_reruns_from_disk() {
+    let out = tmp("sweep");
+    let o = out.to_str().unwrap();
+    let mut args = vec!["gpu-sweep", "--env", "lunar", "--alpha", "20..40", "--step", "10", "--out", o];
+    args.extend_from_slice(GA);
+    let (code, first, err) = run(&args);
+    assert_eq!(code, 0, "{err}");
+    for a in ["alpha_020.00", "alpha_030.00", "alpha_040.00"] {
+        assert!(out.join(a).join("pareto.csv").exists(), "{a}");
+    }
+    let summary = std::fs::read_to_string(out.join("summary.csv")).unwrap();
+    assert!(summary.lines().count() >= 4);
+    assert!(std::fs::read_to_string(out.join("sweep.svg")).unwrap().starts_with("<svg"));
+    // finished angles are read back, not rerun: same table, no new evaluations
+    let before = std::fs::metadata(out.join("alpha_030.00/evaluations.csv")).unwrap().len();
+    let (code, second, _) = run(&args);
+    assert_eq!(code, 0);
+    assert_eq!(first, second);
+    assert_eq!(before, std::fs::metadata(out.join("alpha_030.00/evaluations.csv")).unwrap().len());
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn sweep_needs_a_range_and_single_commands_refuse_one() {
+    let (code, _, err) = run(&["gpu-sweep", "--out", "/tmp/x"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--alpha"), "{err}");
+    let (code, _, err) = run(&["simulate", "--alpha", "1..40", "--design", "47,46,32,43,94,11,0.84,32"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("gpu-sweep"), "{err}");
+}
+
+#[test]
+fn repeatability_and_sensitivity_write_their_tables() {
+    let rep = tmp("rep");
+    let mut args = vec!["study", "repeatability", "--env", "lunar", "--runs", "3", "--out", rep.to_str().unwrap()];
+    args.extend_from_slice(GA);
+    let (code, out, err) = run(&args);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("CV"), "{out}");
+    let summary = std::fs::read_to_string(rep.join("summary.csv")).unwrap();
+    assert!(summary.contains("w_spec_j_kg"));
+    assert_eq!(std::fs::read_to_string(rep.join("runs.csv")).unwrap().lines().count(), 4);
+
+    let sens = tmp("sens");
+    let mut args = vec!["study", "sensitivity", "--env", "lunar", "--out", sens.to_str().unwrap(), "--repeatability", rep.to_str().unwrap()];
+    args.extend_from_slice(GA);
+    let (code, _, err) = run(&args);
+    assert_eq!(code, 0, "{err}");
+    // Table C.2's 5 x 5 grid in vacuum
+    assert_eq!(std::fs::read_to_string(sens.join("grid.csv")).unwrap().lines().count(), 26);
+    let _ = std::fs::remove_dir_all(&rep);
+    let _ = std::fs::remove_dir_all(&sens);
+}
