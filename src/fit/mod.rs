@@ -12,7 +12,8 @@
 //!   (D.4), or a Dirichlet-multinomial negative log-likelihood of the individual runs.
 //! - Optimiser: the crate's GA ([`crate::optim::nsga2`] with one objective: elitist
 //!   (μ + λ) survival, SBX and polynomial mutation), uniform initial population, fixed seed;
-//!   every generation is evaluated as one batch (one engine call per candidate, in parallel).
+//!   every generation is evaluated as one batch (one engine call per candidate, in parallel);
+//!   the GA's best is then polished by a bounded Nelder-Mead ([`polish`]).
 //! - Uncertainty ([`bootstrap`]): runs resampled with replacement; each replicate is refitted
 //!   by a bounded Nelder-Mead ([`nelder_mead`]) started from the GA archive's best point
 //!   under the replicate's objective; standard deviation and the 16-84 % percentile interval.
@@ -333,6 +334,38 @@ pub fn ga_fit(
     Ok(GaFit { x: best.x.clone(), value, bins, evaluations: state.evaluations, archive: gp.archive })
 }
 
+/// Polish a GA result with a bounded Nelder-Mead (the same local search the bootstrap
+/// refits use, so the estimate and its replicates come from one procedure). Keeps the GA's
+/// point unless the polish is strictly better; the archive is left as the GA's.
+pub fn polish(problem: &Problem, target: &Target, kind: ObjectiveKind, fit: GaFit, max_evals: usize) -> GaFit {
+    let eps = problem.eps();
+    let m = nelder_mead::minimise(
+        |u| target.value(kind, problem.bins_at(&problem.from_unit(u)).as_deref(), eps),
+        &problem.to_unit(&fit.x),
+        0.05,
+        max_evals,
+        1e-4,
+    );
+    let x = problem.from_unit(&m.x);
+    let evaluations = fit.evaluations + m.evaluations as u64;
+    match problem.bins_at(&x) {
+        Some(bins) if m.value < fit.value => GaFit { x, value: m.value, bins, evaluations: evaluations + 1, ..fit },
+        _ => GaFit { evaluations, ..fit },
+    }
+}
+
+/// [`ga_fit`], then [`polish`] with the bootstrap's budget.
+pub fn global_fit(
+    problem: &Problem,
+    target: &Target,
+    kind: ObjectiveKind,
+    settings: GaSettings,
+    progress: &mut dyn FnMut(u64, f64),
+) -> anyhow::Result<GaFit> {
+    let fit = ga_fit(problem, target, kind, settings, progress)?;
+    Ok(polish(problem, target, kind, fit, bootstrap_evals(problem.params.len())))
+}
+
 /// Bootstrap settings.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct BootstrapSettings {
@@ -487,7 +520,7 @@ pub fn holdout(
     let teeth = problem.teeth();
     let fit_target = Target::new(&fit_runs, teeth, resolution_g);
     let held_target = Target::new(&held_runs, teeth, resolution_g);
-    let fit = ga_fit(problem, &fit_target, kind, settings, progress)?;
+    let fit = global_fit(problem, &fit_target, kind, settings, progress)?;
     let eps = problem.eps();
     let in_sample = fit_target.likelihood(&fit.bins, eps);
     let nll_heldout = -objective::dm_log_likelihood(&held_target.counts, &objective::floored(&fit.bins, eps), in_sample.concentration);
@@ -556,7 +589,7 @@ pub struct FitReport {
     pub fitted: Vec<f64>,
     pub uncertainty: Option<Uncertainty>,
     pub heldout: Option<Heldout>,
-    /// Simulations run by the main GA.
+    /// Simulations run by the main fit (GA and polish).
     pub evaluations: u64,
     pub ga: GaSettings,
 }
@@ -600,7 +633,7 @@ pub fn fit(
     }
     let target = Target::new(runs, teeth, resolution_g);
     let generations = settings.ga.generations;
-    let fit = ga_fit(problem, &target, settings.objective, settings.ga, &mut |g, best| {
+    let fit = global_fit(problem, &target, settings.objective, settings.ga, &mut |g, best| {
         if g == generations || g % 10 == 0 {
             log(format!("fit: generation {g}/{generations}, best objective {best:.4}"));
         }
