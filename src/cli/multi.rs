@@ -2,11 +2,12 @@
 //! its own directory, run in lockstep threads so each generation is one engine job;
 //! finished runs are read back, unfinished ones resumed, missing ones started.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 
-use crate::engine::BatchEvaluator;
+use super::optimize::GaArgs;
+use crate::engine::{make_engine, BatchEvaluator, EngineKind};
 use crate::optim::front::{read_pareto_csv, FrontPoint};
 use crate::optim::lockstep::Lockstep;
 use crate::optim::runner::{is_finished, run, Manifest, RunOptions};
@@ -50,6 +51,20 @@ pub fn run_all(engine: &dyn BatchEvaluator, plans: &[Planned], opts: &RunOptions
     });
     for (i, r) in results {
         fronts[i] = r?;
+    }
+    Ok(fronts)
+}
+
+/// Create `out`, start the engine and run every plan in lockstep (log lines, no bars: they
+/// would interleave). `None` when Ctrl-C stopped the runs (checkpoints are saved; rerunning
+/// the same command resumes them).
+pub fn execute(out: &Path, kind: EngineKind, ga: &GaArgs, plans: &[Planned]) -> anyhow::Result<Option<Vec<Vec<FrontPoint>>>> {
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let engine = make_engine(kind)?;
+    let opts = RunOptions { progress: false, ..ga.options("") };
+    let fronts: Option<Vec<Vec<FrontPoint>>> = run_all(&engine, plans, &opts)?.into_iter().collect();
+    if fronts.is_none() {
+        eprintln!("interrupted: rerun the same command to resume every unfinished run");
     }
     Ok(fronts)
 }

@@ -9,9 +9,8 @@ use anyhow::{bail, Context as _};
 use clap::{Args, Subcommand};
 
 use super::args::{EngineArgs, ScenarioArgs};
-use super::multi::{panels_svg, run_all, Planned};
+use super::multi::{execute, panels_svg, Planned};
 use super::optimize::GaArgs;
-use crate::engine::make_engine;
 use crate::model::Scenario;
 use crate::optim::front::{closest_to_mass_flow, FrontPoint};
 use crate::optim::runner::write_atomic;
@@ -97,10 +96,6 @@ fn point_row(p: Option<&FrontPoint>) -> String {
 
 const POINT_HEADER: &str = "f_stroke_hz,w_spec_j_kg,m_dot_kg_s,d_avg_m,n_wire,l_c_mm,l_a_mm,l_b_mm,r_mm,omega_deg,delta_deg,v0_m_s,a_m_s2";
 
-fn finish(fronts: Vec<Option<Vec<FrontPoint>>>) -> Option<Vec<Vec<FrontPoint>>> {
-    fronts.into_iter().collect()
-}
-
 fn repeatability(a: RepeatabilityArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let c = &a.common;
     let (base, _) = c.scenario.resolve()?;
@@ -115,12 +110,7 @@ fn repeatability(a: RepeatabilityArgs, out: &mut dyn Write) -> anyhow::Result<Ex
             Ok(Planned { label: format!("run {i:>3}"), dir: c.out.join(format!("run_{i:03}")), manifest: c.ga.manifest(s, c.engine.engine)? })
         })
         .collect::<anyhow::Result<_>>()?;
-    std::fs::create_dir_all(&c.out).with_context(|| format!("creating {}", c.out.display()))?;
-    let engine = make_engine(c.engine.engine)?;
-    let mut opts = c.ga.options("");
-    opts.progress = false;
-    let Some(fronts) = finish(run_all(&engine, &plans, &opts)?) else {
-        eprintln!("interrupted: rerun the same command to resume");
+    let Some(fronts) = execute(&c.out, c.engine.engine, &c.ga, &plans)? else {
         return Ok(ExitCode::from(130));
     };
     let mut csv = format!("run,seed,{POINT_HEADER}\n");
@@ -204,12 +194,7 @@ fn sensitivity(a: SensitivityArgs, out: &mut dyn Write) -> anyhow::Result<ExitCo
             Ok(Planned { label: format!("grid {i:>2}"), dir: c.out.join(format!("grid_{i:02}")), manifest: c.ga.manifest(s, c.engine.engine)? })
         })
         .collect::<anyhow::Result<_>>()?;
-    std::fs::create_dir_all(&c.out).with_context(|| format!("creating {}", c.out.display()))?;
-    let engine = make_engine(c.engine.engine)?;
-    let mut opts = c.ga.options("");
-    opts.progress = false;
-    let Some(fronts) = finish(run_all(&engine, &plans, &opts)?) else {
-        eprintln!("interrupted: rerun the same command to resume");
+    let Some(fronts) = execute(&c.out, c.engine.engine, &c.ga, &plans)? else {
         return Ok(ExitCode::from(130));
     };
     let mut csv = format!("point,k_elastic,mu_friction,k_drag,{POINT_HEADER},w_spec_within_repeatability_ci\n");

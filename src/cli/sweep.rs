@@ -6,14 +6,13 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Context as _};
+use anyhow::bail;
 use clap::Args;
 
 use super::args::{EngineArgs, ScenarioArgs};
-use super::multi::{panels_svg, run_all, Planned};
+use super::multi::{execute, panels_svg, Planned};
 use super::optimize::GaArgs;
-use crate::engine::make_engine;
-use crate::optim::front::{closest_to_mass_flow, picks, FrontPoint, TARGET_MASS_FLOW_KG_S};
+use crate::optim::front::{closest_to_mass_flow, picks, TARGET_MASS_FLOW_KG_S};
 use crate::optim::runner::write_atomic;
 
 #[derive(Debug, Args)]
@@ -48,16 +47,9 @@ pub fn run(a: SweepArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         s.validate().map_err(|e| anyhow::anyhow!("--alpha {alpha}: {e}"))?;
         plans.push(Planned { label: format!("alpha {alpha:>5.1}"), dir: a.out.join(format!("alpha_{alpha:06.2}")), manifest: a.ga.manifest(s, a.engine.engine)? });
     }
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    let engine = make_engine(a.engine.engine)?;
-    let mut opts = a.ga.options("");
-    opts.progress = false; // one bar per angle would interleave; log lines instead
-    let fronts = run_all(&engine, &plans, &opts)?;
-    if fronts.iter().any(|f| f.is_none()) {
-        eprintln!("interrupted: rerun the same command to resume every unfinished angle");
+    let Some(fronts) = execute(&a.out, a.engine.engine, &a.ga, &plans)? else {
         return Ok(ExitCode::from(130));
-    }
-    let fronts: Vec<Vec<FrontPoint>> = fronts.into_iter().map(|f| f.expect("finished")).collect();
+    };
     let mut csv = String::from("alpha_deg,pick,f_stroke_hz,w_spec_j_kg,w_spec_se_j_kg,m_dot_kg_s,m_dot_se_kg_s,d_avg_m,n_wire,l_c_mm,l_a_mm,l_b_mm,r_mm,omega_deg,delta_deg,v0_m_s,a_m_s2\n");
     let mut series: [Vec<f64>; 6] = Default::default();
     writeln!(out, "{:>6} {:>4} {:>12} {:>14} {:>12}", "alpha", "pick", "f [Hz e-2]", "W_spec [J/kg]", "m_dot [kg/h]")?;
