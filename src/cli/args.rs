@@ -64,6 +64,10 @@ pub struct ScenarioArgs {
     /// Compatibility mode.
     #[arg(long, value_enum)]
     pub compat: Option<Compat>,
+    /// Switch on an effect beyond the thesis's model (cpu engine), repeatable:
+    /// impact-scatter=SIGMA_DEG, launch-spread=SPEED_SPREAD,ANGLE_SIGMA_DEG, polydisperse=SIGMA_LN.
+    #[arg(long = "effect")]
+    pub effects: Vec<String>,
 }
 
 impl ScenarioArgs {
@@ -120,6 +124,9 @@ impl ScenarioArgs {
         }
         if self.no_randomise {
             s.sim.randomise = false;
+        }
+        for spec in &self.effects {
+            s.effects.set_from_cli(spec).map_err(anyhow::Error::msg)?;
         }
         if let Err(e) = s.validate() {
             bail!("invalid setting: {e}");

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context as _;
 
 use super::optimize::GaArgs;
-use crate::engine::{make_engine, BatchEvaluator, EngineKind};
+use crate::engine::{make_engine_for, BatchEvaluator, EngineKind};
 use crate::optim::front::{read_pareto_csv, FrontPoint};
 use crate::optim::lockstep::Lockstep;
 use crate::optim::runner::{is_finished, run, Manifest, RunOptions};
@@ -60,7 +60,10 @@ pub fn run_all(engine: &dyn BatchEvaluator, plans: &[Planned], opts: &RunOptions
 /// the same command resumes them).
 pub fn execute(out: &Path, kind: EngineKind, ga: &GaArgs, plans: &[Planned]) -> anyhow::Result<Option<Vec<Vec<FrontPoint>>>> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let engine = make_engine(kind)?;
+    let engine = match plans.first() {
+        Some(p) => make_engine_for(kind, &p.manifest.scenario)?,
+        None => return Ok(Some(Vec::new())),
+    };
     let opts = RunOptions { progress: false, ..ga.options("") };
     let fronts: Option<Vec<Vec<FrontPoint>>> = run_all(&engine, plans, &opts)?.into_iter().collect();
     if fronts.is_none() {

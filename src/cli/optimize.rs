@@ -9,7 +9,7 @@ use anyhow::bail;
 use clap::Args;
 
 use super::args::{EngineArgs, ScenarioArgs};
-use crate::engine::make_engine;
+use crate::engine::make_engine_for;
 use crate::optim::front::print_picks;
 use crate::optim::nsga2::{Config, Mode};
 use crate::optim::runner::{read_manifest, run as run_optimisation, Algorithm, Manifest, RunOptions};
@@ -98,15 +98,14 @@ pub struct OptimizeArgs {
 }
 
 pub fn run(a: OptimizeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    let (manifest, kind) = if a.resume {
+    let (manifest, kind, scenario) = if a.resume {
         let m = read_manifest(&a.out)?;
-        let kind = m.engine;
-        (None, kind)
+        (None, m.engine, m.scenario)
     } else {
         let (scenario, _) = a.scenario.resolve()?;
-        (Some(a.ga.manifest(scenario, a.engine.engine)?), a.engine.engine)
+        (Some(a.ga.manifest(scenario.clone(), a.engine.engine)?), a.engine.engine, scenario)
     };
-    let engine = make_engine(kind)?;
+    let engine = make_engine_for(kind, &scenario)?;
     let outcome = run_optimisation(&a.out, manifest, a.resume, &engine, &a.ga.options(""))?;
     if outcome.interrupted {
         return Ok(ExitCode::from(130));

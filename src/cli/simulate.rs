@@ -9,7 +9,7 @@ use clap::Args;
 use serde_json::json;
 
 use super::args::{EngineArgs, ScenarioArgs};
-use crate::engine::{evaluate_detailed, make_engine, Detailed, EngineKind};
+use crate::engine::{evaluate_detailed, make_engine_for, Detailed, EngineKind};
 use crate::model::outcome::centre_and_dispersion;
 use crate::model::{Design, PhysicsMode, Scenario};
 
@@ -44,7 +44,7 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     if trace && matches!(a.engine.engine, EngineKind::Gpu | EngineKind::Auto) {
         bail!("--trajectories and --plot record every flight, which only the CPU engines do: use --engine cpu or listing");
     }
-    let engine = make_engine(a.engine.engine)?;
+    let engine = make_engine_for(a.engine.engine, &scenario)?;
     let det = match evaluate_detailed(engine.as_ref(), &scenario, &design, trace) {
         Ok(d) => d,
         Err(invalid) => bail!("invalid design ({}): {invalid}", invalid.rule()),

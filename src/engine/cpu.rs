@@ -63,6 +63,10 @@ pub fn kernel_physics<T: Real>(ctx: &Context) -> KPhysics<T> {
         min_hop: T::c(if listing { LISTING_MIN_HOP_X } else { PHYSICAL_MIN_HOP }),
         min_hop_horizontal: listing,
         per_particle_rest: !listing,
+        scatter_sigma: T::c(ctx.effects.impact_scatter.map_or(0.0, |e| e.sigma_deg.to_radians())),
+        launch_speed_spread: T::c(ctx.effects.launch_spread.map_or(0.0, |e| e.speed_spread)),
+        launch_angle_sigma: T::c(ctx.effects.launch_spread.map_or(0.0, |e| e.angle_sigma_deg.to_radians())),
+        size_sigma_ln: T::c(ctx.effects.polydisperse.map_or(0.0, |e| e.sigma_ln)),
     }
 }
 
@@ -78,7 +82,7 @@ fn state_of(code: u32) -> ParticleState {
 pub fn run_design<T: Real>(prep: &Prepared, ctx: &Context, mut trace: Option<&mut Vec<FlightRecord>>) -> Run {
     let d = kernel_design::<T>(prep);
     let ph = kernel_physics::<T>(ctx);
-    let mut parts: Vec<KParticle<T>> = prep.launches.iter().map(|l| init_particle(&d, [T::c(l[0]), T::c(l[1])])).collect();
+    let mut parts: Vec<KParticle<T>> = prep.launches.iter().enumerate().map(|(i, l)| init_particle(&d, &ph, [T::c(l[0]), T::c(l[1])], i as u32)).collect();
     let mut iterations = 0;
     for bounce in 0..ctx.max_bounces {
         let (mut flying, mut hop_sum, mut hop_n) = (0usize, 0.0f64, 0usize);

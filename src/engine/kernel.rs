@@ -10,7 +10,7 @@
 use crate::model::collision::Restitution;
 use crate::model::flight::Flight;
 use crate::model::real::Real;
-use crate::model::rng::{uniform, DRAW_ANGLE, DRAW_SPEED};
+use crate::model::rng::{normal, uniform, DRAW_ANGLE, DRAW_LAUNCH_ANGLE, DRAW_LAUNCH_SPEED, DRAW_SCATTER, DRAW_SIZE, DRAW_SPEED, PER_PARTICLE};
 
 pub const SURFACE_NONE: u32 = 0;
 pub const SURFACE_BASE: u32 = 1;
@@ -66,6 +66,12 @@ pub struct KPhysics<T> {
     pub min_hop_horizontal: bool,
     /// Rest per particle (text) instead of the listing's mean-hop stop for all.
     pub per_particle_rest: bool,
+    /// Effects (issue 5, `cpu` engine only; 0 = off): impact tilt σ (rad), launch speed
+    /// spread (fraction), launch angle σ (rad), log-normal size σ.
+    pub scatter_sigma: T,
+    pub launch_speed_spread: T,
+    pub launch_angle_sigma: T,
+    pub size_sigma_ln: T,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -83,6 +89,8 @@ pub struct KParticle<T> {
     pub hop: T,
     /// First impact point, global.
     pub first: [T; 2],
+    /// This grain's Stokes k_drag, 1/s (differs between grains only when polydisperse).
+    pub k_drag: T,
 }
 
 /// The first surface a flight meets.
@@ -117,8 +125,15 @@ pub fn normal_of<T: Real>(d: &KDesign<T>, surface: u32) -> [T; 2] {
 
 /// A particle at its launch point (global = tooth 0 frame), moving at v0 along the launch
 /// angle (listing lines 45, 206-210).
-pub fn init_particle<T: Real>(d: &KDesign<T>, launch: [T; 2]) -> KParticle<T> {
+pub fn init_particle<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, launch: [T; 2], index: u32) -> KParticle<T> {
+    // polydisperse: k ∝ 1/d² with d = d_ref e^{σ z}
+    let k_drag = if ph.size_sigma_ln > T::zero() {
+        ph.k_drag * (T::c(-2.0) * ph.size_sigma_ln * T::c(normal(ph.seed, index, PER_PARTICLE, DRAW_SIZE))).exp()
+    } else {
+        ph.k_drag
+    };
     KParticle {
+        k_drag,
         tooth: 0,
         pos: launch,
         vel: {
@@ -142,17 +157,29 @@ pub fn randomise_launch<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KPart
         RANDOMISE_EVERY_LAUNCH => true,
         _ => false,
     };
-    if !apply {
+    let spread = p.surface == SURFACE_NONE && (ph.launch_speed_spread > T::zero() || ph.launch_angle_sigma > T::zero());
+    if !apply && !spread {
         return;
     }
     let two = T::c(2.0);
-    let fa = T::one() - ph.band + two * ph.band * T::c(uniform(ph.seed, index, bounce, DRAW_ANGLE));
-    let fs = T::one() - ph.band + two * ph.band * T::c(uniform(ph.seed, index, bounce, DRAW_SPEED));
-    let speed = (p.vel[0] * p.vel[0] + p.vel[1] * p.vel[1]).sqrt() * fs;
+    let (fa, fs) = if apply {
+        (
+            T::one() - ph.band + two * ph.band * T::c(uniform(ph.seed, index, bounce, DRAW_ANGLE)),
+            T::one() - ph.band + two * ph.band * T::c(uniform(ph.seed, index, bounce, DRAW_SPEED)),
+        )
+    } else {
+        (T::one(), T::one())
+    };
+    let mut speed = (p.vel[0] * p.vel[0] + p.vel[1] * p.vel[1]).sqrt() * fs;
     if p.surface == SURFACE_NONE {
         let mut ang = p.vel[1].katan2(p.vel[0]);
         if ang < T::zero() {
             ang = ang + two * T::PI(); // listing keeps angles in [0, 2π)
+        }
+        if spread {
+            // launch-spread effect: earlier (slower) departures and a jittered direction
+            speed = speed * (T::one() - ph.launch_speed_spread * T::c(uniform(ph.seed, index, bounce, DRAW_LAUNCH_SPEED)));
+            ang = ang + ph.launch_angle_sigma * T::c(normal(ph.seed, index, bounce, DRAW_LAUNCH_ANGLE));
         }
         let (s, c) = (ang * fa).ksin_cos();
         p.vel = [speed * c, speed * s];
@@ -203,7 +230,7 @@ fn contact<T: Real>(d: &KDesign<T>, p: &KParticle<T>, a: [T; 2], b: [T; 2], n: [
 /// ignored on the first flight). The base-line crossing bounds the flight: every tooth
 /// segment lies above the base, so nothing after it can be hit.
 pub fn first_hit<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bounce: u32) -> Hit<T> {
-    let fl = Flight { p0: p.pos, v0: p.vel, g: ph.g, k: ph.k_drag };
+    let fl = Flight { p0: p.pos, v0: p.vel, g: ph.g, k: p.k_drag };
     let mut best = Hit { found: false, t: T::infinity(), ..Default::default() };
     let k = p.tooth;
     let kf = T::c(k as f64);
@@ -335,9 +362,19 @@ pub fn step_particle<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KParticl
         p.state = STATE_LOST;
         return flown;
     }
-    let fl = Flight { p0: p.pos, v0: p.vel, g: ph.g, k: ph.k_drag };
+    let fl = Flight { p0: p.pos, v0: p.vel, g: ph.g, k: p.k_drag };
     let v_in = fl.vel(hit.t);
-    let v_out = ph.restitution.bounce(v_in, normal_of(d, hit.surface));
+    let mut n = normal_of(d, hit.surface);
+    if ph.scatter_sigma > T::zero() {
+        // impact-scatter effect: the local normal is tilted; a tilt that would make the grain
+        // leave through the surface is not applied
+        let (s, c) = (ph.scatter_sigma * T::c(normal(ph.seed, index, bounce, DRAW_SCATTER))).ksin_cos();
+        let tilted = [c * n[0] - s * n[1], s * n[0] + c * n[1]];
+        if dot(v_in, tilted) < T::zero() {
+            n = tilted;
+        }
+    }
+    let v_out = ph.restitution.bounce(v_in, n);
     p.hop = (hit.pos[0] - p.pos[0]).abs(); // Eq. 4.50, per particle
     let back = offset(d, hit.tooth - p.tooth, [T::zero(), T::zero()]);
     p.pos = [hit.pos[0] - back[0], hit.pos[1] - back[1]];

@@ -162,6 +162,11 @@ impl ParticleEngine for ListingEngine {
             min_hop: 0.0,
             min_hop_horizontal: true,
             per_particle_rest: ctx.mode == PhysicsMode::Physical,
+            // effects are refused for this engine (engine::make_engine_for)
+            scatter_sigma: 0.0,
+            launch_speed_spread: 0.0,
+            launch_angle_sigma: 0.0,
+            size_sigma_ln: 0.0,
         };
         let mut st: Vec<State> = prep
             .launches

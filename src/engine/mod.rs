@@ -34,6 +34,7 @@ pub struct Context {
     pub seed_word: u32,
     pub rest_threshold: f64,
     pub max_bounces: u32,
+    pub effects: crate::model::effects::Effects,
 }
 
 impl Context {
@@ -54,6 +55,7 @@ impl Context {
             seed_word: seed_word(s.sim.seed),
             rest_threshold: s.sim.rest_threshold,
             max_bounces: s.sim.max_bounces,
+            effects: s.effects,
         }
     }
 }
@@ -193,6 +195,25 @@ pub fn particle_engine(kind: EngineKind) -> Box<dyn Engine> {
         EngineKind::Cpu => Box::new(cpu::CpuEngine::default()),
         EngineKind::Gpu | EngineKind::Auto => panic!("particle_engine covers the CPU engines; use make_engine for {kind:?}"),
     }
+}
+
+/// The engine for a scenario: the effects of issue 5 live in the `cpu` kernel only, so a
+/// scenario with effects runs on `cpu` (`auto` says so) and `listing`/`gpu` refuse it.
+pub fn make_engine_for(kind: EngineKind, scenario: &Scenario) -> anyhow::Result<Box<dyn Engine>> {
+    if scenario.effects.any() {
+        let active = scenario.effects.active().join(", ");
+        return match kind {
+            EngineKind::Cpu => Ok(particle_engine(EngineKind::Cpu)),
+            EngineKind::Auto => {
+                eprintln!("engine auto: effects on ({active}), using the cpu engine");
+                Ok(particle_engine(EngineKind::Cpu))
+            }
+            EngineKind::Listing | EngineKind::Gpu => {
+                anyhow::bail!("--engine {}: the effects ({active}) are only in the cpu engine; use --engine cpu", format!("{kind:?}").to_lowercase())
+            }
+        };
+    }
+    make_engine(kind)
 }
 
 /// Any engine by name. `gpu` without an adapter is an error; `auto` falls back to `cpu`.

@@ -23,6 +23,9 @@ pub struct ConfigFile {
     pub collision: Option<CollisionTable>,
     pub sim: Option<SimTable>,
     pub performance: Option<PerformanceTable>,
+    /// Effects beyond the thesis's model: [effects.impact_scatter] sigma_deg,
+    /// [effects.launch_spread] speed_spread + angle_sigma_deg, [effects.polydisperse] sigma_ln.
+    pub effects: Option<crate::model::effects::Effects>,
     /// How a validation setup was measured (App. B, 4.3.2); descriptive only, it does not
     /// change the scenario.
     pub measurement: Option<MeasurementTable>,
@@ -176,6 +179,9 @@ impl ConfigFile {
             set(&mut s.sim.seed, t.seed);
             set(&mut s.sim.rest_threshold, t.rest_threshold_m);
             set(&mut s.sim.launch_offset_deg, t.launch_offset_deg);
+        }
+        if let Some(e) = &self.effects {
+            s.effects = *e;
         }
         if let Some(p) = &self.performance {
             set(&mut s.performance.conveyor_length, p.conveyor_length_m);

@@ -2,6 +2,7 @@
 
 pub mod collision;
 pub mod design;
+pub mod effects;
 pub mod fill;
 pub mod flight;
 pub mod geometry;

@@ -46,6 +46,20 @@ pub fn uniform(seed_word: u32, particle: u32, bounce: u32, draw: u32) -> f64 {
 /// The draws a particle makes at each launch (4.2.4: one factor for the angle, one for the speed).
 pub const DRAW_ANGLE: u32 = 0;
 pub const DRAW_SPEED: u32 = 1;
+/// Effects (issue 5): a normal deviate for the impact tilt, the launch spread's speed and
+/// angle, and the grain size (keyed with bounce = `PER_PARTICLE`).
+pub const DRAW_SCATTER: u32 = 2; // and 3
+pub const DRAW_LAUNCH_SPEED: u32 = 4;
+pub const DRAW_LAUNCH_ANGLE: u32 = 5; // and 6
+pub const DRAW_SIZE: u32 = 7; // and 8
+pub const PER_PARTICLE: u32 = u32::MAX;
+
+/// Standard normal deviate from two keyed uniforms (Box-Muller).
+pub fn normal(seed_word: u32, particle: u32, bounce: u32, draw: u32) -> f64 {
+    let u1 = 1.0 - uniform(seed_word, particle, bounce, draw); // (0, 1]
+    let u2 = uniform(seed_word, particle, bounce, draw + 1);
+    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+}
 
 #[cfg(test)]
 mod tests {
@@ -76,6 +90,16 @@ mod tests {
         assert_ne!(a, uniform(s, 4, 4, 0));
         assert_ne!(a, uniform(seed_word(2), 3, 4, 0));
         assert_eq!(a, uniform(s, 3, 4, 0));
+    }
+
+    #[test]
+    fn normal_deviates_have_unit_variance() {
+        let s = seed_word(9);
+        let n = 50_000u32;
+        let z: Vec<f64> = (0..n).map(|i| normal(s, i, 0, DRAW_SCATTER)).collect();
+        let m = z.iter().sum::<f64>() / n as f64;
+        let v = z.iter().map(|x| (x - m).powi(2)).sum::<f64>() / n as f64;
+        assert!(m.abs() < 0.02 && (v - 1.0).abs() < 0.03, "{m} {v}");
     }
 
     #[test]

@@ -138,6 +138,9 @@ pub struct Scenario {
     pub collision: Collision,
     pub sim: SimSettings,
     pub performance: PerformanceParams,
+    /// Effects beyond the thesis's model (issue 5), all off by default.
+    #[serde(default, skip_serializing_if = "crate::model::effects::Effects::is_default")]
+    pub effects: crate::model::effects::Effects,
 }
 
 impl Solid {
@@ -240,6 +243,7 @@ impl Scenario {
             collision: Collision { k_elastic: 0.872, mu_friction: 0.106 },
             sim: SimSettings::default(),
             performance: PerformanceParams::default(),
+            effects: Default::default(),
         }
     }
 
@@ -354,6 +358,6 @@ impl Scenario {
         if let Some(g) = p.spill_check_g {
             positive("performance.spill_check_g", g)?;
         }
-        Ok(())
+        self.effects.validate()
     }
 }

@@ -272,7 +272,7 @@ impl GpuEngine {
                 .zip(&designs)
                 .flat_map(|(p, _)| {
                     let kd = kernel_design::<f32>(p);
-                    p.launches.iter().map(move |l| GpuParticle::from(&init_particle(&kd, [l[0] as f32, l[1] as f32])))
+                    p.launches.iter().enumerate().map(move |(i, l)| GpuParticle::from(&init_particle(&kd, &kp, [l[0] as f32, l[1] as f32], i as u32)))
                 })
                 .collect();
             let phys = GpuPhysics::from_kernel(&kp, ctx.max_bounces, n_particles, chunk.len() as u32, teeth);
