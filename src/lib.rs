@@ -6,6 +6,7 @@
 //! - [`cli`]: the thin command-line layer.
 
 pub mod cli;
+pub mod diagnose;
 pub mod engine;
 pub mod fit;
 pub mod io;

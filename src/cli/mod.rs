@@ -10,6 +10,7 @@ pub mod optimize;
 pub mod simulate;
 pub mod study;
 pub mod sweep;
+pub mod synth;
 
 use std::io::Write;
 use std::process::ExitCode;
@@ -41,6 +42,8 @@ pub enum Command {
     /// Repeatability and sensitivity studies of the optimiser (5.4.1-5.4.2).
     #[command(subcommand)]
     Study(study::StudyCommand),
+    /// Measurement-like tooth masses from the model, optionally with effects switched on.
+    Synth(synth::SynthArgs),
 }
 
 /// Exit status: 0 success, 1 a check failed, 2 bad input or an error.
@@ -53,5 +56,6 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         Command::Fit(a) => fit::run(a, out),
         Command::GpuSweep(a) => sweep::run(a, out),
         Command::Study(c) => study::run(c, out),
+        Command::Synth(a) => synth::run(a, out),
     }
 }
