@@ -11,7 +11,7 @@ use clap::Args;
 use super::args::EngineArgs;
 use crate::engine::make_engine;
 use crate::fit::report::{self, Meta};
-use crate::fit::{objective, parse_params, FitSettings, GaSettings, ObjectiveKind, Problem};
+use crate::fit::{objective, parse_assignments, parse_params, FitSettings, GaSettings, ObjectiveKind, Problem};
 use crate::io::config::ConfigFile;
 use crate::io::measured;
 
@@ -50,6 +50,10 @@ pub struct FitArgs {
     /// Bootstrap replicates over the runs for the parameter uncertainty (0 = off).
     #[arg(long, default_value_t = 20)]
     pub bootstrap: usize,
+    /// Do not fit: score these values (`k_elastic=0.854,mu_fric=0.133,k_drag=5.347`) against
+    /// the runs; the parameters not named keep the setup's values.
+    #[arg(long, conflicts_with = "params")]
+    pub at: Option<String>,
     /// Write fit.json, fit.csv and fit.svg into this directory.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -60,7 +64,13 @@ pub struct FitArgs {
 
 pub fn run(a: FitArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     // cheap checks first: nothing is simulated before every input is known to be good
-    let params = parse_params(&a.params)?;
+    let (params, at) = match &a.at {
+        Some(list) => {
+            let (p, v) = parse_assignments(list)?;
+            (p, Some(v))
+        }
+        None => (parse_params(&a.params)?, None),
+    };
     if a.pop < 4 {
         bail!("--pop must be >= 4, got {}", a.pop);
     }
@@ -99,16 +109,23 @@ pub fn run(a: FitArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         .unwrap_or_else(|| objective::infer_resolution(runs.runs.iter().flat_map(|r| r.teeth_g.iter().copied())));
 
     let engine = make_engine(a.engine.engine)?;
-    let problem = Problem::new(engine.as_ref(), scenario, design, params).with_context(|| format!("--setup {}", a.setup.display()))?;
+    let problem = Problem::new(engine.as_ref(), scenario, design, params)
+        .with_context(|| format!("--setup {}", a.setup.display()))?;
     let settings = FitSettings {
         objective: a.objective,
         ga: GaSettings { pop: a.pop, generations: a.generations, seed },
         bootstrap: a.bootstrap,
         holdout: a.holdout,
     };
-    let started = std::time::Instant::now();
-    let report = crate::fit::fit(&problem, &runs, resolution_g, settings, &mut |line| eprintln!("{line}"))?;
-    eprintln!("fit: done in {:.1} s", started.elapsed().as_secs_f64());
+    let report = match &at {
+        Some(x) => crate::fit::evaluate_at(&problem, &runs, resolution_g, a.objective, x)?,
+        None => {
+            let started = std::time::Instant::now();
+            let r = crate::fit::fit(&problem, &runs, resolution_g, settings, &mut |line| eprintln!("{line}"))?;
+            eprintln!("fit: done in {:.1} s", started.elapsed().as_secs_f64());
+            r
+        }
+    };
 
     let meta = Meta {
         data: a.data.display().to_string(),

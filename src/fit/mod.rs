@@ -17,6 +17,10 @@
 //! - Uncertainty ([`bootstrap`]): runs resampled with replacement; each replicate is refitted
 //!   by a bounded Nelder-Mead ([`nelder_mead`]) started from the GA archive's best point
 //!   under the replicate's objective; standard deviation and the 16-84 % percentile interval.
+//!   It measures how much the run-to-run scatter moves the optimum with the particle streams
+//!   held fixed; it does not include the Monte-Carlo noise of a finite particle count (rerun
+//!   with other `--seed`s for that) nor the misfit of a model that cannot reach the data,
+//!   and a parameter pinned at a bound gets a one-sided, possibly degenerate interval.
 //! - Held-out score ([`holdout`]): the last K runs (file order) are left out, a full GA fit
 //!   on the others is scored on them.
 
@@ -153,6 +157,14 @@ impl Target {
     pub fn likelihood(&self, bins: &[f64], eps: f64) -> Profiled {
         objective::profile_nll(&self.counts, bins, eps)
     }
+
+    /// The likelihood with the mean set to the measured mean distribution (a perfect mean
+    /// model): its NLL is the reference a fitted model's NLL is compared with, its
+    /// concentration the one the runs' scatter alone implies. A fit whose profiled α0 is
+    /// far below that explains misfit of the mean as over-dispersion.
+    pub fn measured_mean_likelihood(&self) -> Profiled {
+        objective::profile_nll(&self.counts, &self.bins, 1e-12)
+    }
 }
 
 /// `runs` restricted to the given indices (repeats allowed, for the bootstrap).
@@ -171,7 +183,12 @@ pub struct Problem<'a> {
 
 impl<'a> Problem<'a> {
     /// Checks the scenario and that the design can be simulated at all.
-    pub fn new(engine: &'a dyn BatchEvaluator, base: Scenario, design: Design, params: Vec<Param>) -> anyhow::Result<Self> {
+    pub fn new(
+        engine: &'a dyn BatchEvaluator,
+        base: Scenario,
+        design: Design,
+        params: Vec<Param>,
+    ) -> anyhow::Result<Self> {
         if params.is_empty() {
             bail!("--params: no parameter to fit (known: {})", known_names());
         }
@@ -225,17 +242,25 @@ impl<'a> Problem<'a> {
 
     /// Parameters from unit-box coordinates.
     pub fn from_unit(&self, u: &[f64]) -> Vec<f64> {
-        self.params.iter().zip(u).map(|(p, u)| {
-            let (lo, hi) = p.bounds();
-            lo + u.clamp(0.0, 1.0) * (hi - lo)
-        }).collect()
+        self.params
+            .iter()
+            .zip(u)
+            .map(|(p, u)| {
+                let (lo, hi) = p.bounds();
+                lo + u.clamp(0.0, 1.0) * (hi - lo)
+            })
+            .collect()
     }
 
     pub fn to_unit(&self, x: &[f64]) -> Vec<f64> {
-        self.params.iter().zip(x).map(|(p, x)| {
-            let (lo, hi) = p.bounds();
-            ((x - lo) / (hi - lo)).clamp(0.0, 1.0)
-        }).collect()
+        self.params
+            .iter()
+            .zip(x)
+            .map(|(p, x)| {
+                let (lo, hi) = p.bounds();
+                ((x - lo) / (hi - lo)).clamp(0.0, 1.0)
+            })
+            .collect()
     }
 }
 
@@ -322,12 +347,8 @@ pub fn ga_fit(
         .min_by(|a, b| a.eval.objectives[0].total_cmp(&b.eval.objectives[0]))
         .context("empty population")?;
     let value = best.eval.objectives[0];
-    let bins = gp
-        .archive
-        .iter()
-        .find(|c| c.x == best.x)
-        .and_then(|c| c.bins.clone())
-        .or_else(|| problem.bins_at(&best.x));
+    let bins =
+        gp.archive.iter().find(|c| c.x == best.x).and_then(|c| c.bins.clone()).or_else(|| problem.bins_at(&best.x));
     let Some(bins) = bins.filter(|_| value.is_finite()) else {
         bail!("no candidate could be simulated (every evaluation was rejected by the engine)");
     };
@@ -523,7 +544,11 @@ pub fn holdout(
     let fit = global_fit(problem, &fit_target, kind, settings, progress)?;
     let eps = problem.eps();
     let in_sample = fit_target.likelihood(&fit.bins, eps);
-    let nll_heldout = -objective::dm_log_likelihood(&held_target.counts, &objective::floored(&fit.bins, eps), in_sample.concentration);
+    let nll_heldout = -objective::dm_log_likelihood(
+        &held_target.counts,
+        &objective::model_probabilities(&held_target.counts, &fit.bins, eps),
+        in_sample.concentration,
+    );
     Ok(Heldout {
         k,
         heldout_runs: held_runs.runs.iter().map(|r| r.id.clone()).collect(),
@@ -582,6 +607,8 @@ pub struct FitReport {
     pub sse_percent2: f64,
     pub mae_percent: f64,
     pub likelihood: Profiled,
+    /// [`Target::measured_mean_likelihood`] of all runs.
+    pub measured_mean_likelihood: Profiled,
     pub runs: usize,
     pub resolution_g: f64,
     pub measured: MeasuredSummary,
@@ -591,7 +618,8 @@ pub struct FitReport {
     pub heldout: Option<Heldout>,
     /// Simulations run by the main fit (GA and polish).
     pub evaluations: u64,
-    pub ga: GaSettings,
+    /// None when the parameters were given ([`evaluate_at`]), not fitted.
+    pub ga: Option<GaSettings>,
 }
 
 /// What `fit` does besides the GA.
@@ -669,6 +697,7 @@ pub fn fit(
         sse_percent2: target.sse(&fit.bins),
         mae_percent: objective::mae_percent(&fit.bins, &target.bins),
         likelihood: target.likelihood(&fit.bins, eps),
+        measured_mean_likelihood: target.measured_mean_likelihood(),
         runs: n,
         resolution_g,
         measured: MeasuredSummary::new(runs, teeth),
@@ -676,8 +705,75 @@ pub fn fit(
         uncertainty,
         heldout,
         evaluations: fit.evaluations,
-        ga: settings.ga,
+        ga: Some(settings.ga),
         x: fit.x,
+    })
+}
+
+/// `NAME=VALUE,...` (e.g. `k_elastic=0.854,mu_fric=0.133,k_drag=5.347`): the parameters
+/// and their values, for [`evaluate_at`].
+pub fn parse_assignments(list: &str) -> anyhow::Result<(Vec<Param>, Vec<f64>)> {
+    let mut names = Vec::new();
+    let mut values = Vec::new();
+    for item in list.split(',').map(str::trim) {
+        let Some((name, value)) = item.split_once('=') else {
+            bail!("--at: expected NAME=VALUE, got `{item}` (known names: {})", known_names());
+        };
+        let v: f64 = value
+            .trim()
+            .parse()
+            .map_err(|_| anyhow::anyhow!("--at: `{}`: not a number: `{}`", name.trim(), value.trim()))?;
+        if !v.is_finite() {
+            bail!("--at: `{}` must be finite, got {v}", name.trim());
+        }
+        names.push(name.trim().to_string());
+        values.push(v);
+    }
+    let params = parse_params(&names.join(","))
+        .map_err(|e| anyhow::anyhow!("{}", e.to_string().replacen("--params", "--at", 1)))?;
+    Ok((params, values))
+}
+
+/// Score given parameter values against all runs, without fitting: the same report as
+/// [`fit`] with no uncertainty and no held-out score.
+pub fn evaluate_at(
+    problem: &Problem,
+    runs: &MeasuredRuns,
+    resolution_g: f64,
+    kind: ObjectiveKind,
+    x: &[f64],
+) -> anyhow::Result<FitReport> {
+    let teeth = problem.teeth();
+    if runs.teeth > teeth {
+        bail!(
+            "the measured data has {} teeth but the setup simulates only {teeth} (sim.teeth): raise sim.teeth",
+            runs.teeth
+        );
+    }
+    problem.scenario_at(x).validate().map_err(|e| anyhow::anyhow!("--at: {e}"))?;
+    let target = Target::new(runs, teeth, resolution_g);
+    let Some(bins) = problem.bins_at(x) else {
+        bail!("the engine rejected the setup at these parameters");
+    };
+    let eps = problem.eps();
+    Ok(FitReport {
+        params: problem.params.clone(),
+        x: x.to_vec(),
+        setup_values: problem.setup_values(),
+        objective: kind,
+        objective_value: target.value(kind, Some(&bins), eps),
+        sse_percent2: target.sse(&bins),
+        mae_percent: objective::mae_percent(&bins, &target.bins),
+        likelihood: target.likelihood(&bins, eps),
+        measured_mean_likelihood: target.measured_mean_likelihood(),
+        runs: runs.runs.len(),
+        resolution_g,
+        measured: MeasuredSummary::new(runs, teeth),
+        fitted: bins,
+        uncertainty: None,
+        heldout: None,
+        evaluations: 1,
+        ga: None,
     })
 }
 
@@ -704,6 +800,19 @@ mod tests {
         assert_eq!(s.environment.k_drag, Some(3.0));
         assert_eq!((s.collision.k_elastic, s.collision.mu_friction), (0.5, 0.2));
         assert_eq!(Param::ALL.map(|p| p.get(&s)), [0.5, 0.2, 3.0]);
+    }
+
+    #[test]
+    fn assignments_parse() {
+        let (p, v) = parse_assignments("k_elastic=0.854, mu_fric=0.133,k_drag=5.347").unwrap();
+        assert_eq!(p, Param::ALL.to_vec());
+        assert_eq!(v, vec![0.854, 0.133, 5.347]);
+        for (bad, needle) in
+            [("k_drag", "NAME=VALUE"), ("k_drag=x", "not a number"), ("g=1", "`g`"), ("k_drag=inf", "finite")]
+        {
+            let e = parse_assignments(bad).unwrap_err().to_string();
+            assert!(e.contains("--at") && e.contains(needle), "{bad}: {e}");
+        }
     }
 
     #[test]

@@ -113,6 +113,8 @@ pub fn to_json(r: &FitReport, meta: &Meta) -> Value {
             "nll": num(r.likelihood.nll),
             "nll_per_run": num(r.likelihood.nll / r.runs as f64),
             "concentration": num(r.likelihood.concentration),
+            "nll_measured_mean": num(r.measured_mean_likelihood.nll),
+            "concentration_measured_mean": num(r.measured_mean_likelihood.concentration),
             "lost_fraction": r.fitted[teeth],
         },
         "setup_values": params_object(r, &r.setup_values),
@@ -125,8 +127,9 @@ pub fn to_json(r: &FitReport, meta: &Meta) -> Value {
             "engine": meta.engine,
             "particles": meta.particles,
             "seed": meta.seed,
-            "pop": r.ga.pop,
-            "generations": r.ga.generations,
+            "fitted": r.ga.is_some(),
+            "pop": r.ga.map(|g| g.pop),
+            "generations": r.ga.map(|g| g.generations),
             "evaluations": r.evaluations,
             "bootstrap": r.uncertainty.as_ref().map_or(0, |u| u.replicates),
             "bootstrap_evaluations": r.uncertainty.as_ref().map_or(0, |u| u.evaluations),
@@ -148,15 +151,24 @@ pub fn write_table(out: &mut dyn Write, r: &FitReport, meta: &Meta) -> std::io::
         ObjectiveKind::Sse => "sse (Eq. 4.62, %²)",
         ObjectiveKind::Likelihood => "likelihood (Dirichlet-multinomial NLL)",
     };
-    writeln!(out, "data       {} ({} runs, {} teeth, scale {} g)", meta.data, r.runs, meta.measured_teeth, r.resolution_g)?;
-    writeln!(out, "setup      {} ({} teeth simulated)", meta.setup, meta.teeth)?;
     writeln!(
         out,
-        "settings   objective {kind}, engine {}, {} particles, seed {}, GA pop {} x {} generations ({} simulations)",
-        meta.engine, meta.particles, meta.seed, r.ga.pop, r.ga.generations, r.evaluations
+        "data       {} ({} runs, {} teeth, scale {} g)",
+        meta.data, r.runs, meta.measured_teeth, r.resolution_g
+    )?;
+    writeln!(out, "setup      {} ({} teeth simulated)", meta.setup, meta.teeth)?;
+    let how = match r.ga {
+        Some(g) => format!("GA pop {} x {} generations + polish ({} simulations)", g.pop, g.generations, r.evaluations),
+        None => "evaluated at the given parameters (no fit)".to_string(),
+    };
+    writeln!(
+        out,
+        "settings   objective {kind}, engine {}, {} particles, seed {}, {how}",
+        meta.engine, meta.particles, meta.seed
     )?;
     writeln!(out)?;
-    writeln!(out, "parameter        fitted        sd    68 % interval          bounds       setup")?;
+    let head = if r.ga.is_some() { "fitted" } else { " given" };
+    writeln!(out, "parameter        {head}        sd    68 % interval          bounds       setup")?;
     for (j, p) in r.params.iter().enumerate() {
         let (lo, hi) = p.bounds();
         let (sd, iv) = match &r.uncertainty {
@@ -175,7 +187,11 @@ pub fn write_table(out: &mut dyn Write, r: &FitReport, meta: &Meta) -> std::io::
         )?;
     }
     if let Some(u) = &r.uncertainty {
-        writeln!(out, "(uncertainty: {} bootstrap resamples of the runs, each refitted locally; {} simulations)", u.replicates, u.evaluations)?;
+        writeln!(
+            out,
+            "(uncertainty: {} bootstrap resamples of the runs, each refitted locally; {} simulations)",
+            u.replicates, u.evaluations
+        )?;
     }
     writeln!(out)?;
     writeln!(out, "tooth   measured %      sd     min     max   fitted %")?;
@@ -211,24 +227,48 @@ pub fn write_table(out: &mut dyn Write, r: &FitReport, meta: &Meta) -> std::io::
         "neg. log-likelihood    {:>9.1}      ({:.2} per run, concentration {:.3e})",
         r.likelihood.nll,
         r.likelihood.nll / r.runs as f64,
-        r.likelihood.concentration
+        r.likelihood.concentration,
+    )?;
+    writeln!(
+        out,
+        "  runs' own mean        {:>9.1}      ({:.2} per run, concentration {:.3e}: the reference)",
+        r.measured_mean_likelihood.nll,
+        r.measured_mean_likelihood.nll / r.runs as f64,
+        r.measured_mean_likelihood.concentration,
     )?;
     if let Some(h) = &r.heldout {
         writeln!(out)?;
-        writeln!(out, "held out   last {} runs ({}); fit on the other {}:", h.k, h.heldout_runs.join(", "), h.fit_runs.len())?;
-        let params: Vec<String> = r.params.iter().zip(&h.params).map(|(p, v)| format!("{} {:.4}", p.name(), v)).collect();
+        writeln!(
+            out,
+            "held out   last {} runs ({}); fit on the other {}:",
+            h.k,
+            h.heldout_runs.join(", "),
+            h.fit_runs.len()
+        )?;
+        let params: Vec<String> =
+            r.params.iter().zip(&h.params).map(|(p, v)| format!("{} {:.4}", p.name(), v)).collect();
         writeln!(out, "           {}", params.join(", "))?;
         writeln!(out, "SSE in-sample (fit runs)      {:>9.1} %²", h.sse_in_sample_percent2)?;
         writeln!(out, "SSE held-out                  {:>9.1} %²", h.sse_heldout_percent2)?;
-        writeln!(out, "SSE measured fit vs held-out  {:>9.1} %²   (run-to-run floor)", h.sse_measured_fit_vs_heldout_percent2)?;
-        writeln!(out, "NLL per run in-sample / held-out {:.2} / {:.2}", h.nll_in_sample_per_run, h.nll_heldout_per_run)?;
+        writeln!(
+            out,
+            "SSE measured fit vs held-out  {:>9.1} %²   (run-to-run floor)",
+            h.sse_measured_fit_vs_heldout_percent2
+        )?;
+        writeln!(
+            out,
+            "NLL per run in-sample / held-out {:.2} / {:.2}",
+            h.nll_in_sample_per_run, h.nll_heldout_per_run
+        )?;
     }
     Ok(())
 }
 
 /// fit.csv: one row per simulated tooth and one `lost` row, percentages.
 pub fn to_csv(r: &FitReport, meta: &Meta) -> String {
-    let mut s = String::from("tooth,measured_mean_percent,measured_sd_percent,measured_min_percent,measured_max_percent,fitted_percent\n");
+    let mut s = String::from(
+        "tooth,measured_mean_percent,measured_sd_percent,measured_min_percent,measured_max_percent,fitted_percent\n",
+    );
     let m = &r.measured;
     let f = |v: f64| if v.is_finite() { format!("{v}") } else { String::new() };
     for j in 0..meta.teeth {
@@ -266,37 +306,57 @@ pub fn to_svg(r: &FitReport, meta: &Meta) -> String {
     if lost > 0.0 {
         cats.push(("lost".into(), 0.0, 0.0, 0.0, 0.0, lost));
     }
-    let (w, h) = (720.0, 440.0);
-    let (left, right, top, bottom) = (70.0, 20.0, 50.0, 60.0);
+    let (w, h) = (880.0, 440.0);
+    // the legend sits in the right margin, clear of the data
+    let (left, right, top, bottom) = (70.0, 190.0, 50.0, 60.0);
     let (pw, ph) = (w - left - right, h - top - bottom);
-    let ymax_data = cats.iter().map(|c| c.4.max(c.5).max(c.1 + if c.2.is_finite() { c.2 } else { 0.0 })).fold(0.0, f64::max);
-    let step = if ymax_data > 0.5 { 0.2 } else if ymax_data > 0.2 { 0.1 } else { 0.05 };
+    let ymax_data =
+        cats.iter().map(|c| c.4.max(c.5).max(c.1 + if c.2.is_finite() { c.2 } else { 0.0 })).fold(0.0, f64::max);
+    let step = if ymax_data > 0.5 {
+        0.2
+    } else if ymax_data > 0.2 {
+        0.1
+    } else {
+        0.05
+    };
     let ymax = ((ymax_data / step).ceil() * step).max(step);
     let y = |v: f64| top + ph * (1.0 - v / ymax);
     let slot = pw / cats.len() as f64;
     let bar = slot * 0.5;
     let mut s = String::new();
-    let _ = writeln!(s, r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="12">"#);
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="12">"#
+    );
     let _ = writeln!(s, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
     let params: Vec<String> = r.params.iter().zip(&r.x).map(|(p, v)| format!("{} {:.3}", p.name(), v)).collect();
     let _ = writeln!(
         s,
         r#"<text x="{}" y="20" text-anchor="middle" font-size="14">{}</text>"#,
-        w / 2.0,
+        left + pw / 2.0,
         esc(&format!("Measured vs fitted distribution ({} runs) — {}", r.runs, meta.data))
     );
     let _ = writeln!(
         s,
         r#"<text x="{}" y="38" text-anchor="middle">{}</text>"#,
-        w / 2.0,
-        esc(&format!("{}; SSE {:.1} %²", params.join(", "), r.sse_percent2))
+        left + pw / 2.0,
+        esc(&format!(
+            "fitted ({}): {}; SSE {:.1} %²",
+            match r.objective {
+                ObjectiveKind::Sse => "SSE",
+                ObjectiveKind::Likelihood => "likelihood",
+            },
+            params.join(", "),
+            r.sse_percent2
+        ))
     );
     // grid and y axis
     let mut v = 0.0;
     while v <= ymax + 1e-9 {
         let yy = y(v);
         let _ = writeln!(s, r##"<line x1="{left}" y1="{yy:.1}" x2="{:.1}" y2="{yy:.1}" stroke="#ddd"/>"##, left + pw);
-        let _ = writeln!(s, r#"<text x="{:.1}" y="{:.1}" text-anchor="end">{:.0}</text>"#, left - 6.0, yy + 4.0, 100.0 * v);
+        let _ =
+            writeln!(s, r#"<text x="{:.1}" y="{:.1}" text-anchor="end">{:.0}</text>"#, left - 6.0, yy + 4.0, 100.0 * v);
         v += step;
     }
     let _ = writeln!(
@@ -306,7 +366,13 @@ pub fn to_svg(r: &FitReport, meta: &Meta) -> String {
         top + ph / 2.0
     );
     let _ = writeln!(s, r#"<line x1="{left}" y1="{top}" x2="{left}" y2="{:.1}" stroke="black"/>"#, top + ph);
-    let _ = writeln!(s, r#"<line x1="{left}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="black"/>"#, top + ph, left + pw, top + ph);
+    let _ = writeln!(
+        s,
+        r#"<line x1="{left}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="black"/>"#,
+        top + ph,
+        left + pw,
+        top + ph
+    );
     for (i, (label, mean, sd, min, max, fitted)) in cats.iter().enumerate() {
         let cx = left + slot * (i as f64 + 0.5);
         if *mean > 0.0 {
@@ -332,9 +398,21 @@ pub fn to_svg(r: &FitReport, meta: &Meta) -> String {
             );
         }
         if *max > 0.0 {
-            let _ = writeln!(s, r#"<line x1="{cx:.1}" y1="{:.1}" x2="{cx:.1}" y2="{:.1}" stroke="black"/>"#, y(*min), y(*max));
+            let _ = writeln!(
+                s,
+                r#"<line x1="{cx:.1}" y1="{:.1}" x2="{cx:.1}" y2="{:.1}" stroke="black"/>"#,
+                y(*min),
+                y(*max)
+            );
             for e in [min, max] {
-                let _ = writeln!(s, r#"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="black"/>"#, cx - 6.0, y(*e), cx + 6.0, y(*e));
+                let _ = writeln!(
+                    s,
+                    r#"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="black"/>"#,
+                    cx - 6.0,
+                    y(*e),
+                    cx + 6.0,
+                    y(*e)
+                );
             }
         }
         let (fx, fy) = (cx, y(*fitted));
@@ -347,14 +425,36 @@ pub fn to_svg(r: &FitReport, meta: &Meta) -> String {
             fy + 6.0,
             100.0 * fitted
         );
-        let _ = writeln!(s, r#"<text x="{cx:.1}" y="{:.1}" text-anchor="middle">{}</text>"#, top + ph + 18.0, esc(label));
+        let _ =
+            writeln!(s, r#"<text x="{cx:.1}" y="{:.1}" text-anchor="middle">{}</text>"#, top + ph + 18.0, esc(label));
     }
     let _ = writeln!(s, r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">tooth</text>"#, left + pw / 2.0, h - 18.0);
     // legend
-    let lx = left + pw - 190.0;
-    let _ = writeln!(s, r##"<rect x="{lx:.1}" y="{}" width="14" height="10" fill="#1f5fa8"/><text x="{:.1}" y="{}">measured mean</text>"##, top + 4.0, lx + 20.0, top + 13.0);
-    let _ = writeln!(s, r##"<rect x="{lx:.1}" y="{}" width="14" height="10" fill="#8cc4f0"/><text x="{:.1}" y="{}">±1 sd of the runs</text>"##, top + 20.0, lx + 20.0, top + 29.0);
-    let _ = writeln!(s, r#"<line x1="{:.1}" y1="{}" x2="{:.1}" y2="{}" stroke="black"/><text x="{:.1}" y="{}">min / max of the runs</text>"#, lx + 7.0, top + 36.0, lx + 7.0, top + 46.0, lx + 20.0, top + 45.0);
+    let lx = left + pw + 20.0;
+    let _ = writeln!(
+        s,
+        r##"<rect x="{lx:.1}" y="{}" width="14" height="10" fill="#1f5fa8"/><text x="{:.1}" y="{}">measured mean</text>"##,
+        top + 4.0,
+        lx + 20.0,
+        top + 13.0
+    );
+    let _ = writeln!(
+        s,
+        r##"<rect x="{lx:.1}" y="{}" width="14" height="10" fill="#8cc4f0"/><text x="{:.1}" y="{}">±1 sd of the runs</text>"##,
+        top + 20.0,
+        lx + 20.0,
+        top + 29.0
+    );
+    let _ = writeln!(
+        s,
+        r#"<line x1="{:.1}" y1="{}" x2="{:.1}" y2="{}" stroke="black"/><text x="{:.1}" y="{}">min / max of the runs</text>"#,
+        lx + 7.0,
+        top + 36.0,
+        lx + 7.0,
+        top + 46.0,
+        lx + 20.0,
+        top + 45.0
+    );
     let _ = writeln!(
         s,
         r##"<path d="M {:.1} {} L {:.1} {} L {:.1} {} L {:.1} {} Z" fill="#d62728"/><text x="{:.1}" y="{}">fitted simulation</text>"##,
