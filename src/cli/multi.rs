@@ -72,8 +72,11 @@ pub fn execute(out: &Path, kind: EngineKind, ga: &GaArgs, plans: &[Planned]) -> 
     Ok(fronts)
 }
 
+/// One panel of `panels_svg`: its name and named series (one y value per x).
+pub type Panel<'a> = (&'a str, Vec<(&'a str, Vec<f64>)>);
+
 /// A small multi-panel line plot (x, several named series per panel), hand-written SVG.
-pub fn panels_svg(title: &str, x_label: &str, x: &[f64], panels: &[(&str, Vec<(&str, Vec<f64>)>)]) -> String {
+pub fn panels_svg(title: &str, x_label: &str, x: &[f64], panels: &[Panel]) -> String {
     let (w, ph, m) = (640.0, 200.0, 60.0);
     let h = 40.0 + panels.len() as f64 * (ph + 30.0) + 30.0;
     let colours = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e"];
