@@ -48,14 +48,24 @@ fn randomise_launch(d: Design, p: ptr<function, Particle>, index: u32, bounce: u
     var apply = false;
     if (ph.randomise == RANDOMISE_FIRST_LAUNCH) { apply = bounce == 0u; }
     if (ph.randomise == RANDOMISE_EVERY_LAUNCH) { apply = true; }
-    if (!apply) { return; }
-    let fa = 1.0 - ph.band + 2.0 * ph.band * uniform01(ph.seed, index, bounce, 0u);
-    let fs = 1.0 - ph.band + 2.0 * ph.band * uniform01(ph.seed, index, bounce, 1u);
+    let spread = (*p).surface == SURFACE_NONE && (ph.launch_speed_spread > 0.0 || ph.launch_angle_sigma > 0.0);
+    if (!apply && !spread) { return; }
+    var fa = 1.0;
+    var fs = 1.0;
+    if (apply) {
+        fa = 1.0 - ph.band + 2.0 * ph.band * uniform01(ph.seed, index, bounce, 0u);
+        fs = 1.0 - ph.band + 2.0 * ph.band * uniform01(ph.seed, index, bounce, 1u);
+    }
     let v = vec2<f32>((*p).vel_x, (*p).vel_y);
-    let speed = sqrt(v.x * v.x + v.y * v.y) * fs;
+    var speed = sqrt(v.x * v.x + v.y * v.y) * fs;
     if ((*p).surface == SURFACE_NONE) {
         var ang = katan2(v.y, v.x);
         if (ang < 0.0) { ang += 2.0 * PI; }
+        if (spread) {
+            // launch-spread effect: earlier (slower) departures and a jittered direction
+            speed *= 1.0 - ph.launch_speed_spread * uniform01(ph.seed, index, bounce, 4u);
+            ang += ph.launch_angle_sigma * normal01(ph.seed, index, bounce, 5u);
+        }
         let sc = ksin_cos(ang * fa);
         (*p).vel_x = speed * sc.y;
         (*p).vel_y = speed * sc.x;
@@ -110,7 +120,7 @@ fn to_index(x: f32) -> i32 {
 fn first_hit(d: Design, p: Particle, bounce: u32) -> Hit {
     let pos = vec2<f32>(p.pos_x, p.pos_y);
     let vel = vec2<f32>(p.vel_x, p.vel_y);
-    let fl = Flight(pos, vel, ph.g, ph.k_drag);
+    let fl = Flight(pos, vel, ph.g, p.k_drag);
     var best = Hit(false, INF, vec2<f32>(0.0), 0, SURFACE_NONE);
     let k = p.tooth;
     let kf = f32(k);
@@ -233,9 +243,17 @@ fn step_particle(d: Design, p: ptr<function, Particle>, index: u32, bounce: u32)
         return;
     }
     let pos = vec2<f32>((*p).pos_x, (*p).pos_y);
-    let fl = Flight(pos, vec2<f32>((*p).vel_x, (*p).vel_y), ph.g, ph.k_drag);
+    let fl = Flight(pos, vec2<f32>((*p).vel_x, (*p).vel_y), ph.g, (*p).k_drag);
     let v_in = flight_vel(fl, hit.t);
-    let v_out = bounce_velocity(v_in, normal_of(d, hit.surface));
+    var n = normal_of(d, hit.surface);
+    if (ph.scatter_sigma > 0.0) {
+        // impact-scatter effect: tilt the local normal unless that would let the grain leave
+        // through the surface
+        let sc = ksin_cos(ph.scatter_sigma * normal01(ph.seed, index, bounce, 2u));
+        let tilted = vec2<f32>(sc.y * n.x - sc.x * n.y, sc.x * n.x + sc.y * n.y);
+        if (dot(v_in, tilted) < 0.0) { n = tilted; }
+    }
+    let v_out = bounce_velocity(v_in, n);
     (*p).hop = abs(hit.pos.x - pos.x);         // Eq. 4.50 per particle
     let back = offset(d, hit.tooth - (*p).tooth, vec2<f32>(0.0));
     (*p).pos_x = hit.pos.x - back.x;

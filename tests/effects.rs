@@ -72,7 +72,7 @@ fn config_files_and_flags_carry_effects_and_other_engines_refuse_them() {
     let setup = concat!(env!("CARGO_MANIFEST_DIR"), "/data/validation/test3.toml");
     let o = Command::new(bin).args(["simulate", "--config", setup, "--effect", "impact-scatter=5", "--engine", "listing"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("only in the cpu engine"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("in the cpu and gpu engines only"));
     let o = Command::new(bin).args(["simulate", "--config", setup, "--effect", "wobble=1"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown effect"));

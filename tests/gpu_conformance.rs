@@ -61,3 +61,27 @@ fn batch_interface_matches_single_design_runs() {
         assert!((sim.d_avg_m - b.d_avg_m).abs() < 1e-6);
     }
 }
+
+#[test]
+fn gpu_conforms_with_each_effect_switched_on() {
+    use sawtooth::model::effects::{ImpactScatter, LaunchSpread, Polydisperse};
+    let Some(g) = gpu() else { return };
+    let mut cases = Vec::new();
+    for (name, e) in [
+        ("impact-scatter", sawtooth::model::effects::Effects { impact_scatter: Some(ImpactScatter { sigma_deg: 8.0 }), ..Default::default() }),
+        ("launch-spread", sawtooth::model::effects::Effects { launch_spread: Some(LaunchSpread { speed_spread: 0.4, angle_sigma_deg: 5.0 }), ..Default::default() }),
+        ("polydisperse", sawtooth::model::effects::Effects { polydisperse: Some(Polydisperse { sigma_ln: 0.5 }), ..Default::default() }),
+    ] {
+        for (env, base) in [("lunar", Scenario::lunar()), ("earth", Scenario::earth())] {
+            let mut s = base;
+            s.sim.particles = 50;
+            s.effects = e;
+            cases.push((format!("{env}, {name}"), s));
+        }
+    }
+    let report = run(&g, &cases, 25, 9, Tolerances::default());
+    for r in &report.scenarios {
+        eprintln!("effects: {}", serde_json::to_string(r).unwrap());
+    }
+    assert!(report.passed, "{:#?}\nworst: {:#?}", report.failures, report.worst);
+}

@@ -20,3 +20,10 @@ fn uniform01(seed: u32, particle: u32, bounce: u32, draw: u32) -> f32 {
     let h = pcg4d(pcg4d(vec4<u32>(particle, bounce, draw, seed)));
     return f32(h.x >> 8u) * (1.0 / 16777216.0);
 }
+
+// Standard normal deviate from two keyed uniforms (Box-Muller), as src/model/rng.rs `normal`.
+fn normal01(seed: u32, particle: u32, bounce: u32, draw: u32) -> f32 {
+    let u1 = 1.0 - uniform01(seed, particle, bounce, draw);
+    let u2 = uniform01(seed, particle, bounce, draw + 1u);
+    return sqrt(-2.0 * log(u1)) * ksin_cos(2.0 * PI * u2).y;
+}

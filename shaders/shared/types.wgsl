@@ -22,7 +22,12 @@ struct Physics {
     n_particles: u32,
     n_designs: u32,          // designs in this dispatch
     teeth_hist: u32,         // histogram bins per design (= teeth)
-    _pad: u32,
+    // effects (issue 5; 0 = off); polydispersity arrives as each particle's k_drag
+    scatter_sigma: f32,      // impact normal tilt sigma, rad
+    launch_speed_spread: f32,
+    launch_angle_sigma: f32, // rad
+    _pad0: u32,
+    _pad1: u32,
 }
 
 struct Design {
@@ -52,7 +57,7 @@ struct Particle {
     bounces: u32,
     hop: f32,
     first_x: f32, first_y: f32,
-    _pad: u32,
+    k_drag: f32,             // this grain's Stokes k_drag, 1/s (polydisperse effect)
 }
 
 struct Outcome {

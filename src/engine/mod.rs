@@ -197,21 +197,12 @@ pub fn particle_engine(kind: EngineKind) -> Box<dyn Engine> {
     }
 }
 
-/// The engine for a scenario: the effects of issue 5 live in the `cpu` kernel only, so a
-/// scenario with effects runs on `cpu` (`auto` says so) and `listing`/`gpu` refuse it.
+/// The engine for a scenario: the effects of issue 5 live in the `cpu` and `gpu` kernels;
+/// the `listing` port (the thesis's algorithm) refuses a scenario that switches one on.
 pub fn make_engine_for(kind: EngineKind, scenario: &Scenario) -> anyhow::Result<Box<dyn Engine>> {
-    if scenario.effects.any() {
+    if scenario.effects.any() && kind == EngineKind::Listing {
         let active = scenario.effects.active().join(", ");
-        return match kind {
-            EngineKind::Cpu => Ok(particle_engine(EngineKind::Cpu)),
-            EngineKind::Auto => {
-                eprintln!("engine auto: effects on ({active}), using the cpu engine");
-                Ok(particle_engine(EngineKind::Cpu))
-            }
-            EngineKind::Listing | EngineKind::Gpu => {
-                anyhow::bail!("--engine {}: the effects ({active}) are only in the cpu engine; use --engine cpu", format!("{kind:?}").to_lowercase())
-            }
-        };
+        anyhow::bail!("--engine listing: the effects ({active}) are in the cpu and gpu engines only; use --engine cpu");
     }
     make_engine(kind)
 }

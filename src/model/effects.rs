@@ -1,6 +1,6 @@
 //! Optional physical effects the thesis's model leaves out (issue 5), each off by default and
-//! with at most two parameters. They are applied by the `cpu` engine; the other engines
-//! refuse a scenario that switches one on (see `engine::check_supported`).
+//! with at most two parameters. The `cpu` and `gpu` kernels apply them; the `listing` port of
+//! the thesis's algorithm refuses a scenario that switches one on (`engine::make_engine_for`).
 
 use serde::{Deserialize, Serialize};
 

@@ -27,7 +27,10 @@ pub struct GpuPhysics {
     pub n_particles: u32,
     pub n_designs: u32,
     pub teeth_hist: u32,
-    pub _pad: u32,
+    pub scatter_sigma: f32,
+    pub launch_speed_spread: f32,
+    pub launch_angle_sigma: f32,
+    pub _pad: [u32; 2],
 }
 
 #[repr(C)]
@@ -61,7 +64,7 @@ pub struct GpuParticle {
     pub bounces: u32,
     pub hop: f32,
     pub first: [f32; 2],
-    pub _pad: u32,
+    pub k_drag: f32,
 }
 
 #[repr(C)]
@@ -99,7 +102,10 @@ impl GpuPhysics {
             n_particles,
             n_designs,
             teeth_hist: teeth,
-            _pad: 0,
+            scatter_sigma: k.scatter_sigma,
+            launch_speed_spread: k.launch_speed_spread,
+            launch_angle_sigma: k.launch_angle_sigma,
+            _pad: [0; 2],
         }
     }
 }
@@ -137,7 +143,7 @@ impl From<&KParticle<f32>> for GpuParticle {
             bounces: p.bounces,
             hop: p.hop,
             first: p.first,
-            _pad: 0,
+            k_drag: p.k_drag,
         }
     }
 }
@@ -148,8 +154,8 @@ mod tests {
 
     #[test]
     fn sizes_match_the_wgsl_structs() {
-        // 20, 24, 12 and 8 four-byte fields in shaders/shared/types.wgsl
-        assert_eq!(std::mem::size_of::<GpuPhysics>(), 80);
+        // 24, 24, 12 and 8 four-byte fields in shaders/shared/types.wgsl
+        assert_eq!(std::mem::size_of::<GpuPhysics>(), 96);
         assert_eq!(std::mem::size_of::<GpuDesign>(), 96);
         assert_eq!(std::mem::size_of::<GpuParticle>(), 48);
         assert_eq!(std::mem::size_of::<GpuOutcome>(), 32);
