@@ -79,3 +79,41 @@ fn config_files_and_flags_carry_effects_and_other_engines_refuse_them() {
     let o = Command::new(bin).args(["simulate", "--config", setup, "--effect", "impact-scatter=3", "--json"]).output().unwrap();
     assert!(o.status.success());
 }
+
+#[test]
+fn sled_motion_after_every_flight_changes_nothing_and_a_returning_sled_carries_grains_up() {
+    use sawtooth::model::effects::SledMotion;
+    let (s, d) = rig();
+    let base = sim(&s, &d);
+    let mut late = s.clone();
+    late.effects.sled_motion = Some(SledMotion { delay_s: 90.0, return_speed_m_s: 0.05 });
+    assert_eq!(sim(&late, &d).distribution, base.distribution, "a sled that moves after everything has settled");
+    // A slow return (the POC's downstroke speed v_d = 0.05 m/s, 5.3.1) slides the profile
+    // down under the flying grains, so they land further up it. (A fast immediate return can
+    // do the opposite: it sweeps the next tooth's ramp into the rising grains.)
+    let mut moving = s.clone();
+    moving.effects.sled_motion = Some(SledMotion { delay_s: 0.0, return_speed_m_s: 0.05 });
+    let m = sim(&moving, &d);
+    let total: f64 = m.distribution.iter().sum::<f64>() + m.lost_fraction;
+    assert!((total - 1.0).abs() < 1e-12);
+    assert!(m.advance_m > base.advance_m, "{} vs {}", m.advance_m, base.advance_m);
+    // vacuum too
+    let mut lunar = Scenario::lunar();
+    lunar.sim.particles = 200;
+    let l0 = sim(&lunar, &Design::lunar_solution_c());
+    lunar.effects.sled_motion = Some(SledMotion { delay_s: 0.0, return_speed_m_s: 0.05 });
+    assert!(sim(&lunar, &Design::lunar_solution_c()).advance_m > l0.advance_m);
+}
+
+#[test]
+fn sled_motion_is_refused_where_it_is_not_implemented() {
+    let bin = env!("CARGO_BIN_EXE_sawtooth");
+    let setup = concat!(env!("CARGO_MANIFEST_DIR"), "/data/validation/test2.toml");
+    let o = Command::new(bin).args(["simulate", "--config", setup, "--effect", "sled-motion=0.01,0.05", "--engine", "gpu"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("sled-motion"));
+    let o = Command::new(bin).args(["simulate", "--config", setup, "--effect", "sled-motion=0.01,0.05", "--plot", "/tmp/x.svg"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let o = Command::new(bin).args(["simulate", "--config", setup, "--effect", "sled-motion=0.01,0.05", "--json"]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

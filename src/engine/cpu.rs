@@ -41,6 +41,7 @@ pub fn kernel_design<T: Real>(prep: &Prepared) -> KDesign<T> {
         teeth: p.teeth as i32,
         launch_angle: T::c(prep.launch_angle),
         v0: T::c(prep.design.v0),
+        stroke: T::c(prep.design.v0 * prep.design.v0 / (2.0 * prep.design.a)),
     }
 }
 
@@ -67,6 +68,8 @@ pub fn kernel_physics<T: Real>(ctx: &Context) -> KPhysics<T> {
         launch_speed_spread: T::c(ctx.effects.launch_spread.map_or(0.0, |e| e.speed_spread)),
         launch_angle_sigma: T::c(ctx.effects.launch_spread.map_or(0.0, |e| e.angle_sigma_deg.to_radians())),
         size_sigma_ln: T::c(ctx.effects.polydisperse.map_or(0.0, |e| e.sigma_ln)),
+        sled_delay: T::c(ctx.effects.sled_motion.map_or(0.0, |e| e.delay_s)),
+        sled_speed: T::c(ctx.effects.sled_motion.map_or(0.0, |e| e.return_speed_m_s)),
     }
 }
 

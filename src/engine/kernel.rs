@@ -47,6 +47,8 @@ pub struct KDesign<T> {
     pub teeth: i32,
     pub launch_angle: T,
     pub v0: T,
+    /// Stroke v0²/(2a), m: how far the sled returns (sled-motion effect).
+    pub stroke: T,
 }
 
 /// Scenario-wide constants.
@@ -72,6 +74,10 @@ pub struct KPhysics<T> {
     pub launch_speed_spread: T,
     pub launch_angle_sigma: T,
     pub size_sigma_ln: T,
+    /// Sled motion after the launch (cpu only; speed 0 = off): rest for `sled_delay` s, then
+    /// return at `sled_speed` m/s over the design's stroke.
+    pub sled_delay: T,
+    pub sled_speed: T,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -91,6 +97,8 @@ pub struct KParticle<T> {
     pub first: [T; 2],
     /// This grain's Stokes k_drag, 1/s (differs between grains only when polydisperse).
     pub k_drag: T,
+    /// Time since the launch, s (kept for the sled-motion effect).
+    pub clock: T,
 }
 
 /// The first surface a flight meets.
@@ -214,14 +222,14 @@ fn hop_ok<T: Real>(ph: &KPhysics<T>, from: [T; 2], to: [T; 2]) -> bool {
 /// the flight would then find no later crossing. Points merely behind a line (a point on
 /// ramp j is behind tooth j's own chord) are not in contact.
 #[inline(always)]
-fn contact<T: Real>(d: &KDesign<T>, p: &KParticle<T>, a: [T; 2], b: [T; 2], n: [T; 2]) -> bool {
-    let c0 = dot([p.pos[0] - a[0], p.pos[1] - a[1]], n);
-    let tol = T::c(64.0) * T::epsilon() * d.pitch_len.max(p.pos[0].abs()).max(p.pos[1].abs());
-    if c0.abs() > tol || dot(p.vel, n) >= T::zero() {
+fn contact<T: Real>(d: &KDesign<T>, pos: [T; 2], vel: [T; 2], a: [T; 2], b: [T; 2], n: [T; 2]) -> bool {
+    let c0 = dot([pos[0] - a[0], pos[1] - a[1]], n);
+    let tol = T::c(64.0) * T::epsilon() * d.pitch_len.max(pos[0].abs()).max(pos[1].abs());
+    if c0.abs() > tol || dot(vel, n) >= T::zero() {
         return false;
     }
     let e = [b[0] - a[0], b[1] - a[1]];
-    let s = dot([p.pos[0] - a[0], p.pos[1] - a[1]], e) / dot(e, e);
+    let s = dot([pos[0] - a[0], pos[1] - a[1]], e) / dot(e, e);
     s >= T::zero() && s <= T::one()
 }
 
@@ -230,7 +238,17 @@ fn contact<T: Real>(d: &KDesign<T>, p: &KParticle<T>, a: [T; 2], b: [T; 2], n: [
 /// ignored on the first flight). The base-line crossing bounds the flight: every tooth
 /// segment lies above the base, so nothing after it can be hit.
 pub fn first_hit<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bounce: u32) -> Hit<T> {
-    let fl = Flight { p0: p.pos, v0: p.vel, g: ph.g, k: p.k_drag };
+    let fl = Flight { p0: p.pos, v0: p.vel, g: ph.g, k: p.k_drag, drift: [T::zero(); 2] };
+    first_hit_in(d, ph, p, &fl, bounce, T::infinity())
+}
+
+/// `first_hit` for a given flight (possibly drifting: sled motion), looking no further than
+/// `t_limit`. With drift the flight's x(t) is no longer the air-frame one, so the x-window
+/// and concavity culls are skipped (they are exact only without drift).
+pub fn first_hit_in<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, fl: &Flight<T>, bounce: u32, t_limit: T) -> Hit<T> {
+    let fl = *fl;
+    let drifting = fl.drift != [T::zero(); 2];
+    let rel_vel = [fl.v0[0] + fl.drift[0], fl.v0[1] + fl.drift[1]];
     let mut best = Hit { found: false, t: T::infinity(), ..Default::default() };
     let k = p.tooth;
     let kf = T::c(k as f64);
@@ -238,12 +256,12 @@ pub fn first_hit<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bo
     // Base: one line through every p1 (frame origin lies on it).
     let mut horizon = T::infinity();
     let departing_base = p.surface == SURFACE_BASE;
-    let mut roots = fl.line_crossings([T::zero(), T::zero()], d.n_base, departing_base, T::zero(), T::infinity());
+    let mut roots = fl.line_crossings([T::zero(), T::zero()], d.n_base, departing_base, T::zero(), t_limit);
     if !departing_base && hop_ok(ph, p.pos, p.pos) {
         let s0 = -kf * d.pitch_len;
         let a = [s0 * d.t_base[0], s0 * d.t_base[1]];
         let b = [(s0 + d.base_length) * d.t_base[0], (s0 + d.base_length) * d.t_base[1]];
-        if contact(d, p, a, b, d.n_base) {
+        if contact(d, p.pos, rel_vel, a, b, d.n_base) {
             roots = [Some(T::zero()), None];
         }
     }
@@ -262,9 +280,20 @@ pub fn first_hit<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bo
         break;
     }
 
-    // Teeth whose x-extent overlaps the flight's x-range before the horizon.
-    let x_end = if horizon.is_finite() { fl.pos(horizon)[0] } else if p.vel[0] >= T::zero() { T::infinity() } else { T::neg_infinity() };
-    let (xmin, xmax) = if x_end >= p.pos[0] { (p.pos[0], x_end) } else { (x_end, p.pos[0]) };
+    // Teeth whose x-extent overlaps the flight's x-range before the horizon (with drift x(t)
+    // need not be monotone: then every tooth up to the time limit is considered).
+    let horizon = horizon.min(t_limit);
+    let x_end = if horizon.is_finite() {
+        fl.pos(horizon)[0]
+    } else if p.vel[0] >= T::zero() {
+        T::infinity()
+    } else {
+        T::neg_infinity()
+    };
+    // with drift: |x(t) - x0| <= (|vx| + |wx|) t bounds the range instead of monotonicity
+    let reach = (fl.v0[0].abs() + fl.drift[0].abs()) * horizon;
+    let (x_end, x_start) = if drifting { (p.pos[0] + reach, p.pos[0] - reach) } else { (x_end, p.pos[0]) };
+    let (xmin, xmax) = if x_end >= x_start { (x_start, x_end) } else { (x_end, x_start) };
     let lo = ((xmin - d.ext_max) / d.pitch[0]).ceil().max(T::c(-1e9)).min(T::c(1e9));
     let hi = ((xmax - d.ext_min) / d.pitch[0]).floor().max(T::c(-1e9)).min(T::c(1e9));
     let j_lo = (lo.to_i64().unwrap_or(0) + k as i64).clamp(0, d.teeth as i64 - 1) as i32;
@@ -275,7 +304,7 @@ pub fn first_hit<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bo
     let x_far = if best.found { best.pos[0] } else { x_end };
     for j in j_lo..=j_hi {
         let dj = j - k;
-        if flies_over(d, &fl, dj, p.pos[0], x_far) {
+        if !drifting && flies_over(d, &fl, dj, p.pos[0], x_far) {
             continue;
         }
         for surface in [SURFACE_RAMP, SURFACE_CATCH] {
@@ -293,7 +322,9 @@ pub fn first_hit<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bo
             // (x(t) is monotone): search that time window only.
             let margin = T::c(64.0) * T::epsilon() * d.pitch_len;
             let (xa, xb) = (a[0].min(b[0]) - margin, a[0].max(b[0]) + margin);
-            let (t_lo, t_hi) = if fl.v0[0] > T::zero() {
+            let (t_lo, t_hi) = if drifting {
+                (T::zero(), T::infinity())
+            } else if fl.v0[0] > T::zero() {
                 (fl.time_at_x(xa.max(p.pos[0])), fl.time_at_x(xb))
             } else if fl.v0[0] < T::zero() {
                 (fl.time_at_x(xb.min(p.pos[0])), fl.time_at_x(xa))
@@ -303,7 +334,7 @@ pub fn first_hit<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bo
                 (T::infinity(), T::infinity())
             };
             let mut roots = if t_lo > t_max { [None, None] } else { fl.line_crossings(a, n, departing, t_lo, t_max.min(t_hi)) };
-            if !departing && hop_ok(ph, p.pos, p.pos) && contact(d, p, a, b, n) {
+            if !departing && hop_ok(ph, p.pos, p.pos) && contact(d, p.pos, rel_vel, a, b, n) {
                 roots = [Some(T::zero()), None];
             }
             let e = [b[0] - a[0], b[1] - a[1]];
@@ -353,17 +384,64 @@ pub struct Flown<T> {
     pub t: T,
 }
 
+/// The sled's velocity seen as a drift of the particles in the sled frame at time `clock`
+/// since the launch, and the time that motion phase ends (sled-motion effect): at rest until
+/// the delay, then returning down the slope (so particles drift up it) until it has
+/// travelled back the stroke, then at rest for good.
+#[inline(always)]
+fn sled_phase<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, clock: T) -> ([T; 2], T) {
+    let back_end = ph.sled_delay + d.stroke / ph.sled_speed;
+    if clock < ph.sled_delay {
+        ([T::zero(); 2], ph.sled_delay)
+    } else if clock < back_end {
+        ([ph.sled_speed * d.t_base[0], ph.sled_speed * d.t_base[1]], back_end)
+    } else {
+        ([T::zero(); 2], T::infinity())
+    }
+}
+
+/// The first impact of a flight against a moving sled: the flight is split where the sled's
+/// motion changes, each piece a drifting flight in the sled frame. Returns the hit (time
+/// counted from the start of the whole flight) and the flight of the piece it lies in, with
+/// that piece's start time.
+fn first_hit_moving<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bounce: u32) -> (Hit<T>, Flight<T>, T) {
+    let mut q = *p;
+    let mut elapsed = T::zero();
+    loop {
+        let (drift, phase_end) = sled_phase(d, ph, q.clock);
+        let fl = Flight { p0: q.pos, v0: q.vel, g: ph.g, k: q.k_drag, drift };
+        let limit = phase_end - q.clock;
+        let mut hit = first_hit_in(d, ph, &q, &fl, bounce, limit);
+        if hit.found || !limit.is_finite() {
+            hit.t = hit.t + elapsed;
+            return (hit, fl, elapsed);
+        }
+        // no impact in this phase: continue from where the particle is when it ends
+        q.pos = fl.pos(limit);
+        q.vel = fl.vel(limit);
+        q.surface = SURFACE_NONE; // airborne: no surface is being left any more
+        q.clock = phase_end;
+        elapsed = elapsed + limit;
+    }
+}
+
 /// One flight and bounce of one particle (one iteration of the bounce loop, 4.2.4).
 pub fn step_particle<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KParticle<T>, index: u32, bounce: u32) -> Flown<T> {
     randomise_launch(d, ph, p, index, bounce);
     let flown = Flown { from_tooth: p.tooth, from: p.pos, vel: p.vel, t: T::zero() };
-    let hit = first_hit(d, ph, p, bounce);
+    let (hit, fl, piece_start) = if ph.sled_speed > T::zero() {
+        first_hit_moving(d, ph, p, bounce)
+    } else {
+        let fl = Flight { p0: p.pos, v0: p.vel, g: ph.g, k: p.k_drag, drift: [T::zero(); 2] };
+        (first_hit(d, ph, p, bounce), fl, T::zero())
+    };
     if !hit.found {
         p.state = STATE_LOST;
         return flown;
     }
-    let fl = Flight { p0: p.pos, v0: p.vel, g: ph.g, k: p.k_drag };
-    let v_in = fl.vel(hit.t);
+    // restitution acts on the velocity relative to the (possibly moving) surface
+    let v_air = fl.vel(hit.t - piece_start);
+    let v_in = [v_air[0] + fl.drift[0], v_air[1] + fl.drift[1]];
     let mut n = normal_of(d, hit.surface);
     if ph.scatter_sigma > T::zero() {
         // impact-scatter effect: the local normal is tilted; a tilt that would make the grain
@@ -374,8 +452,10 @@ pub fn step_particle<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KParticl
             n = tilted;
         }
     }
-    let v_out = ph.restitution.bounce(v_in, n);
+    let v_rel_out = ph.restitution.bounce(v_in, n);
+    let v_out = [v_rel_out[0] - fl.drift[0], v_rel_out[1] - fl.drift[1]];
     p.hop = (hit.pos[0] - p.pos[0]).abs(); // Eq. 4.50, per particle
+    p.clock = p.clock + hit.t;
     let back = offset(d, hit.tooth - p.tooth, [T::zero(), T::zero()]);
     p.pos = [hit.pos[0] - back[0], hit.pos[1] - back[1]];
     p.tooth = hit.tooth;

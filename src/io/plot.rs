@@ -58,7 +58,7 @@ fn flight_points(r: &FlightRecord, g: f64, k_drag: f64) -> Vec<V2> {
     if r.t <= 0.0 {
         return Vec::new();
     }
-    let f = Flight { p0: r.from, v0: r.vel, g, k: k_drag };
+    let f = Flight { p0: r.from, v0: r.vel, g, k: k_drag, drift: [0.0; 2] };
     (0..=FLIGHT_SAMPLES).map(|i| f.pos(r.t * i as f64 / FLIGHT_SAMPLES as f64)).collect()
 }
 

@@ -31,7 +31,7 @@ pub fn impact_point(r: &FlightRecord, g: f64, k_drag: f64) -> Option<[f64; 2]> {
     if r.state == ParticleState::Lost && r.t == 0.0 {
         return None;
     }
-    Some(Flight { p0: r.from, v0: r.vel, g, k: k_drag }.pos(r.t))
+    Some(Flight { p0: r.from, v0: r.vel, g, k: k_drag, drift: [0.0; 2] }.pos(r.t))
 }
 
 /// The launch (bounce 0 only) and impact points of every flight, in record order.

@@ -31,9 +31,22 @@ pub struct Polydisperse {
     pub sigma_ln: f64,
 }
 
+/// The sled keeps moving after the launch (the thesis assumes it stops): it rests for
+/// `delay_s`, then returns down the slope at `return_speed_m_s` until it has travelled back
+/// the stroke v0²/(2a) (the POC profile vs the delayed profile of Tests 1 and 2). Impacts are
+/// computed against the moving profile, restitution on the velocity relative to it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SledMotion {
+    pub delay_s: f64,
+    pub return_speed_m_s: f64,
+}
+
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Effects {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sled_motion: Option<SledMotion>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub impact_scatter: Option<ImpactScatter>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -43,7 +56,7 @@ pub struct Effects {
 }
 
 /// Names as the CLI spells them.
-pub const EFFECT_NAMES: [&str; 3] = ["impact-scatter", "launch-spread", "polydisperse"];
+pub const EFFECT_NAMES: [&str; 4] = ["impact-scatter", "launch-spread", "polydisperse", "sled-motion"];
 
 impl Effects {
     pub fn is_default(&self) -> bool {
@@ -51,7 +64,7 @@ impl Effects {
     }
 
     pub fn any(&self) -> bool {
-        self.impact_scatter.is_some() || self.launch_spread.is_some() || self.polydisperse.is_some()
+        self.impact_scatter.is_some() || self.launch_spread.is_some() || self.polydisperse.is_some() || self.sled_motion.is_some()
     }
 
     /// Names of the effects switched on.
@@ -66,11 +79,14 @@ impl Effects {
         if self.polydisperse.is_some() {
             v.push("polydisperse");
         }
+        if self.sled_motion.is_some() {
+            v.push("sled-motion");
+        }
         v
     }
 
     /// Parse `NAME=p1[,p2]` (CLI): impact-scatter=SIGMA_DEG, launch-spread=SPEED,ANGLE_DEG,
-    /// polydisperse=SIGMA_LN.
+    /// polydisperse=SIGMA_LN, sled-motion=DELAY_S,RETURN_SPEED_M_S.
     pub fn set_from_cli(&mut self, spec: &str) -> Result<(), String> {
         let (name, params) = spec.split_once('=').ok_or_else(|| format!("--effect `{spec}`: expected NAME=PARAMS, e.g. impact-scatter=5"))?;
         let values: Vec<f64> = params
@@ -97,6 +113,10 @@ impl Effects {
                 want(1)?;
                 self.polydisperse = Some(Polydisperse { sigma_ln: values[0] });
             }
+            "sled-motion" => {
+                want(2)?;
+                self.sled_motion = Some(SledMotion { delay_s: values[0], return_speed_m_s: values[1] });
+            }
             other => return Err(format!("--effect: unknown effect `{other}` (known: {})", EFFECT_NAMES.join(", "))),
         }
         self.validate()
@@ -119,6 +139,10 @@ impl Effects {
         }
         if let Some(e) = self.polydisperse {
             check("polydisperse.sigma_ln", e.sigma_ln, 0.0, 1.5)?;
+        }
+        if let Some(e) = self.sled_motion {
+            check("sled_motion.delay_s", e.delay_s, 0.0, 100.0)?;
+            check("sled_motion.return_speed_m_s", e.return_speed_m_s, 1e-6, 10.0)?;
         }
         Ok(())
     }

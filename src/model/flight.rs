@@ -11,13 +11,17 @@
 use super::real::Real;
 
 /// A ballistic flight from `p0` with velocity `v0` under gravity `g` (downwards) and Stokes
-/// drag `k` (1/s, 0 = vacuum).
+/// drag `k` (1/s, 0 = vacuum). `drift` is a constant velocity added to the position (not to
+/// the air-relative motion): seen from a sled moving at -drift, a flight in still air is the
+/// lab flight plus drift·t, which keeps every crossing in the same closed/monotone form
+/// (the sled-motion effect). It is zero otherwise.
 #[derive(Clone, Copy, Debug)]
 pub struct Flight<T> {
     pub p0: [T; 2],
     pub v0: [T; 2],
     pub g: T,
     pub k: T,
+    pub drift: [T; 2],
 }
 
 /// (1 - e^{-kt}) / k, accurate for small kt.
@@ -35,6 +39,16 @@ impl<T: Real> Flight<T> {
     /// Position at time t.
     #[inline(always)]
     pub fn pos(&self, t: T) -> [T; 2] {
+        let p = self.lab_pos(t);
+        if self.drift == [T::zero(); 2] {
+            return p;
+        }
+        [p[0] + self.drift[0] * t, p[1] + self.drift[1] * t]
+    }
+
+    /// Position without the drift (the flight in the air's frame).
+    #[inline(always)]
+    fn lab_pos(&self, t: T) -> [T; 2] {
         if self.drag() {
             // Eq. 4.53-4.54: x = x0 + vx (1-e^{-kt})/k ; y = y0 - g t / k + (g/k² + vy/k)(1-e^{-kt})
             let e = relax(self.k, t);
@@ -46,7 +60,8 @@ impl<T: Real> Flight<T> {
         }
     }
 
-    /// Velocity at time t (Eq. 4.41 vacuum, Eq. 4.44-4.45 drag).
+    /// Velocity relative to the air at time t (Eq. 4.41 vacuum, Eq. 4.44-4.45 drag); the
+    /// velocity relative to a drifting frame is this plus `drift`.
     #[inline(always)]
     pub fn vel(&self, t: T) -> [T; 2] {
         if self.drag() {
@@ -60,6 +75,7 @@ impl<T: Real> Flight<T> {
 
     /// Time at which the flight reaches horizontal position `x` (x(t) is monotone), infinite
     /// when it never does (behind it, or beyond the drag asymptote x0 + vx/k).
+    /// (Without drift only: callers skip the x-window with a drifting flight.)
     #[inline(always)]
     pub fn time_at_x(&self, x: T) -> T {
         let dx = x - self.p0[0];
@@ -110,9 +126,10 @@ impl<T: Real> Flight<T> {
     pub fn line_crossings(&self, a: [T; 2], n: [T; 2], departing: bool, t_min: T, t_max: T) -> [Option<T>; 2] {
         let c0 = if departing { T::zero() } else { n[0] * (self.p0[0] - a[0]) + n[1] * (self.p0[1] - a[1]) };
         let nv = n[0] * self.v0[0] + n[1] * self.v0[1];
+        let nw = n[0] * self.drift[0] + n[1] * self.drift[1]; // drift adds to the linear term
         let keep = |t: T| if t > T::zero() && t >= t_min && t <= t_max { Some(t) } else { None };
         if !self.drag() {
-            let c1 = nv;
+            let c1 = nv + nw;
             let c2 = -T::c(0.5) * self.g * n[1];
             if departing {
                 // f(t) = t (c1 + c2 t)
@@ -126,7 +143,7 @@ impl<T: Real> Flight<T> {
         // Stokes: f(t) = c0 + a t + b E(t), E = (1 - e^{-kt})/k, f'(t) = a + b e^{-kt}.
         let k = self.k;
         let vinf_n = -self.g / k * n[1];
-        let (ca, cb) = (vinf_n, nv - vinf_n);
+        let (ca, cb) = (vinf_n + nw, nv - vinf_n);
         let f = |t: T| c0 + ca * t + cb * relax(k, t);
         // f and f' share e^{-kt}: one expm1 per Newton step.
         let fdf = |t: T| {
@@ -136,7 +153,7 @@ impl<T: Real> Flight<T> {
         // Extremum where e^{-kt} = -a/b, i.e. t* = ln(b/(-a))/k = ln(1 + x)/k with
         // x = n·v/(-a) (b + a = n·v); it exists for x > 0. log1p keeps t* accurate when a
         // flight leaves a surface almost tangentially (x tiny), where ln(-a/b) rounds to 0.
-        let x = if ca != T::zero() { nv / -ca } else { T::zero() };
+        let x = if ca != T::zero() { (nv + nw) / -ca } else { T::zero() };
         let t_star = if x > T::zero() && x.is_finite() { Some(x.ln_1p() / k) } else { None };
         // Since 0 <= E < 1/k, f lies between two lines; where the bounding line reaches zero
         // f has its final sign, so the search needs no loop to find an upper end.
@@ -258,7 +275,7 @@ mod tests {
 
     #[test]
     fn vacuum_parabola_hits_the_ground_at_the_textbook_time() {
-        let f = Flight { p0: [0.0, 0.0], v0: [1.0, 2.0], g: 9.81, k: 0.0 };
+        let f = Flight { p0: [0.0, 0.0], v0: [1.0, 2.0], g: 9.81, k: 0.0, drift: [0.0; 2] };
         let r = f.line_crossings([0.0, 0.0], [0.0, 1.0], true, 0.0, f64::INFINITY);
         assert!((r[0].unwrap() - 4.0 / 9.81).abs() < 1e-14);
         assert!(r[1].is_none());
@@ -266,7 +283,7 @@ mod tests {
 
     #[test]
     fn stokes_flight_crossings_match_its_position() {
-        let f = Flight { p0: [0.0, 0.01], v0: [0.5, 1.0], g: 9.81, k: 5.4 };
+        let f = Flight { p0: [0.0, 0.01], v0: [0.5, 1.0], g: 9.81, k: 5.4, drift: [0.0; 2] };
         // line y = 0.02 is crossed twice (up and down)
         let r = f.line_crossings([0.0, 0.02], [0.0, 1.0], false, 0.0, f64::INFINITY);
         let (t1, t2) = (r[0].unwrap(), r[1].unwrap());
@@ -284,7 +301,7 @@ mod tests {
 
     #[test]
     fn stokes_departing_flight_finds_its_return() {
-        let f = Flight { p0: [0.0, 0.0], v0: [0.3, 0.8], g: 9.81, k: 5.0 };
+        let f = Flight { p0: [0.0, 0.0], v0: [0.3, 0.8], g: 9.81, k: 5.0, drift: [0.0; 2] };
         let r = f.line_crossings([0.0, 0.0], [0.0, 1.0], true, 0.0, f64::INFINITY);
         let t = r[0].unwrap();
         assert!(t > 0.05);
@@ -293,9 +310,20 @@ mod tests {
     }
 
     #[test]
+    fn drifting_crossings_match_the_drifting_position() {
+        for k in [0.0f64, 5.4] {
+            let f = Flight { p0: [0.0, 0.01], v0: [0.5, 1.0], g: 9.81, k, drift: [-0.2, -0.14] };
+            let r = f.line_crossings([0.0, 0.0], [-0.57, 0.82], false, 0.0, f64::INFINITY);
+            let t = r[0].expect("the drifting flight comes down");
+            let p = f.pos(t);
+            assert!((-0.57 * p[0] + 0.82 * p[1]).abs() < 1e-12, "k {k}");
+        }
+    }
+
+    #[test]
     fn y_at_x_agrees_with_the_time_form() {
         for k in [0.0f64, 5.347] {
-            let f = Flight { p0: [0.01, 0.02], v0: [0.4, 0.9], g: 9.81, k };
+            let f = Flight { p0: [0.01, 0.02], v0: [0.4, 0.9], g: 9.81, k, drift: [0.0; 2] };
             let p = f.pos(0.07);
             assert!((f.y_at_x(p[0]).unwrap() - p[1]).abs() < 1e-12, "k {k}");
         }
@@ -305,7 +333,7 @@ mod tests {
     fn eq_4_55_trajectory_agrees_with_time_form() {
         // y(x) of Eq. 4.55 evaluated at x(t) equals y(t)
         let (k, g): (f64, f64) = (5.347, 9.81);
-        let f = Flight { p0: [0.0, 0.0], v0: [0.4, 0.9], g, k };
+        let f = Flight { p0: [0.0, 0.0], v0: [0.4, 0.9], g, k, drift: [0.0; 2] };
         let t = 0.08;
         let p = f.pos(t);
         let vx = f.v0[0];
