@@ -117,3 +117,53 @@ fn sled_motion_is_refused_where_it_is_not_implemented() {
     let o = Command::new(bin).args(["simulate", "--config", setup, "--effect", "sled-motion=0.01,0.05", "--json"]).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+#[test]
+fn quadratic_drag_flights_match_an_rk4_integration_of_schiller_naumann() {
+    use sawtooth::model::effects::{QuadraticDrag, AIR_DENSITY, AIR_VISCOSITY};
+    let (mut s, d) = rig();
+    s.sim.particles = 60;
+    let qd = QuadraticDrag { diameter_m: 150e-6, density_kg_m3: 2500.0 };
+    s.effects.quadratic_drag = Some(qd);
+    let det = evaluate_detailed(particle_engine(EngineKind::Cpu).as_ref(), &s, &d, true).unwrap();
+    let g = s.environment.g;
+    // dv/dt = -g ŷ - k(|v|) v with k(v) = 18 μ/(ρ d²) (1 + 0.15 Re^0.687), Eq. 4.15/4.18
+    let accel = |v: [f64; 2]| {
+        let speed = v[0].hypot(v[1]);
+        let re = AIR_DENSITY * speed * qd.diameter_m / AIR_VISCOSITY;
+        let k = 18.0 * AIR_VISCOSITY / (qd.density_kg_m3 * qd.diameter_m.powi(2)) * (1.0 + 0.15 * re.powf(0.687));
+        [-k * v[0], -g - k * v[1]]
+    };
+    let (mut checked, mut worst) = (0, 0.0f64);
+    let next = |a: &sawtooth::engine::FlightRecord| det.flights.iter().find(|b| b.particle == a.particle && b.bounce == a.bounce + 1);
+    for a in &det.flights {
+        let Some(b) = next(a) else { continue };
+        if a.t <= 0.0 {
+            continue;
+        }
+        // RK4 from the launch for the flight's duration
+        let (mut x, mut v) = (a.from, a.vel);
+        let n = 4000;
+        let h = a.t / n as f64;
+        for _ in 0..n {
+            let k1v = accel(v);
+            let k1x = v;
+            let v2 = [v[0] + 0.5 * h * k1v[0], v[1] + 0.5 * h * k1v[1]];
+            let k2v = accel(v2);
+            let v3 = [v[0] + 0.5 * h * k2v[0], v[1] + 0.5 * h * k2v[1]];
+            let k3v = accel(v3);
+            let v4 = [v[0] + h * k3v[0], v[1] + h * k3v[1]];
+            let k4v = accel(v4);
+            for i in 0..2 {
+                x[i] += h / 6.0 * (k1x[i] + 2.0 * v2[i] + 2.0 * v3[i] + v4[i]);
+                v[i] += h / 6.0 * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i]);
+            }
+        }
+        let err = (x[0] - b.from[0]).hypot(x[1] - b.from[1]);
+        assert!(err < 2e-4, "particle {} bounce {}: landing differs by {err} m", a.particle, a.bounce);
+        worst = worst.max(err);
+        checked += 1;
+    }
+    eprintln!("quadratic drag: {checked} flights checked, worst landing difference {worst:.2e} m");
+    assert!(checked >= 10, "{checked}");
+}

@@ -41,8 +41,8 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         (None, None) => bail!("no design: pass --design l_c,l_a,l_b,r,omega_deg,delta_deg,v0,a or a config file with [design]"),
     };
     let trace = a.trajectories.is_some() || a.plot.is_some();
-    if trace && scenario.effects.sled_motion.is_some() {
-        bail!("--trajectories and --plot draw flights in the air's frame; with the sled-motion effect they would be wrong, so they are not offered");
+    if trace && (scenario.effects.sled_motion.is_some() || scenario.effects.quadratic_drag.is_some()) {
+        bail!("--trajectories and --plot redraw each flight as one closed-form arc; with the sled-motion or quadratic-drag effects that would be wrong, so they are not offered");
     }
     if trace && matches!(a.engine.engine, EngineKind::Gpu | EngineKind::Auto) {
         bail!("--trajectories and --plot record every flight, which only the CPU engines do: use --engine cpu or listing");

@@ -70,6 +70,10 @@ pub fn kernel_physics<T: Real>(ctx: &Context) -> KPhysics<T> {
         size_sigma_ln: T::c(ctx.effects.polydisperse.map_or(0.0, |e| e.sigma_ln)),
         sled_delay: T::c(ctx.effects.sled_motion.map_or(0.0, |e| e.delay_s)),
         sled_speed: T::c(ctx.effects.sled_motion.map_or(0.0, |e| e.return_speed_m_s)),
+        // quadratic drag needs air: it replaces the linear drag where there is some
+        qd_k0: T::c(ctx.effects.quadratic_drag.filter(|_| ctx.k_drag > 0.0).map_or(0.0, |e| e.coefficients().0)),
+        qd_re_per_speed: T::c(ctx.effects.quadratic_drag.map_or(0.0, |e| e.coefficients().1)),
+        qd_step: T::c(if ctx.effects.quadratic_drag.is_some() && ctx.k_drag > 0.0 { crate::model::effects::QUADRATIC_DRAG_STEP_S } else { 0.0 }),
     }
 }
 

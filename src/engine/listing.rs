@@ -169,6 +169,9 @@ impl ParticleEngine for ListingEngine {
             size_sigma_ln: 0.0,
             sled_delay: 0.0,
             sled_speed: 0.0,
+            qd_k0: 0.0,
+            qd_re_per_speed: 0.0,
+            qd_step: 0.0,
         };
         let mut st: Vec<State> = prep
             .launches

@@ -204,12 +204,12 @@ pub fn make_engine_for(kind: EngineKind, scenario: &Scenario) -> anyhow::Result<
         let active = scenario.effects.active().join(", ");
         anyhow::bail!("--engine listing: the effects ({active}) are in the cpu and gpu engines only; use --engine cpu");
     }
-    if scenario.effects.sled_motion.is_some() {
-        // piecewise drifting flights are in the cpu kernel only
+    if scenario.effects.sled_motion.is_some() || scenario.effects.quadratic_drag.is_some() {
+        // piecewise flights (sled motion, quadratic drag) are in the cpu kernel only
         match kind {
-            EngineKind::Gpu => anyhow::bail!("--engine gpu: the sled-motion effect is in the cpu engine only; use --engine cpu"),
+            EngineKind::Gpu => anyhow::bail!("--engine gpu: the sled-motion and quadratic-drag effects are in the cpu engine only; use --engine cpu"),
             EngineKind::Auto => {
-                eprintln!("engine auto: sled-motion is in the cpu engine only, using it");
+                eprintln!("engine auto: sled-motion/quadratic-drag are in the cpu engine only, using it");
                 return Ok(particle_engine(EngineKind::Cpu));
             }
             _ => {}
