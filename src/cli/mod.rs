@@ -4,6 +4,7 @@
 pub mod args;
 pub mod bench;
 pub mod conformance;
+pub mod diagnose;
 pub mod fit;
 pub mod multi;
 pub mod optimize;
@@ -44,6 +45,8 @@ pub enum Command {
     Study(study::StudyCommand),
     /// Measurement-like tooth masses from the model, optionally with effects switched on.
     Synth(synth::SynthArgs),
+    /// Locate the sim-to-real gap and rank candidate effects by held-out error.
+    Diagnose(diagnose::DiagnoseArgs),
 }
 
 /// Exit status: 0 success, 1 a check failed, 2 bad input or an error.
@@ -57,5 +60,6 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         Command::GpuSweep(a) => sweep::run(a, out),
         Command::Study(c) => study::run(c, out),
         Command::Synth(a) => synth::run(a, out),
+        Command::Diagnose(a) => diagnose::run(a, out),
     }
 }

@@ -2,3 +2,5 @@
 //! model (`synth`), the data that checks a diagnosis whose true effect is known.
 
 pub mod synth;
+#[allow(clippy::module_inception)] pub mod diagnose;
+pub mod render;

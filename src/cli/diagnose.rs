@@ -1,0 +1,193 @@
+//! `sawtooth diagnose`: locate the sim-to-real gap in one or more measured conditions and
+//! rank the candidate effects by held-out error (issue 5 §2). The work is in
+//! [`crate::diagnose::diagnose`].
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{bail, Context as _};
+use clap::Args;
+
+use crate::diagnose::diagnose::{diagnose, parse_effects, to_json, Budget, Condition, Settings};
+use crate::diagnose::render;
+use crate::engine::{make_engine, EngineKind};
+use crate::fit::objective;
+use crate::io::config::ConfigFile;
+use crate::io::measured;
+
+#[derive(Debug, Args)]
+pub struct DiagnoseArgs {
+    /// Measured runs (CSV, as data/validation), repeatable; the i-th --data goes with the
+    /// i-th --setup.
+    #[arg(long, required = true)]
+    pub data: Vec<PathBuf>,
+    /// The rig's setup for each --data (config TOML with [design], optional [measurement]).
+    #[arg(long, required = true)]
+    pub setup: Vec<PathBuf>,
+    /// Candidate effects: `all` or a comma list of impact-scatter, launch-spread, polydisperse,
+    /// sled-motion, quadratic-drag.
+    #[arg(long, default_value = "all")]
+    pub effects: String,
+    /// Cross-validation folds (run i of each condition is in fold i mod K).
+    #[arg(long, default_value_t = 3)]
+    pub folds: usize,
+    /// Seed of the particle streams, the GAs and the bootstrap (default: the first setup's
+    /// sim.seed).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Particle engine for the fits: cpu, gpu or auto (the listing port has no effects).
+    #[arg(long, value_enum, default_value = "cpu")]
+    pub engine: EngineKind,
+    /// Particles per simulation (the same streams for every candidate).
+    #[arg(long, default_value_t = 600)]
+    pub particles: u32,
+    /// GA population size per fit (>= 4).
+    #[arg(long, default_value_t = 24)]
+    pub pop: usize,
+    /// GA generations per fit after the initial population.
+    #[arg(long, default_value_t = 15)]
+    pub generations: u64,
+    /// Nelder-Mead evaluations polishing each GA result.
+    #[arg(long, default_value_t = 40)]
+    pub polish: usize,
+    /// Bootstrap replicates for the intervals (resampling held-out runs).
+    #[arg(long, default_value_t = 400)]
+    pub bootstrap: usize,
+    /// Write report.md, diagnosis.json, residuals.svg, ranking.svg, distributions.svg here.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Print diagnosis.json's object instead of a summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn stem(p: &Path) -> String {
+    p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| p.display().to_string())
+}
+
+pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    // cheap checks first: nothing is simulated before every input is known to be good
+    if a.data.len() != a.setup.len() {
+        bail!(
+            "--data and --setup must come in pairs (matched by order): got {} --data and {} --setup",
+            a.data.len(),
+            a.setup.len()
+        );
+    }
+    let effects = parse_effects(&a.effects)?;
+    if a.engine == EngineKind::Listing {
+        bail!("--engine listing: the effects are in the cpu and gpu engines only; use --engine cpu or auto");
+    }
+    if a.folds < 2 {
+        bail!("--folds must be >= 2, got {}", a.folds);
+    }
+    if a.particles == 0 {
+        bail!("--particles must be >= 1, got 0");
+    }
+    if a.pop < 4 {
+        bail!("--pop must be >= 4, got {}", a.pop);
+    }
+    if a.bootstrap < 2 {
+        bail!("--bootstrap must be >= 2, got {}", a.bootstrap);
+    }
+    let mut conditions = Vec::with_capacity(a.data.len());
+    let mut seed = a.seed;
+    let mut names: Vec<String> = Vec::new();
+    for (data, setup) in a.data.iter().zip(&a.setup) {
+        let runs = measured::load(data).with_context(|| format!("--data {}", data.display()))?;
+        let config = ConfigFile::load(setup).with_context(|| format!("--setup {}", setup.display()))?;
+        let Some(design) = config.design() else {
+            bail!("--setup {}: no [design] table (the rig's sawtooth design is required)", setup.display());
+        };
+        let mut scenario = config.scenario().with_context(|| format!("--setup {}", setup.display()))?;
+        if scenario.effects.any() {
+            eprintln!(
+                "diagnose: {}: the setup's [effects] ({}) are switched off; the diagnosis fits them itself",
+                setup.display(),
+                scenario.effects.active().join(", ")
+            );
+            scenario.effects = Default::default();
+        }
+        let seed = *seed.get_or_insert(scenario.sim.seed);
+        scenario.sim.particles = a.particles;
+        scenario.sim.seed = seed;
+        if let Err(e) = scenario.validate() {
+            bail!("--setup {}: invalid setting: {e}", setup.display());
+        }
+        if runs.teeth > scenario.sim.teeth as usize {
+            bail!(
+                "--data {} has {} teeth but the setup simulates only {} (sim.teeth): raise sim.teeth in {}",
+                data.display(),
+                runs.teeth,
+                scenario.sim.teeth,
+                setup.display()
+            );
+        }
+        if runs.runs.len() < a.folds {
+            bail!("--folds {}: --data {} has only {} runs (each fold needs a held-out run)", a.folds, data.display(), runs.runs.len());
+        }
+        if let Err(invalid) = crate::model::prepare(&scenario, &design) {
+            bail!("--setup {}: the design cannot be simulated ({}): {invalid}", setup.display(), invalid.rule());
+        }
+        let resolution_g = config
+            .measurement
+            .as_ref()
+            .and_then(|m| m.scale_resolution_g)
+            .unwrap_or_else(|| objective::infer_resolution(runs.runs.iter().flat_map(|r| r.teeth_g.iter().copied())));
+        let mut name = stem(data);
+        if names.contains(&name) {
+            name = format!("{name}#{}", names.len() + 1);
+        }
+        names.push(name.clone());
+        conditions.push(Condition {
+            name,
+            data: data.display().to_string(),
+            setup: setup.display().to_string(),
+            runs,
+            base: scenario,
+            design,
+            resolution_g,
+        });
+    }
+    let seed = seed.unwrap_or(0);
+    let engine = make_engine(a.engine)?;
+    let settings = Settings {
+        effects,
+        folds: a.folds,
+        budget: Budget { pop: a.pop, generations: a.generations, polish: a.polish, seed },
+        bootstrap: a.bootstrap,
+    };
+    let started = std::time::Instant::now();
+    let d = diagnose(engine.as_ref(), conditions, settings, &mut |line| eprintln!("{line}"))?;
+    eprintln!("diagnose: done in {:.1} s", started.elapsed().as_secs_f64());
+    let json = to_json(&d);
+    render::write_dir(&a.out, &d, &json)?;
+    if a.json {
+        writeln!(out, "{}", serde_json::to_string_pretty(&json)?).context("writing output")?;
+    } else {
+        let b = &d.baseline;
+        writeln!(out, "baseline held-out gap {:.1} %² [{:.1}, {:.1}]", b.heldout, b.interval[0], b.interval[1])?;
+        for (i, m) in d.ranking.iter().enumerate() {
+            writeln!(
+                out,
+                "{}. {:<15} held-out gap {:>8.1} %² [{:.1}, {:.1}]  reduction {:>6.1} %",
+                i + 1,
+                m.name(),
+                m.heldout,
+                m.interval[0],
+                m.interval[1],
+                100.0 * (1.0 - m.heldout / b.heldout)
+            )?;
+        }
+        writeln!(out, "best: {}", d.best.map_or("none (the data cannot tell)", |e| e.name()))?;
+        if !d.indistinguishable.is_empty() {
+            writeln!(out, "indistinguishable: {}", d.indistinguishable.iter().map(|e| e.name()).collect::<Vec<_>>().join(", "))?;
+        }
+        for n in &d.notes {
+            writeln!(out, "note: {n}")?;
+        }
+        writeln!(out, "wrote {0}/report.md, {0}/diagnosis.json and SVG plots", a.out.display())?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
