@@ -39,6 +39,9 @@ pub fn run(a: SweepArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     single.alpha = None;
     let (base, _) = single.resolve()?;
     let n = ((to - from) / a.step + 1e-9).floor() as usize + 1;
+    if n > 400 {
+        bail!("--alpha {from}..{to} with --step {}: {n} angles; at most 400 (each angle is one optimisation run)", a.step);
+    }
     let angles: Vec<f64> = (0..n).map(|i| from + i as f64 * a.step).collect();
     let mut plans = Vec::new();
     for &alpha in &angles {
