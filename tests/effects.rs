@@ -167,3 +167,18 @@ fn quadratic_drag_flights_match_an_rk4_integration_of_schiller_naumann() {
     eprintln!("quadratic drag: {checked} flights checked, worst landing difference {worst:.2e} m");
     assert!(checked >= 10, "{checked}");
 }
+
+#[test]
+fn quadratic_drag_flights_beyond_the_conveyor_end_are_lost_not_followed_forever() {
+    // Regression: a piecewise (quadratic-drag) flight that crossed the base line past the
+    // last tooth found no hit in any piece and was followed for ever.
+    use sawtooth::model::effects::QuadraticDrag;
+    let (mut s, d) = rig();
+    s.sim.particles = 100;
+    s.sim.teeth = 3;
+    s.effects.quadratic_drag = Some(QuadraticDrag { diameter_m: 150e-6, density_kg_m3: 2500.0 });
+    let out = sim(&s, &d);
+    assert!(out.lost_fraction > 0.05, "expected grains thrown past tooth 3, lost {}", out.lost_fraction);
+    let total: f64 = out.distribution.iter().sum::<f64>() + out.lost_fraction;
+    assert!((total - 1.0).abs() < 1e-9, "{total}");
+}

@@ -405,6 +405,9 @@ fn sled_phase<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, clock: T) -> ([T; 2], T
     }
 }
 
+/// Longest flight the piecewise integration follows, s; longer ones count as lost.
+pub const MAX_FLIGHT_S: f64 = 60.0;
+
 /// Drag rate for the quadratic-drag effect at air speed `speed`: the Schiller-Naumann force
 /// per unit mass and speed, 18μ/(ρ_p d²)(1 + 0.15 Re^0.687) (Eq. 4.18).
 #[inline(always)]
@@ -415,7 +418,7 @@ fn schiller_naumann_k<T: Real>(ph: &KPhysics<T>, speed: T) -> T {
 
 /// The first impact of a flight split into pieces: where the sled's motion changes (each
 /// piece a drifting flight in the sled frame) and, with quadratic drag, every `qd_step`
-/// (each piece a Stokes flight with k from the speed at its start). Returns the hit (time
+/// (each piece a Stokes flight with k from the speed at its midpoint). Returns the hit (time
 /// counted from the start of the whole flight) and the flight of the piece it lies in, with
 /// that piece's start time.
 fn first_hit_piecewise<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bounce: u32) -> (Hit<T>, Flight<T>, T) {
@@ -425,8 +428,13 @@ fn first_hit_piecewise<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<
         let (drift, mut phase_end) = if ph.sled_speed > T::zero() { sled_phase(d, ph, q.clock) } else { ([T::zero(); 2], T::infinity()) };
         let mut k = q.k_drag;
         if ph.qd_step > T::zero() {
-            k = schiller_naumann_k(ph, (q.vel[0] * q.vel[0] + q.vel[1] * q.vel[1]).sqrt());
+            // midpoint rule for the drag rate: predict the speed half a piece ahead with the
+            // rate at the start, fly the piece with the rate there (second order in the step)
             phase_end = phase_end.min(q.clock + ph.qd_step);
+            let k0 = schiller_naumann_k(ph, (q.vel[0] * q.vel[0] + q.vel[1] * q.vel[1]).sqrt());
+            let probe = Flight { p0: q.pos, v0: q.vel, g: ph.g, k: k0, drift };
+            let vh = probe.vel(T::c(0.5) * (phase_end - q.clock));
+            k = schiller_naumann_k(ph, (vh[0] * vh[0] + vh[1] * vh[1]).sqrt());
         }
         let fl = Flight { p0: q.pos, v0: q.vel, g: ph.g, k, drift };
         let limit = phase_end - q.clock;
@@ -438,6 +446,13 @@ fn first_hit_piecewise<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<
         // no impact in this phase: continue from where the particle is when it ends
         q.pos = fl.pos(limit);
         q.vel = fl.vel(limit);
+        // Below the base line (through this frame's p1) without a hit: the flight crossed the
+        // line beyond the conveyor's ends and falls away (lost, as in `first_hit`). The time
+        // cap keeps a pathological flight from looping (no flight lasts a minute on the rig).
+        if dot(q.pos, d.n_base) < T::zero() || elapsed + limit > T::c(MAX_FLIGHT_S) {
+            hit.t = hit.t + elapsed;
+            return (hit, fl, elapsed);
+        }
         q.surface = SURFACE_NONE; // airborne: no surface is being left any more
         q.clock = phase_end;
         elapsed = elapsed + limit;

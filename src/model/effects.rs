@@ -59,7 +59,7 @@ pub struct QuadraticDrag {
 pub const AIR_DENSITY: f64 = 1.225;
 pub const AIR_VISCOSITY: f64 = 1.81e-5;
 /// Length of the piecewise-Stokes steps of the quadratic-drag integration, s.
-pub const QUADRATIC_DRAG_STEP_S: f64 = 0.002;
+pub const QUADRATIC_DRAG_STEP_S: f64 = 0.02;
 
 impl QuadraticDrag {
     /// Stokes part 18 μ / (ρ_p d²), 1/s, and Re per unit speed ρ_air d / μ, s/m.
