@@ -9,7 +9,7 @@ use std::process::ExitCode;
 use anyhow::{bail, Context as _};
 use clap::Args;
 
-use crate::diagnose::diagnose::{diagnose, parse_effects, to_json, Budget, Condition, Settings};
+use crate::diagnose::diagnose::{diagnose, parse_effects, to_json, Budget, Condition, KnownMotion, Settings};
 use crate::diagnose::render;
 use crate::engine::{make_engine, EngineKind};
 use crate::fit::objective;
@@ -26,9 +26,8 @@ pub struct DiagnoseArgs {
     #[arg(long, required = true)]
     pub setup: Vec<PathBuf>,
     /// Candidate effects: a comma list of impact-scatter, launch-spread, polydisperse,
-    /// sled-motion, quadratic-drag, or `all`. The default leaves out quadratic-drag: its
-    /// 2 ms piecewise flights make each fit about two orders of magnitude slower.
-    #[arg(long, default_value = "impact-scatter,launch-spread,polydisperse,sled-motion")]
+    /// sled-motion, quadratic-drag, or `all`.
+    #[arg(long, default_value = "all")]
     pub effects: String,
     /// Cross-validation folds (run i of each condition is in fold i mod K).
     #[arg(long, default_value_t = 3)]
@@ -149,6 +148,11 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
             base: scenario,
             design,
             resolution_g,
+            motion: KnownMotion {
+                delay_s: config.measurement.as_ref().and_then(|m| m.motion_delay_s),
+                return_speed_m_s: config.measurement.as_ref().and_then(|m| m.motion_return_speed_m_s),
+            },
+            motion_profile: config.measurement.as_ref().and_then(|m| m.motion_profile.clone()),
         });
     }
     let seed = seed.unwrap_or(0);

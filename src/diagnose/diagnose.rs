@@ -21,7 +21,9 @@
 //!   is in fold i mod K). For the baseline and every candidate effect the shared parameters
 //!   and the effect's own ones are refitted on the training folds (GA, then a short bounded
 //!   Nelder-Mead; an effect's fit also starts from the baseline's fold fit with the effect
-//!   switched off, so the nested model is never fitted worse than the baseline), and the
+//!   switched off, so a nested model is never fitted worse than the baseline; quadratic drag
+//!   replaces the linear drag law and sled motion stated by a setup stays on, so those two
+//!   are not nested), and the
 //!   held-out folds' mean distributions are scored: the **held-out gap** is the SSE summed
 //!   over conditions and folds. Every candidate sees the same particle streams (common
 //!   random numbers: same seed and particle count, effect draws on their own counters).
@@ -38,6 +40,12 @@
 //!   improvement (baseline − effect) lies above 0; otherwise `best` is null. Effects whose
 //!   intervals overlap the top-ranked effect's are `indistinguishable` (the top one included
 //!   when any other overlaps).
+//! - **Known sled motion.** A setup may state the sled's motion after the launch
+//!   ([measurement] `motion_delay_s`, `motion_return_speed_m_s`; e.g. the POC profile of Test
+//!   1 returns at once at v_d ≈ 0.05 m/s, 5.3.1). The baseline and the other candidates
+//!   ignore it, as the thesis's model does; the sled-motion candidate holds the stated values
+//!   fixed for that condition and fits the ones left out, shared by the conditions that
+//!   leave them out. Conditions that differ only in their motion are what identifies it.
 //! - **Limits.** With one condition, a shift of the whole distribution cannot be told apart
 //!   from refitted collision/drag parameters; the report says so. The Monte-Carlo noise of
 //!   the fixed particle streams is part of every held-out gap (rerun with other `--seed`s).
@@ -111,6 +119,19 @@ impl EffectKind {
         }
     }
 
+    /// Parameters at which the effect does nothing (a nested baseline), where they exist:
+    /// quadratic drag replaces the linear drag law, so no setting of it is the baseline; a
+    /// sled-motion delay at its bound outlasts the rig's flights.
+    pub fn neutral(self) -> Option<&'static [f64]> {
+        match self {
+            EffectKind::ImpactScatter => Some(&[0.0]),
+            EffectKind::LaunchSpread => Some(&[0.0, 0.0]),
+            EffectKind::Polydisperse => Some(&[0.0]),
+            EffectKind::SledMotion => Some(&[0.3, 0.05]),
+            EffectKind::QuadraticDrag => None,
+        }
+    }
+
     /// Switch the effect on in `s` with parameters `v` (the others are left as they are).
     pub fn apply(self, s: &mut Scenario, v: &[f64]) {
         match self {
@@ -150,6 +171,24 @@ pub fn parse_effects(list: &str) -> anyhow::Result<Vec<EffectKind>> {
     Ok(out)
 }
 
+/// What a setup states of the sled's motion after the launch ([measurement]
+/// motion_delay_s, motion_return_speed_m_s): the sled-motion candidate holds these fixed for
+/// the condition and fits the values left out.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct KnownMotion {
+    pub delay_s: Option<f64>,
+    pub return_speed_m_s: Option<f64>,
+}
+
+impl KnownMotion {
+    fn get(&self, i: usize) -> Option<f64> {
+        [self.delay_s, self.return_speed_m_s][i]
+    }
+    pub fn any(&self) -> bool {
+        self.delay_s.is_some() || self.return_speed_m_s.is_some()
+    }
+}
+
 /// One measured condition: runs and the setup they were measured with.
 #[derive(Clone, Debug)]
 pub struct Condition {
@@ -162,6 +201,10 @@ pub struct Condition {
     pub base: Scenario,
     pub design: Design,
     pub resolution_g: f64,
+    /// The sled's motion as far as the setup knows it.
+    pub motion: KnownMotion,
+    /// The setup's motion-profile label (`poc`, `delayed`), if any.
+    pub motion_profile: Option<String>,
 }
 
 impl Condition {
@@ -192,17 +235,29 @@ pub struct Joint<'a> {
     pub conditions: &'a [Condition],
     pub shared: Vec<Param>,
     pub effect: Option<EffectKind>,
+    /// Indices of the effect's parameters that are fitted: all of them, except sled-motion
+    /// values that every setup states (`KnownMotion`).
+    pub effect_free: Vec<usize>,
 }
 
-impl Joint<'_> {
+impl<'a> Joint<'a> {
+    pub fn new(engine: &'a dyn BatchEvaluator, conditions: &'a [Condition], shared: Vec<Param>, effect: Option<EffectKind>) -> Self {
+        let effect_free = match effect {
+            None => Vec::new(),
+            Some(EffectKind::SledMotion) => (0..2).filter(|i| conditions.iter().any(|c| c.motion.get(*i).is_none())).collect(),
+            Some(e) => (0..e.bounds().len()).collect(),
+        };
+        Joint { engine, conditions, shared, effect, effect_free }
+    }
+
     pub fn dim(&self) -> usize {
-        self.shared.len() + self.effect.map_or(0, |e| e.bounds().len())
+        self.shared.len() + self.effect_free.len()
     }
 
     pub fn bounds(&self) -> (Vec<f64>, Vec<f64>) {
         let mut b: Vec<(f64, f64)> = self.shared.iter().map(|p| p.bounds()).collect();
         if let Some(e) = self.effect {
-            b.extend_from_slice(e.bounds());
+            b.extend(self.effect_free.iter().map(|i| e.bounds()[*i]));
         }
         b.into_iter().unzip()
     }
@@ -211,9 +266,23 @@ impl Joint<'_> {
     pub fn names(&self) -> Vec<&'static str> {
         let mut n: Vec<&'static str> = self.shared.iter().map(|p| p.name()).collect();
         if let Some(e) = self.effect {
-            n.extend_from_slice(e.param_names());
+            n.extend(self.effect_free.iter().map(|i| e.param_names()[*i]));
         }
         n
+    }
+
+    /// The point at which the effect is switched off, from a baseline point, where the effect
+    /// has one (`EffectKind::neutral`).
+    pub fn nested(&self, baseline_x: &[f64]) -> Option<Vec<f64>> {
+        let mut v = baseline_x.to_vec();
+        if let Some(e) = self.effect {
+            let off = e.neutral()?;
+            if e == EffectKind::SledMotion && self.conditions.iter().any(|c| c.motion.any()) {
+                return None; // the stated motions stay on
+            }
+            v.extend(self.effect_free.iter().map(|i| off[*i]));
+        }
+        Some(v)
     }
 
     /// Condition `c`'s scenario at parameters `x` (k_drag only where the setup has drag).
@@ -227,7 +296,19 @@ impl Joint<'_> {
             p.apply(&mut s, *v);
         }
         if let Some(e) = self.effect {
-            e.apply(&mut s, &x[self.shared.len()..]);
+            // the effect's full parameter vector: fitted values, then what the setup states
+            let mut v: Vec<f64> = e.bounds().iter().map(|b| b.0).collect();
+            for (i, xv) in self.effect_free.iter().zip(&x[self.shared.len()..]) {
+                v[*i] = *xv;
+            }
+            if e == EffectKind::SledMotion {
+                for (i, vi) in v.iter_mut().enumerate() {
+                    if let Some(known) = cond.motion.get(i) {
+                        *vi = known;
+                    }
+                }
+            }
+            e.apply(&mut s, &v);
         }
         s
     }
@@ -540,14 +621,10 @@ fn cross_validate(
 ) -> anyhow::Result<ModelResult> {
     let conds = joint.conditions;
     let extra = joint.dim() - joint.shared.len();
-    // the nested baseline's point with the effect switched off (zero strength)
-    let nested = |x: &[f64]| -> Vec<f64> {
-        let mut v = x.to_vec();
-        v.extend(std::iter::repeat_n(0.0, extra));
-        v
-    };
+    // the baseline's point with the effect switched off, where the effect has such a setting
+    let nested = |x: &[f64]| -> Vec<Vec<f64>> { joint.nested(x).into_iter().collect() };
     let all_targets: Vec<Target> = conds.iter().map(|c| c.target(&(0..c.runs.runs.len()).collect::<Vec<_>>())).collect();
-    let starts: Vec<Vec<f64>> = baseline.map(|b| vec![nested(&b.full.x)]).unwrap_or_default();
+    let starts: Vec<Vec<f64>> = baseline.map(|b| nested(&b.full.x)).unwrap_or_default();
     let full = fit_joint(joint, &all_targets, budget, &starts)?;
     let mut evaluations = full.evaluations;
     let mut fold_params = Vec::with_capacity(k);
@@ -555,7 +632,7 @@ fn cross_validate(
     for f in 0..k {
         let targets: Vec<Target> = conds.iter().map(|c| c.target(&fold_indices(c.runs.runs.len(), k, f).0)).collect();
         // the baseline's fold fit (never the full fit: it has seen the held-out runs)
-        let starts: Vec<Vec<f64>> = baseline.map(|b| vec![nested(&b.fold_params[f])]).unwrap_or_default();
+        let starts: Vec<Vec<f64>> = baseline.map(|b| nested(&b.fold_params[f])).unwrap_or_default();
         let b = Budget { seed: budget.seed.wrapping_add(1 + f as u64), ..budget };
         let fit = fit_joint(joint, &targets, b, &starts)?;
         evaluations += fit.evaluations;
@@ -724,6 +801,32 @@ fn gap_condition(cond: &Condition, before: &[f64], after: &[f64], replicates: us
     }
 }
 
+/// What the sled-motion candidate can and cannot use of the setups' stated motions.
+fn sled_motion_notes(conditions: &[Condition]) -> Vec<String> {
+    let mut notes = Vec::new();
+    if !conditions.iter().any(|c| c.motion.any()) {
+        notes.push(
+            "sled-motion: no setup states the sled's motion (measurement.motion_delay_s, motion_return_speed_m_s); \
+             its delay and return speed are fitted and shared by every condition"
+                .to_string(),
+        );
+    }
+    for (i, name) in ["motion_delay_s", "motion_return_speed_m_s"].iter().enumerate() {
+        let mut labels: Vec<&str> =
+            conditions.iter().filter(|c| c.motion.get(i).is_none()).map(|c| c.motion_profile.as_deref().unwrap_or("unlabelled")).collect();
+        labels.sort_unstable();
+        labels.dedup();
+        if labels.len() > 1 {
+            notes.push(format!(
+                "sled-motion: conditions with different motion profiles ({}) share one fitted {name}; state the known \
+                 value in each profile's setup",
+                labels.join(", ")
+            ));
+        }
+    }
+    notes
+}
+
 /// Run the diagnosis. `log` receives progress lines.
 pub fn diagnose(
     engine: &dyn BatchEvaluator,
@@ -775,6 +878,9 @@ pub fn diagnose(
     if effects.is_empty() {
         bail!("--effects: no candidate effect applies to these setups");
     }
+    if effects.contains(&EffectKind::SledMotion) {
+        notes.extend(sled_motion_notes(&conditions));
+    }
     if conditions.len() == 1 {
         notes.push(
             "single condition: a shift of the whole distribution cannot be separated from refitted collision/drag \
@@ -785,7 +891,7 @@ pub fn diagnose(
     let shared = shared_params(&conditions);
     let budget = settings.budget;
     let particles = conditions[0].base.sim.particles;
-    let joint_for = |effect| Joint { engine, conditions: &conditions, shared: shared.clone(), effect };
+    let joint_for = |effect| Joint::new(engine, &conditions, shared.clone(), effect);
 
     log(format!("diagnose: baseline ({} conditions, {k} folds)", conditions.len()));
     let base = cross_validate(&joint_for(None), k, budget, None, log)?;
@@ -873,6 +979,8 @@ pub fn to_json(d: &Diagnosis) -> Value {
                 "data": c.data,
                 "setup": c.setup,
                 "runs": c.runs.runs.len(),
+                "motion_profile": c.motion_profile,
+                "stated_motion": {"delay_s": c.motion.delay_s, "return_speed_m_s": c.motion.return_speed_m_s},
                 "teeth": teeth,
                 "centre_of_mass": w.centre.json(),
                 "dispersion": w.dispersion.json(),

@@ -55,19 +55,23 @@ pub fn to_markdown(d: &Diagnosis) -> String {
     let mut s = String::new();
     let b = &d.baseline;
     let _ = writeln!(s, "# Diagnosis of the sim-to-real gap\n");
-    let _ = writeln!(s, "| condition | data | setup | runs | measured teeth | scale resolution (g) | drag |");
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    let _ = writeln!(s, "| condition | data | setup | runs | measured teeth | scale resolution (g) | drag | motion profile | stated sled motion (delay s, return m/s) |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
+    let stated = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v}"));
     for c in &d.conditions {
         let _ = writeln!(
             s,
-            "| {} | `{}` | `{}` | {} | {} | {} | {} |",
+            "| {} | `{}` | `{}` | {} | {} | {} | {} | {} | {}, {} |",
             c.name,
             c.data,
             c.setup,
             c.runs.runs.len(),
             c.runs.teeth,
             c.resolution_g,
-            c.base.environment.k_drag.map_or("vacuum".to_string(), |_| "Stokes".to_string())
+            c.base.environment.k_drag.map_or("vacuum".to_string(), |_| "Stokes".to_string()),
+            c.motion_profile.as_deref().unwrap_or("–"),
+            stated(c.motion.delay_s),
+            stated(c.motion.return_speed_m_s)
         );
     }
     let bu = d.settings.budget;

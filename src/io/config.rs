@@ -104,11 +104,19 @@ pub struct MeasurementTable {
     /// `poc` (single cycle of the proof-of-concept profile, Test 1) or `delayed` (delayed,
     /// decelerated downstroke, Tests 2-3); Table 4.2.
     pub motion_profile: Option<String>,
+    /// What is known of the sled's motion after the launch (the thesis's model assumes it
+    /// stops): it rests this long, s, ...
+    pub motion_delay_s: Option<f64>,
+    /// ... then returns down the slope at this speed, m/s, over the stroke. Used only by
+    /// `diagnose`'s sled-motion candidate, which holds a value given here fixed for this
+    /// condition and fits one left out (shared by the conditions that leave it out).
+    pub motion_return_speed_m_s: Option<f64>,
     pub description: Option<String>,
 }
 
 impl MeasurementTable {
-    /// Numbers must be finite and > 0; `motion_profile` must be `poc` or `delayed`.
+    /// Numbers must be finite and > 0 (the motion ones inside the sled-motion effect's
+    /// bounds); `motion_profile` must be `poc` or `delayed`.
     pub fn validate(&self) -> anyhow::Result<()> {
         for (key, v) in [("scale_resolution_g", self.scale_resolution_g), ("particle_mass_g", self.particle_mass_g)] {
             if let Some(v) = v {
@@ -118,6 +126,17 @@ impl MeasurementTable {
                 if v <= 0.0 {
                     bail!("measurement.{key} must be > 0, got {v}");
                 }
+            }
+        }
+        // the bounds of the sled-motion effect (`Effects::validate`)
+        if let Some(v) = self.motion_delay_s {
+            if !(v.is_finite() && (0.0..=100.0).contains(&v)) {
+                bail!("measurement.motion_delay_s must lie in [0, 100] s, got {v}");
+            }
+        }
+        if let Some(v) = self.motion_return_speed_m_s {
+            if !(v.is_finite() && (1e-6..=10.0).contains(&v)) {
+                bail!("measurement.motion_return_speed_m_s must lie in [1e-6, 10] m/s, got {v}");
             }
         }
         if let Some(p) = &self.motion_profile {
@@ -252,6 +271,9 @@ mod tests {
             ("particle_mass_g = nan", "measurement.particle_mass_g must be finite"),
             ("scale_resolution_g = inf", "measurement.scale_resolution_g must be finite"),
             ("motion_profile = \"fast\"", "measurement.motion_profile must be `poc` or `delayed`"),
+            ("motion_delay_s = -0.1", "measurement.motion_delay_s must lie in [0, 100]"),
+            ("motion_return_speed_m_s = 0.0", "measurement.motion_return_speed_m_s must lie in"),
+            ("motion_return_speed_m_s = nan", "measurement.motion_return_speed_m_s must lie in"),
             ("scale = 0.1", "scale"),
         ] {
             let err = ConfigFile::parse(&format!("[measurement]\n{text}\n")).unwrap_err();
