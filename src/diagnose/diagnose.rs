@@ -22,8 +22,8 @@
 //!   and the effect's own ones are refitted on the training folds (GA, then a short bounded
 //!   Nelder-Mead; an effect's fit also starts from the baseline's fold fit with the effect
 //!   switched off, so a nested model is never fitted worse than the baseline; quadratic drag
-//!   replaces the linear drag law and sled motion stated by a setup stays on, so those two
-//!   are not nested), and the
+//!   replaces the linear drag law, so it is not nested and has no such start, and sled
+//!   motion stated by a setup stays on in that start), and the
 //!   held-out folds' mean distributions are scored: the **held-out gap** is the SSE summed
 //!   over conditions and folds. Every candidate sees the same particle streams (common
 //!   random numbers: same seed and particle count, effect draws on their own counters).
@@ -33,7 +33,8 @@
 //!   from the same predictions (paired across models). Intervals are the 5-95 % percentiles
 //!   ([`INTERVAL`]); the standard error is the replicates' sd.
 //! - **Ranking.** By the penalised score `held-out gap + 2 × (extra parameters) × SE` (the
-//!   effect's own parameter count; SE its held-out gap's bootstrap standard error): an extra
+//!   parameters beyond the baseline's: the effect's own, less k_drag for quadratic drag, which
+//!   replaces the linear law and is fitted without it; SE its held-out gap's bootstrap standard error): an extra
 //!   parameter must buy two standard errors of held-out improvement. `best` is the top-ranked
 //!   effect only when it beats the baseline beyond the uncertainty: the baseline's held-out
 //!   gap lies above the effect's interval and the paired bootstrap interval of the
@@ -241,7 +242,12 @@ pub struct Joint<'a> {
 }
 
 impl<'a> Joint<'a> {
-    pub fn new(engine: &'a dyn BatchEvaluator, conditions: &'a [Condition], shared: Vec<Param>, effect: Option<EffectKind>) -> Self {
+    pub fn new(engine: &'a dyn BatchEvaluator, conditions: &'a [Condition], mut shared: Vec<Param>, effect: Option<EffectKind>) -> Self {
+        if effect == Some(EffectKind::QuadraticDrag) {
+            // Schiller-Naumann drag replaces the linear law: k_drag would be a dead parameter
+            // (the setups' own value only marks which of them are in air)
+            shared.retain(|p| *p != Param::KDrag);
+        }
         let effect_free = match effect {
             None => Vec::new(),
             Some(EffectKind::SledMotion) => (0..2).filter(|i| conditions.iter().any(|c| c.motion.get(*i).is_none())).collect(),
@@ -271,15 +277,14 @@ impl<'a> Joint<'a> {
         n
     }
 
-    /// The point at which the effect is switched off, from a baseline point, where the effect
-    /// has one (`EffectKind::neutral`).
-    pub fn nested(&self, baseline_x: &[f64]) -> Option<Vec<f64>> {
+    /// A start from a baseline point: the effect's fitted parameters at their neutral values
+    /// (`EffectKind::neutral`), where the effect has them. That is the baseline itself (a
+    /// nested model) unless a setup states its sled motion, which stays on: then it is the
+    /// baseline's collision/drag with the stated motions, a start near the baseline's error.
+    pub fn start_from_baseline(&self, baseline_x: &[f64]) -> Option<Vec<f64>> {
         let mut v = baseline_x.to_vec();
         if let Some(e) = self.effect {
             let off = e.neutral()?;
-            if e == EffectKind::SledMotion && self.conditions.iter().any(|c| c.motion.any()) {
-                return None; // the stated motions stay on
-            }
             v.extend(self.effect_free.iter().map(|i| off[*i]));
         }
         Some(v)
@@ -620,9 +625,10 @@ fn cross_validate(
     log: &mut dyn FnMut(String),
 ) -> anyhow::Result<ModelResult> {
     let conds = joint.conditions;
-    let extra = joint.dim() - joint.shared.len();
+    // parameters beyond the baseline's (quadratic drag trades k_drag for its own two)
+    let extra = joint.dim().saturating_sub(shared_params(conds).len());
     // the baseline's point with the effect switched off, where the effect has such a setting
-    let nested = |x: &[f64]| -> Vec<Vec<f64>> { joint.nested(x).into_iter().collect() };
+    let nested = |x: &[f64]| -> Vec<Vec<f64>> { joint.start_from_baseline(x).into_iter().collect() };
     let all_targets: Vec<Target> = conds.iter().map(|c| c.target(&(0..c.runs.runs.len()).collect::<Vec<_>>())).collect();
     let starts: Vec<Vec<f64>> = baseline.map(|b| nested(&b.full.x)).unwrap_or_default();
     let full = fit_joint(joint, &all_targets, budget, &starts)?;

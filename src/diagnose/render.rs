@@ -24,7 +24,9 @@ fn iv(v: [f64; 2], d: usize) -> String {
 }
 
 fn params_text(m: &ModelResult) -> String {
-    m.names.iter().zip(&m.full.x).map(|(n, v)| format!("{n} {}", f(*v, 3))).collect::<Vec<_>>().join(", ")
+    // small SI values (a grain diameter in m) keep three significant digits
+    let show = |v: f64| if v != 0.0 && v.abs() < 0.01 { format!("{v:.3e}") } else { f(v, 3) };
+    m.names.iter().zip(&m.full.x).map(|(n, v)| format!("{n} {}", show(*v))).collect::<Vec<_>>().join(", ")
 }
 
 fn tooth_label(j: usize, shown: usize) -> String {
