@@ -186,6 +186,20 @@ fn no_effect_no_best() {
     let v = diagnose(&[(&a, &setup("test3")), (&b, &setup("test2"))], &d.join("out"));
     eprintln!("none: {}", summary(&v));
     assert!(v["best"].is_null(), "an effect was declared best on data without one: {}", summary(&v));
+    // where the simulated grains come from: three layers of the fill, deeper and deeper
+    for c in v["where"]["conditions"].as_array().unwrap() {
+        let layers = c["launch_depth"].as_array().unwrap();
+        assert_eq!(layers.len(), 3, "{c}");
+        let mut last_max = 0.0;
+        for l in layers {
+            let [lo, hi] = [l["depth_mm"][0].as_f64().unwrap(), l["depth_mm"][1].as_f64().unwrap()];
+            assert!(lo >= last_max && hi >= lo, "{layers:?}");
+            last_max = hi;
+            let sum: f64 = l["teeth_percent"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).sum::<f64>() + l["further_or_lost_percent"].as_f64().unwrap();
+            assert!((sum - 100.0).abs() < 1e-9, "{l}");
+        }
+    }
+    assert!(std::fs::read_to_string(d.join("out/report.md")).unwrap().contains("by launch depth"));
     std::fs::remove_dir_all(&d).ok();
 }
 

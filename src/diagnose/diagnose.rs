@@ -16,7 +16,9 @@
 //!   same for the centre of mass and the dispersion (Eq. 4.58-4.59; the sd of the per-run
 //!   metric / √n and a Monte-Carlo term). And where the simulated mass comes from: per tooth,
 //!   the share of launched particles that rest in the tooth of their first impact ("first
-//!   flight") and the share that the bounce chain moved there from another tooth.
+//!   flight") and the share that the bounce chain moved there from another tooth; and per
+//!   third of the fill by launch depth below its free surface (`Fill::depth`), where that
+//!   third's grains come to rest.
 //! - **Which.** K-fold cross-validation over runs (run i of each condition, in file order,
 //!   is in fold i mod K). For the baseline and every candidate effect the shared parameters
 //!   and the effect's own ones are refitted on the training folds (GA, then a short bounded
@@ -546,7 +548,56 @@ pub struct WhereCondition {
     /// Per shown tooth: % of launched particles moved there from another tooth by bounces.
     pub bounce_chain: Vec<f64>,
     pub lost_percent: f64,
+    /// Where the grains of each third of the fill (by launch depth) end up.
+    pub launch_depth: Vec<DepthLayer>,
     pub measured_summary: MeasuredSummary,
+}
+
+/// The simulated grains launched from one layer of the fill (equal particle counts, by depth
+/// below the fill's free surface) and where they come to rest.
+#[derive(Clone, Debug)]
+pub struct DepthLayer {
+    pub label: &'static str,
+    /// Depths of the layer's launch points below the fill surface, min and max, mm.
+    pub depth_mm: [f64; 2],
+    pub particles: usize,
+    /// Per shown tooth, % of the layer's particles resting there.
+    pub teeth_percent: Vec<f64>,
+    /// % of the layer's particles resting beyond the shown teeth or lost.
+    pub further_or_lost_percent: f64,
+}
+
+/// Split the particles into top, middle and bottom thirds of the fill by launch depth and
+/// count where each third ends (`end_teeth`: 1-based resting tooth, None when lost).
+fn depth_layers(depths_m: &[f64], end_teeth: &[Option<usize>], shown: usize) -> Vec<DepthLayer> {
+    let mut order: Vec<usize> = (0..depths_m.len()).collect();
+    order.sort_by(|a, b| depths_m[*a].total_cmp(&depths_m[*b]).then(a.cmp(b)));
+    let n = order.len();
+    ["top third", "middle third", "bottom third"]
+        .iter()
+        .enumerate()
+        .filter_map(|(k, label)| {
+            let part = &order[k * n / 3..(k + 1) * n / 3];
+            if part.is_empty() {
+                return None;
+            }
+            let mut counts = vec![0usize; shown];
+            for i in part {
+                if let Some(t) = end_teeth[*i].filter(|t| *t <= shown) {
+                    counts[t - 1] += 1;
+                }
+            }
+            let m = part.len() as f64;
+            let teeth_percent: Vec<f64> = counts.iter().map(|c| 100.0 * *c as f64 / m).collect();
+            Some(DepthLayer {
+                label,
+                depth_mm: [1e3 * depths_m[part[0]], 1e3 * depths_m[part[part.len() - 1]]],
+                particles: part.len(),
+                further_or_lost_percent: 100.0 - teeth_percent.iter().sum::<f64>(),
+                teeth_percent,
+            })
+        })
+        .collect()
 }
 
 /// Per condition "before/after" numbers of the gap section.
@@ -748,12 +799,14 @@ fn where_condition(cond: &Condition, scenario: &Scenario, bins: &[f64], particle
         .map_err(|e| anyhow::anyhow!("{}: the fitted setup cannot be simulated ({}): {e}", cond.setup, e.rule()))?;
     let profile = &det.prepared.profile;
     let (mut first, mut chain, mut lost) = (vec![0usize; teeth], vec![0usize; teeth], 0usize);
-    for p in &det.particles {
+    let mut end_teeth = vec![None; det.particles.len()];
+    for (i, p) in det.particles.iter().enumerate() {
         if p.state == ParticleState::Lost {
             lost += 1;
             continue;
         }
         let end = end_tooth(profile, p.end) as usize;
+        end_teeth[i] = Some(end);
         let start = p.first_impact.map(|fi| end_tooth(profile, fi) as usize);
         if start == Some(end) {
             first[end - 1] += 1;
@@ -762,6 +815,9 @@ fn where_condition(cond: &Condition, scenario: &Scenario, bins: &[f64], particle
         }
     }
     let total = det.particles.len().max(1) as f64;
+    // particle i starts from launch point i (engine::cpu)
+    let depths: Vec<f64> = det.prepared.launches.iter().map(|l| det.prepared.fill.depth(*l)).collect();
+    let launch_depth = depth_layers(&depths, &end_teeth, shown);
     Ok(WhereCondition {
         shown_teeth: shown,
         teeth_residuals,
@@ -770,6 +826,7 @@ fn where_condition(cond: &Condition, scenario: &Scenario, bins: &[f64], particle
         first_flight: first[..shown].iter().map(|c| 100.0 * *c as f64 / total).collect(),
         bounce_chain: chain[..shown].iter().map(|c| 100.0 * *c as f64 / total).collect(),
         lost_percent: 100.0 * lost as f64 / total,
+        launch_depth,
         measured_summary: summary,
     })
 }
@@ -993,6 +1050,13 @@ pub fn to_json(d: &Diagnosis) -> Value {
                 "simulated_lost_percent": num(w.lost_percent),
                 "first_flight_percent": num(w.first_flight.iter().sum()),
                 "bounce_chain_percent": num(w.bounce_chain.iter().sum()),
+                "launch_depth": w.launch_depth.iter().map(|l| json!({
+                    "layer": l.label,
+                    "depth_mm": [num(l.depth_mm[0]), num(l.depth_mm[1])],
+                    "particles": l.particles,
+                    "teeth_percent": l.teeth_percent.iter().map(|v| num(*v)).collect::<Vec<_>>(),
+                    "further_or_lost_percent": num(l.further_or_lost_percent),
+                })).collect::<Vec<_>>(),
                 "flagged_teeth": w.teeth_residuals[..w.shown_teeth].iter().enumerate().filter(|(_, r)| r.flagged()).map(|(j, _)| j + 1).collect::<Vec<_>>(),
             })
         })
@@ -1088,4 +1152,32 @@ pub fn to_json(d: &Diagnosis) -> Value {
             "z_flag": Z_FLAG,
         },
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn depth_layers_split_by_depth_and_count_each_third() {
+        // six particles, shuffled depths; the deepest two end in tooth 1, the shallowest in
+        // tooth 2 and beyond the shown teeth, the middle ones in tooth 2 and lost
+        let depths = [0.003, 0.0001, 0.002, 0.0025, 0.001, 0.0002];
+        let ends = [Some(1), Some(2), None, Some(1), Some(2), Some(5)];
+        let l = depth_layers(&depths, &ends, 3);
+        assert_eq!(l.len(), 3);
+        assert_eq!(l.iter().map(|x| x.particles).sum::<usize>(), 6);
+        assert_eq!(l[0].depth_mm, [0.1, 0.2]);
+        assert_eq!(l[0].teeth_percent, vec![0.0, 50.0, 0.0]);
+        assert_eq!(l[0].further_or_lost_percent, 50.0);
+        assert_eq!(l[1].depth_mm, [1.0, 2.0]);
+        assert_eq!(l[1].teeth_percent, vec![0.0, 50.0, 0.0]);
+        assert_eq!(l[2].depth_mm, [2.5, 3.0]);
+        assert_eq!(l[2].teeth_percent, vec![100.0, 0.0, 0.0]);
+        assert_eq!(l[2].further_or_lost_percent, 0.0);
+        // fewer particles than layers: empty thirds are left out, nothing is lost
+        let l = depth_layers(&[0.001], &[Some(1)], 3);
+        assert_eq!(l.len(), 1);
+        assert_eq!(l[0].teeth_percent, vec![100.0, 0.0, 0.0]);
+    }
 }

@@ -145,6 +145,25 @@ pub fn to_markdown(d: &Diagnosis) -> String {
             f(w.bounce_chain.iter().sum(), 1),
             f(w.lost_percent, 1)
         );
+        if !w.launch_depth.is_empty() {
+            let _ = writeln!(s, "Where each third of the fill (by launch depth below its free surface) comes to rest, % of that third:\n");
+            let heads: Vec<String> = (1..=w.shown_teeth).map(|j| format!("tooth {j}")).collect();
+            let _ = writeln!(s, "| layer | depth (mm) | {} | further or lost |", heads.join(" | "));
+            let _ = writeln!(s, "|---|---|{}---|", "---|".repeat(w.shown_teeth));
+            for l in &w.launch_depth {
+                let cells: Vec<String> = l.teeth_percent.iter().map(|v| f(*v, 1)).collect();
+                let _ = writeln!(
+                    s,
+                    "| {} | {}–{} | {} | {} |",
+                    l.label,
+                    f(l.depth_mm[0], 2),
+                    f(l.depth_mm[1], 2),
+                    cells.join(" | "),
+                    f(l.further_or_lost_percent, 1)
+                );
+            }
+            let _ = writeln!(s);
+        }
     }
 
     // WHICH

@@ -77,6 +77,21 @@ impl ExactBoundary {
     }
 }
 
+impl Fill {
+    /// Signed distance of `p` from the line of the fill's free surface (through `p_fill` at
+    /// `surface_angle`, Figure 4.6), m; the fill lies on one side of it.
+    pub fn signed_surface_distance(&self, p: V2) -> f64 {
+        let (s, c) = self.surface_angle.sin_cos();
+        (p[0] - self.p_fill[0]) * s - (p[1] - self.p_fill[1]) * c
+    }
+
+    /// How deep `p` lies below the free surface, m: its distance from the surface line (the
+    /// fill is bounded by that line, so every point of it is on the same side).
+    pub fn depth(&self, p: V2) -> f64 {
+        self.signed_surface_distance(p).abs()
+    }
+}
+
 /// Fill-surface angle: direction of the effective acceleration + 90° + AOR (erratum 21,
 /// listing lines 111-115; Eq. 4.29-4.31 for the vectors). `launch_angle` is the global
 /// direction of the sled's acceleration, α + offset + δ (listing line 112).
@@ -360,6 +375,26 @@ mod tests {
         assert!(inside > 1000, "{inside}");
         // only points in the slivers between the arc and its 512-point chords may differ
         assert!(disagree <= 3, "{disagree}");
+    }
+
+    #[test]
+    fn the_fill_lies_below_its_surface_line() {
+        use crate::model::{geometry::{check_design, Profile}, Design};
+        let d = Design::lunar_solution_c();
+        let prof = Profile::new(&d, check_design(&d).unwrap(), 35.0, 10);
+        let ang = (35.0f64 + 18.434 + d.delta_deg).to_radians();
+        let f = build_fill(&prof, 1.625, &d, ang, 58.0, PhysicsMode::Physical).unwrap();
+        assert!(f.depth(f.p_fill) < 1e-15);
+        // every vertex on one side (the surface is an edge of the fill), some well below it
+        let signed: Vec<f64> = f.polygon.iter().map(|v| f.signed_surface_distance(*v)).collect();
+        let (lo, hi) = signed.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(*x), b.max(*x)));
+        assert!(lo > -1e-12 || hi < 1e-12, "vertices on both sides: [{lo}, {hi}]");
+        let deepest = lo.abs().max(hi.abs());
+        assert!(deepest > 1e-3, "{deepest}");
+        for l in launch_points(&f, 200, PhysicsMode::Physical).unwrap() {
+            let dd = f.depth(l);
+            assert!(dd <= deepest + 1e-12, "{dd} > {deepest}");
+        }
     }
 
     #[test]
