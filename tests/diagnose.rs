@@ -68,8 +68,8 @@ fn diagnose(pairs: &[(&Path, &str)], out: &Path) -> Value {
         }
     }
     let keys: Vec<&String> = v.as_object().unwrap().keys().collect();
-    assert_eq!(keys.len(), 6, "{keys:?}");
-    for k in ["gap", "ranking", "best", "indistinguishable", "baseline", "where"] {
+    assert_eq!(keys.len(), 7, "{keys:?}");
+    for k in ["gap", "ranking", "best", "indistinguishable", "combined", "baseline", "where"] {
         assert!(v.get(k).is_some(), "missing {k}");
     }
     v
@@ -83,9 +83,34 @@ fn summary(v: &Value) -> String {
         .map(|m| format!("{} {:.1} {} ({:.0} %)", m["effect"], m["heldout_gap"], m["interval"], 100.0 * m["reduction"].as_f64().unwrap()))
         .collect();
     format!(
-        "baseline {:.1} {}; {}; best {}; indistinguishable {}",
-        v["baseline"]["heldout_gap"], v["baseline"]["interval"], r.join("; "), v["best"], v["indistinguishable"]
+        "baseline {:.1} {}; {}; best {}; indistinguishable {}; combined {} {:.1} {}",
+        v["baseline"]["heldout_gap"],
+        v["baseline"]["interval"],
+        r.join("; "),
+        v["best"],
+        v["indistinguishable"],
+        v["combined"]["effects"],
+        v["combined"]["heldout_gap"],
+        v["combined"]["improvement_over_singles"]
     )
+}
+
+/// The two best candidates fitted together: present exactly when two beat the baseline, led
+/// by the best, with well-formed numbers.
+fn check_combined(v: &Value) {
+    let beating = v["ranking"].as_array().unwrap().iter()
+        .filter(|m| m["improvement_interval"][0].as_f64().unwrap() > 0.0 && m["reduction"].as_f64().unwrap() > 0.0)
+        .count();
+    let c = &v["combined"];
+    if v["best"].is_null() || beating < 2 {
+        assert!(c.is_null(), "{c}");
+        return;
+    }
+    assert_eq!(c["effects"][0], v["best"], "{c}");
+    assert_eq!(c["effects"].as_array().unwrap().len(), 2, "{c}");
+    let (g, lo, hi) = (c["heldout_gap"].as_f64().unwrap(), c["interval"][0].as_f64().unwrap(), c["interval"][1].as_f64().unwrap());
+    assert!(g.is_finite() && lo <= hi && g >= 0.0, "{c}");
+    assert_eq!(c["improvement_over_singles"].as_array().unwrap().len(), 2, "{c}");
 }
 
 /// The true effect is first or indistinguishable from the first, and cuts the held-out gap
@@ -97,6 +122,7 @@ fn check_found(v: &Value, truth: &str) {
     let first = ranking[0]["effect"].as_str().unwrap();
     let indist: Vec<&str> = v["indistinguishable"].as_array().unwrap().iter().map(|e| e.as_str().unwrap()).collect();
     assert!(first == truth || indist.contains(&truth), "{truth} neither first nor indistinguishable: {s}");
+    check_combined(v);
     let m = ranking.iter().find(|m| m["effect"] == truth).unwrap();
     assert!(m["reduction"].as_f64().unwrap() >= 0.5, "{truth} closes less than half the gap: {s}");
     let lo = m["interval"][0].as_f64().unwrap();
@@ -186,6 +212,7 @@ fn no_effect_no_best() {
     let v = diagnose(&[(&a, &setup("test3")), (&b, &setup("test2"))], &d.join("out"));
     eprintln!("none: {}", summary(&v));
     assert!(v["best"].is_null(), "an effect was declared best on data without one: {}", summary(&v));
+    assert!(v["combined"].is_null(), "a combination was fitted without a best effect");
     // where the simulated grains come from: three layers of the fill, deeper and deeper
     for c in v["where"]["conditions"].as_array().unwrap() {
         let layers = c["launch_depth"].as_array().unwrap();

@@ -43,6 +43,11 @@
 //!   improvement (baseline − effect) lies above 0; otherwise `best` is null. Effects whose
 //!   intervals overlap the top-ranked effect's are `indistinguishable` (the top one included
 //!   when any other overlaps).
+//! - **How far.** Per tooth, centre of mass and dispersion before and after the top-ranked
+//!   effect, with bootstrap intervals over runs; and, when two candidates each beat the
+//!   baseline, the two fitted together (GA starts from both single fits and the baseline),
+//!   with paired intervals of its improvement over each alone. The combination is reported
+//!   beside the ranking, not in it: `best` stays a single effect.
 //! - **Known sled motion.** A setup may state the sled's motion after the launch
 //!   ([measurement] `motion_delay_s`, `motion_return_speed_m_s`; e.g. the POC profile of Test
 //!   1 returns at once at v_d ≈ 0.05 m/s, 5.3.1). The baseline and the other candidates
@@ -237,25 +242,30 @@ pub struct Joint<'a> {
     pub engine: &'a dyn BatchEvaluator,
     pub conditions: &'a [Condition],
     pub shared: Vec<Param>,
-    pub effect: Option<EffectKind>,
-    /// Indices of the effect's parameters that are fitted: all of them, except sled-motion
-    /// values that every setup states (`KnownMotion`).
-    pub effect_free: Vec<usize>,
+    /// The effects switched on (none for the baseline, two for a combination).
+    pub effects: Vec<EffectKind>,
+    /// The effects' fitted parameters, as (index into `effects`, parameter index): all of
+    /// them, except sled-motion values that every setup states (`KnownMotion`).
+    pub effect_free: Vec<(usize, usize)>,
 }
 
 impl<'a> Joint<'a> {
-    pub fn new(engine: &'a dyn BatchEvaluator, conditions: &'a [Condition], mut shared: Vec<Param>, effect: Option<EffectKind>) -> Self {
-        if effect == Some(EffectKind::QuadraticDrag) {
+    pub fn new(engine: &'a dyn BatchEvaluator, conditions: &'a [Condition], mut shared: Vec<Param>, effects: &[EffectKind]) -> Self {
+        if effects.contains(&EffectKind::QuadraticDrag) {
             // Schiller-Naumann drag replaces the linear law: k_drag would be a dead parameter
             // (the setups' own value only marks which of them are in air)
             shared.retain(|p| *p != Param::KDrag);
         }
-        let effect_free = match effect {
-            None => Vec::new(),
-            Some(EffectKind::SledMotion) => (0..2).filter(|i| conditions.iter().any(|c| c.motion.get(*i).is_none())).collect(),
-            Some(e) => (0..e.bounds().len()).collect(),
-        };
-        Joint { engine, conditions, shared, effect, effect_free }
+        let mut effect_free = Vec::new();
+        for (k, e) in effects.iter().enumerate() {
+            for i in 0..e.bounds().len() {
+                let stated_everywhere = *e == EffectKind::SledMotion && conditions.iter().all(|c| c.motion.get(i).is_some());
+                if !stated_everywhere {
+                    effect_free.push((k, i));
+                }
+            }
+        }
+        Joint { engine, conditions, shared, effects: effects.to_vec(), effect_free }
     }
 
     pub fn dim(&self) -> usize {
@@ -264,30 +274,34 @@ impl<'a> Joint<'a> {
 
     pub fn bounds(&self) -> (Vec<f64>, Vec<f64>) {
         let mut b: Vec<(f64, f64)> = self.shared.iter().map(|p| p.bounds()).collect();
-        if let Some(e) = self.effect {
-            b.extend(self.effect_free.iter().map(|i| e.bounds()[*i]));
-        }
+        b.extend(self.effect_free.iter().map(|(k, i)| self.effects[*k].bounds()[*i]));
         b.into_iter().unzip()
     }
 
-    /// Parameter names, shared first.
+    /// Parameter names, shared first (effect parameter names are unique across effects).
     pub fn names(&self) -> Vec<&'static str> {
         let mut n: Vec<&'static str> = self.shared.iter().map(|p| p.name()).collect();
-        if let Some(e) = self.effect {
-            n.extend(self.effect_free.iter().map(|i| e.param_names()[*i]));
-        }
+        n.extend(self.effect_free.iter().map(|(k, i)| self.effects[*k].param_names()[*i]));
         n
     }
 
-    /// A start from a baseline point: the effect's fitted parameters at their neutral values
-    /// (`EffectKind::neutral`), where the effect has them. That is the baseline itself (a
-    /// nested model) unless a setup states its sled motion, which stays on: then it is the
-    /// baseline's collision/drag with the stated motions, a start near the baseline's error.
-    pub fn start_from_baseline(&self, baseline_x: &[f64]) -> Option<Vec<f64>> {
-        let mut v = baseline_x.to_vec();
-        if let Some(e) = self.effect {
-            let off = e.neutral()?;
-            v.extend(self.effect_free.iter().map(|i| off[*i]));
+    /// A start for this model from another model's point (`names`, `x`): each parameter
+    /// takes the other model's value where it has one, an effect parameter the other lacks
+    /// its neutral value (`EffectKind::neutral`). From the baseline that is the baseline
+    /// itself (a nested model) unless a setup states its sled motion, which stays on; none
+    /// when a parameter has no such value (quadratic drag).
+    pub fn start_from(&self, names: &[&'static str], x: &[f64]) -> Option<Vec<f64>> {
+        let own = self.names();
+        let mut v = Vec::with_capacity(own.len());
+        for (j, n) in own.iter().enumerate() {
+            if let Some(p) = names.iter().position(|m| m == n) {
+                v.push(x[p]);
+            } else if j >= self.shared.len() {
+                let (k, i) = self.effect_free[j - self.shared.len()];
+                v.push(self.effects[k].neutral()?[i]);
+            } else {
+                return None;
+            }
         }
         Some(v)
     }
@@ -302,11 +316,14 @@ impl<'a> Joint<'a> {
             }
             p.apply(&mut s, *v);
         }
-        if let Some(e) = self.effect {
+        for (k, e) in self.effects.iter().enumerate() {
+            let e = *e;
             // the effect's full parameter vector: fitted values, then what the setup states
             let mut v: Vec<f64> = e.bounds().iter().map(|b| b.0).collect();
-            for (i, xv) in self.effect_free.iter().zip(&x[self.shared.len()..]) {
-                v[*i] = *xv;
+            for ((ek, i), xv) in self.effect_free.iter().zip(&x[self.shared.len()..]) {
+                if *ek == k {
+                    v[*i] = *xv;
+                }
             }
             if e == EffectKind::SledMotion {
                 for (i, vi) in v.iter_mut().enumerate() {
@@ -458,8 +475,9 @@ pub struct Settings {
 /// One model's cross-validated result.
 #[derive(Clone, Debug)]
 pub struct ModelResult {
-    /// None = the baseline.
-    pub effect: Option<EffectKind>,
+    /// The effects switched on: none for the baseline, one for a candidate, two for the
+    /// combination of the two best.
+    pub effects: Vec<EffectKind>,
     pub names: Vec<&'static str>,
     /// Fit on all runs.
     pub full: JointFit,
@@ -486,8 +504,19 @@ pub struct ModelResult {
 }
 
 impl ModelResult {
-    pub fn name(&self) -> &'static str {
-        self.effect.map_or("baseline", |e| e.name())
+    pub fn name(&self) -> String {
+        if self.effects.is_empty() {
+            "baseline".into()
+        } else {
+            self.effects.iter().map(|e| e.name()).collect::<Vec<_>>().join("+")
+        }
+    }
+    /// The candidate effect, when this is a one-effect model.
+    pub fn single(&self) -> Option<EffectKind> {
+        match self.effects[..] {
+            [e] => Some(e),
+            _ => None,
+        }
     }
     pub fn params_object(&self) -> Value {
         let mut m = Map::new();
@@ -627,11 +656,23 @@ pub struct Diagnosis {
     pub ranking: Vec<ModelResult>,
     pub best: Option<EffectKind>,
     pub indistinguishable: Vec<EffectKind>,
+    /// The two best effects fitted together, when two beat the baseline.
+    pub combined: Option<Combined>,
     pub where_: Vec<WhereCondition>,
     pub gap: Vec<GapCondition>,
     pub notes: Vec<String>,
     pub particles: u32,
     pub engine: String,
+}
+
+/// The two best effects switched on together.
+#[derive(Clone, Debug)]
+pub struct Combined {
+    /// Its `improvement_interval` is against the baseline.
+    pub model: ModelResult,
+    /// Per effect of the pair (in `model.effects` order): paired bootstrap interval of
+    /// (that effect alone − the combination)'s held-out gap, %².
+    pub improvement_over_singles: Vec<[f64; 2]>,
 }
 
 impl Diagnosis {
@@ -672,24 +713,27 @@ fn cross_validate(
     joint: &Joint,
     k: usize,
     budget: Budget,
-    baseline: Option<&ModelResult>,
+    start_models: &[&ModelResult],
     log: &mut dyn FnMut(String),
 ) -> anyhow::Result<ModelResult> {
     let conds = joint.conditions;
     // parameters beyond the baseline's (quadratic drag trades k_drag for its own two)
     let extra = joint.dim().saturating_sub(shared_params(conds).len());
-    // the baseline's point with the effect switched off, where the effect has such a setting
-    let nested = |x: &[f64]| -> Vec<Vec<f64>> { joint.start_from_baseline(x).into_iter().collect() };
+    // extra GA starts: the given models' points carried over (`Joint::start_from`), e.g. the
+    // baseline's with the effect switched off
+    let starts_at = |x_of: &dyn Fn(&ModelResult) -> &[f64]| -> Vec<Vec<f64>> {
+        start_models.iter().filter_map(|m| joint.start_from(&m.names, x_of(m))).collect()
+    };
     let all_targets: Vec<Target> = conds.iter().map(|c| c.target(&(0..c.runs.runs.len()).collect::<Vec<_>>())).collect();
-    let starts: Vec<Vec<f64>> = baseline.map(|b| nested(&b.full.x)).unwrap_or_default();
+    let starts = starts_at(&|m| &m.full.x);
     let full = fit_joint(joint, &all_targets, budget, &starts)?;
     let mut evaluations = full.evaluations;
     let mut fold_params = Vec::with_capacity(k);
     let mut predictions = vec![Vec::with_capacity(k); conds.len()];
     for f in 0..k {
         let targets: Vec<Target> = conds.iter().map(|c| c.target(&fold_indices(c.runs.runs.len(), k, f).0)).collect();
-        // the baseline's fold fit (never the full fit: it has seen the held-out runs)
-        let starts: Vec<Vec<f64>> = baseline.map(|b| nested(&b.fold_params[f])).unwrap_or_default();
+        // the start models' fold fits (never their full fits: those have seen the held-out runs)
+        let starts = starts_at(&|m| &m.fold_params[f]);
         let b = Budget { seed: budget.seed.wrapping_add(1 + f as u64), ..budget };
         let fit = fit_joint(joint, &targets, b, &starts)?;
         evaluations += fit.evaluations;
@@ -705,10 +749,10 @@ fn cross_validate(
         }
     }
     let heldout = heldout_by_condition.iter().sum();
-    let name = joint.effect.map_or("baseline", |e| e.name());
+    let name = if joint.effects.is_empty() { "baseline".to_string() } else { joint.effects.iter().map(|e| e.name()).collect::<Vec<_>>().join("+") };
     log(format!("diagnose: {name}: in-sample SSE {:.1} %², held-out gap {heldout:.1} %²", full.value));
     Ok(ModelResult {
-        effect: joint.effect,
+        effects: joint.effects.clone(),
         names: joint.names(),
         full,
         fold_params,
@@ -954,14 +998,14 @@ pub fn diagnose(
     let shared = shared_params(&conditions);
     let budget = settings.budget;
     let particles = conditions[0].base.sim.particles;
-    let joint_for = |effect| Joint::new(engine, &conditions, shared.clone(), effect);
+    let joint_for = |effects: &[EffectKind]| Joint::new(engine, &conditions, shared.clone(), effects);
 
     log(format!("diagnose: baseline ({} conditions, {k} folds)", conditions.len()));
-    let base = cross_validate(&joint_for(None), k, budget, None, log)?;
+    let base = cross_validate(&joint_for(&[]), k, budget, &[], log)?;
     let mut models = vec![base];
     for e in &effects {
         log(format!("diagnose: {}", e.name()));
-        let m = cross_validate(&joint_for(Some(*e)), k, budget, Some(&models[0]), log)?;
+        let m = cross_validate(&joint_for(&[*e]), k, budget, &[&models[0]], log)?;
         models.push(m);
     }
     bootstrap_heldout(&conditions, k, &mut models, settings.bootstrap, budget.seed);
@@ -976,18 +1020,37 @@ pub fn diagnose(
     ranking.sort_by(|a, b| a.score.total_cmp(&b.score).then(a.heldout.total_cmp(&b.heldout)));
     let top = ranking.first().context("no effect ranked")?;
     let best = (baseline.heldout > top.interval[1] && top.improvement_interval[0] > 0.0 && top.heldout < baseline.heldout)
-        .then_some(top.effect)
+        .then_some(top.single())
         .flatten();
     let overlaps = |a: [f64; 2], b: [f64; 2]| a[0] <= b[1] && b[0] <= a[1];
     let others: Vec<EffectKind> =
-        ranking[1..].iter().filter(|m| overlaps(m.interval, top.interval)).filter_map(|m| m.effect).collect();
+        ranking[1..].iter().filter(|m| overlaps(m.interval, top.interval)).filter_map(|m| m.single()).collect();
     let indistinguishable = if others.is_empty() {
         Vec::new()
     } else {
-        std::iter::once(top.effect).flatten().chain(others).collect()
+        std::iter::once(top.single()).flatten().chain(others).collect()
     };
 
-    let base_joint = joint_for(None);
+    // How far two effects go together: the two best candidates that each beat the baseline
+    // beyond the uncertainty, refitted jointly from both single fits (and the baseline's).
+    let beating: Vec<&ModelResult> = ranking.iter().filter(|m| m.improvement_interval[0] > 0.0 && m.heldout < baseline.heldout).take(2).collect();
+    let combined = if best.is_some() && beating.len() == 2 {
+        let pair: Vec<EffectKind> = beating.iter().filter_map(|m| m.single()).collect();
+        log(format!("diagnose: {} together", pair.iter().map(|e| e.name()).collect::<Vec<_>>().join(" + ")));
+        let m = cross_validate(&joint_for(&pair), k, budget, &[beating[0], beating[1], &baseline], log)?;
+        // the same paired resamples as the single models (the bootstrap is seeded)
+        let mut four = vec![baseline.clone(), beating[0].clone(), beating[1].clone(), m];
+        bootstrap_heldout(&conditions, k, &mut four, settings.bootstrap, budget.seed);
+        let mut m = four.pop().context("combined")?;
+        let diff = |a: &ModelResult| -> Vec<f64> { a.replicates.iter().zip(&m.replicates).map(|(x, y)| x - y).collect() };
+        let over_singles = vec![interval(&diff(&four[1])), interval(&diff(&four[2]))];
+        m.improvement_interval = interval(&diff(&four[0]));
+        Some(Combined { model: m, improvement_over_singles: over_singles })
+    } else {
+        None
+    };
+
+    let base_joint = joint_for(&[]);
     let mut where_ = Vec::new();
     let mut gap = Vec::new();
     for (c, cond) in conditions.iter().enumerate() {
@@ -1002,6 +1065,7 @@ pub fn diagnose(
         ranking,
         best,
         indistinguishable,
+        combined,
         where_,
         gap,
         notes,
@@ -1070,6 +1134,9 @@ pub fn to_json(d: &Diagnosis) -> Value {
                 "heldout_gap": num(m.heldout),
                 "reduction": num(1.0 - m.heldout / b.heldout),
                 "interval": [num(m.interval[0]), num(m.interval[1])],
+                "improvement_interval": [num(m.improvement_interval[0]), num(m.improvement_interval[1])],
+                "extra_params": m.extra_params,
+                "score": num(m.score),
                 "params": m.params_object(),
             })
         })
@@ -1129,6 +1196,17 @@ pub fn to_json(d: &Diagnosis) -> Value {
         "ranking": ranking,
         "best": d.best.map(|e| e.name()),
         "indistinguishable": d.indistinguishable.iter().map(|e| e.name()).collect::<Vec<_>>(),
+        "combined": d.combined.as_ref().map(|cb| json!({
+            "effects": cb.model.effects.iter().map(|e| e.name()).collect::<Vec<_>>(),
+            "heldout_gap": num(cb.model.heldout),
+            "interval": [num(cb.model.interval[0]), num(cb.model.interval[1])],
+            "reduction": num(1.0 - cb.model.heldout / d.baseline.heldout),
+            "improvement_interval": [num(cb.model.improvement_interval[0]), num(cb.model.improvement_interval[1])],
+            "improvement_over_singles": cb.model.effects.iter().zip(&cb.improvement_over_singles).map(|(e, i)| json!({"effect": e.name(), "interval": [num(i[0]), num(i[1])]})).collect::<Vec<_>>(),
+            "params": cb.model.params_object(),
+            "in_sample_sse": num(cb.model.full.value),
+            "bins": cb.model.full.bins,
+        })),
         "baseline": {
             "params": b.params_object(),
             "in_sample_sse": num(b.full.value),

@@ -266,6 +266,34 @@ pub fn to_markdown(d: &Diagnosis) -> String {
             let _ = writeln!(s, "| dispersion σ_x | {} {} | {} | {} |\n", f(g.dispersion[0], 3), iv(g.dispersion_interval, 3), f(g.dispersion[1], 3), f(g.dispersion[2], 3));
         }
     }
+    if let (Some(cb), Some(t)) = (&d.combined, d.gap_model()) {
+        let m = &cb.model;
+        let _ = writeln!(s, "## Two effects together: `{}`\n", m.name());
+        let _ = writeln!(
+            s,
+            "The two best candidates that each beat the baseline, refitted jointly (starting from both single fits): \
+             held-out gap {} %² {} (reduction {} % against the baseline; paired improvement over each effect alone: {}; \
+             an improvement only where the interval lies above 0). Fitted on all runs: {}; in-sample SSE {} %².\n",
+            f(m.heldout, 1),
+            iv(m.interval, 1),
+            f(100.0 * (1.0 - m.heldout / b.heldout), 1),
+            m.effects.iter().zip(&cb.improvement_over_singles).map(|(e, i)| format!("`{}` {} %²", e.name(), iv(*i, 1))).collect::<Vec<_>>().join(", "),
+            params_text(m),
+            f(m.full.value, 1)
+        );
+        for (ci, (c, w)) in d.conditions.iter().zip(&d.where_).enumerate() {
+            let teeth = c.teeth();
+            let idx: Vec<usize> = (0..w.shown_teeth).chain(std::iter::once(teeth)).collect();
+            let heads: Vec<String> = idx.iter().map(|j| if *j < w.shown_teeth { format!("tooth {}", j + 1) } else { "lost".into() }).collect();
+            let row = |label: &str, bins: &[f64]| format!("| {label} | {} |", idx.iter().map(|j| f(100.0 * bins[*j], 2)).collect::<Vec<_>>().join(" | "));
+            let _ = writeln!(s, "{}: % per tooth (fits on all runs)\n", c.name);
+            let _ = writeln!(s, "| model | {} |", heads.join(" | "));
+            let _ = writeln!(s, "|---|{}", "---|".repeat(idx.len()));
+            let _ = writeln!(s, "{}", row("measured", &d.gap[ci].measured));
+            let _ = writeln!(s, "{}", row(&t.name(), &t.full.bins[ci]));
+            let _ = writeln!(s, "{}\n", row(&m.name(), &m.full.bins[ci]));
+        }
+    }
     let _ = writeln!(s, "Plots: `residuals.svg`, `ranking.svg`, `distributions.svg`; numbers: `diagnosis.json`.");
     s
 }
@@ -425,17 +453,17 @@ pub fn ranking_svg(d: &Diagnosis) -> String {
     let _ = writeln!(s, r##"<line x1="{bx:.1}" y1="{y0:.1}" x2="{bx:.1}" y2="{:.1}" stroke="#888" stroke-dasharray="4 3"/>"##, y0 + h);
     for (i, m) in models.iter().enumerate() {
         let y = y0 + row * (i as f64 + 0.5);
-        let best = m.effect.is_some() && m.effect == d.best;
-        let colour = if m.effect.is_none() {
+        let best = m.single().is_some() && m.single() == d.best;
+        let colour = if m.effects.is_empty() {
             "#555"
         } else if best {
             "#1e8449"
-        } else if m.effect.is_some_and(|e| d.indistinguishable.contains(&e)) {
+        } else if m.single().is_some_and(|e| d.indistinguishable.contains(&e)) {
             "#d68910"
         } else {
             "#2c6fbb"
         };
-        let _ = writeln!(s, r##"<text x="{:.1}" y="{:.1}" font-size="12" text-anchor="end">{}</text>"##, x0 - 8.0, y + 4.0, esc(m.name()));
+        let _ = writeln!(s, r##"<text x="{:.1}" y="{:.1}" font-size="12" text-anchor="end">{}</text>"##, x0 - 8.0, y + 4.0, esc(&m.name()));
         let _ = writeln!(s, r##"<line x1="{:.1}" y1="{y:.1}" x2="{:.1}" y2="{y:.1}" stroke="{colour}" stroke-width="3"/>"##, xp(m.interval[0]), xp(m.interval[1]));
         let _ = writeln!(s, r##"<circle cx="{:.1}" cy="{y:.1}" r="5" fill="{colour}"/>"##, xp(m.heldout));
     }
@@ -454,7 +482,7 @@ pub fn distributions_svg(d: &Diagnosis) -> String {
     let (pw, ph) = (560.0, 240.0);
     let n = d.conditions.len();
     let mut s = svg_open(pw + 100.0, (ph + 80.0) * n as f64 + 30.0);
-    let effect = d.gap_model().map_or("effect", |m| m.name());
+    let effect = d.gap_model().map_or("effect".to_string(), |m| m.name());
     for (i, ((c, g), w)) in d.conditions.iter().zip(&d.gap).zip(&d.where_).enumerate() {
         let teeth = c.teeth();
         let idx: Vec<usize> = (0..w.shown_teeth).chain(std::iter::once(teeth)).collect();
