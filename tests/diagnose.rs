@@ -130,13 +130,21 @@ fn check_found(v: &Value, truth: &str) {
     assert!(lo <= hi && lo >= 0.0, "{s}");
 }
 
+/// A two-condition campaign: each (setup, effect, seed) synthesised into `dir`, then
+/// diagnosed jointly with every candidate.
+fn campaign(dir: &Path, conditions: [(&str, Option<&str>, u64); 2]) -> Value {
+    let data: Vec<PathBuf> = (0..conditions.len()).map(|i| dir.join(format!("c{i}.csv"))).collect();
+    for ((setup, effect, seed), out) in conditions.iter().zip(&data) {
+        synth(setup, *effect, *seed, out);
+    }
+    let pairs: Vec<(&Path, &str)> = data.iter().zip(&conditions).map(|(p, c)| (p.as_path(), c.0)).collect();
+    diagnose(&pairs, &dir.join("out"))
+}
+
 #[test]
 fn launch_spread_is_found() {
     let d = tmp("ls");
-    let (a, b) = (d.join("a.csv"), d.join("b.csv"));
-    synth(&setup("test3"), Some("launch-spread=0.5,8"), 3, &a);
-    synth(&setup("test2"), Some("launch-spread=0.5,8"), 13, &b);
-    let v = diagnose(&[(&a, &setup("test3")), (&b, &setup("test2"))], &d.join("out"));
+    let v = campaign(&d, [(&setup("test3"), Some("launch-spread=0.5,8"), 3), (&setup("test2"), Some("launch-spread=0.5,8"), 13)]);
     check_found(&v, "launch-spread");
     // where: the conditions are reported tooth by tooth, with the first-flight split
     let w = &v["where"]["conditions"];
@@ -151,10 +159,7 @@ fn launch_spread_is_found() {
 #[test]
 fn polydispersity_is_found() {
     let d = tmp("pd");
-    let (a, b) = (d.join("a.csv"), d.join("b.csv"));
-    synth(&setup("test3"), Some("polydisperse=0.6"), 4, &a);
-    synth(&setup("test2"), Some("polydisperse=0.6"), 14, &b);
-    let v = diagnose(&[(&a, &setup("test3")), (&b, &setup("test2"))], &d.join("out"));
+    let v = campaign(&d, [(&setup("test3"), Some("polydisperse=0.6"), 4), (&setup("test2"), Some("polydisperse=0.6"), 14)]);
     check_found(&v, "polydisperse");
     std::fs::remove_dir_all(&d).ok();
 }
@@ -163,10 +168,7 @@ fn polydispersity_is_found() {
 fn impact_scatter_is_found() {
     let d = tmp("is");
     let fast = fast_setup(&d, "1.2");
-    let (a, b) = (d.join("a.csv"), d.join("b.csv"));
-    synth(&setup("test3"), Some("impact-scatter=12"), 1, &a);
-    synth(&fast, Some("impact-scatter=12"), 21, &b);
-    let v = diagnose(&[(&a, &setup("test3")), (&b, &fast)], &d.join("out"));
+    let v = campaign(&d, [(&setup("test3"), Some("impact-scatter=12"), 1), (&fast, Some("impact-scatter=12"), 21)]);
     check_found(&v, "impact-scatter");
     std::fs::remove_dir_all(&d).ok();
 }
@@ -177,10 +179,7 @@ fn sled_motion_is_found() {
     // states the POC profile's return (at once, 0.05 m/s); Test 2's delayed profile is left
     // for the fit. The data come from a POC-like return and from a delayed, slower one.
     let d = tmp("sm");
-    let (a, b) = (d.join("a.csv"), d.join("b.csv"));
-    synth(&setup("test1"), Some("sled-motion=0,0.05"), 5, &a);
-    synth(&setup("test2"), Some("sled-motion=0.04,0.03"), 15, &b);
-    let v = diagnose(&[(&a, &setup("test1")), (&b, &setup("test2"))], &d.join("out"));
+    let v = campaign(&d, [(&setup("test1"), Some("sled-motion=0,0.05"), 5), (&setup("test2"), Some("sled-motion=0.04,0.03"), 15)]);
     check_found(&v, "sled-motion");
     // only the delayed profile's values were fitted
     let m = v["ranking"].as_array().unwrap().iter().find(|m| m["effect"] == "sled-motion").unwrap();
@@ -195,10 +194,7 @@ fn quadratic_drag_is_found() {
     // cannot serve both.
     let d = tmp("qd");
     let fast = fast_setup(&d, "1.4");
-    let (a, b) = (d.join("a.csv"), d.join("b.csv"));
-    synth(&setup("test3"), Some("quadratic-drag=150e-6,2500"), 6, &a);
-    synth(&fast, Some("quadratic-drag=150e-6,2500"), 16, &b);
-    let v = diagnose(&[(&a, &setup("test3")), (&b, &fast)], &d.join("out"));
+    let v = campaign(&d, [(&setup("test3"), Some("quadratic-drag=150e-6,2500"), 6), (&fast, Some("quadratic-drag=150e-6,2500"), 16)]);
     check_found(&v, "quadratic-drag");
     std::fs::remove_dir_all(&d).ok();
 }
@@ -206,10 +202,7 @@ fn quadratic_drag_is_found() {
 #[test]
 fn no_effect_no_best() {
     let d = tmp("none");
-    let (a, b) = (d.join("a.csv"), d.join("b.csv"));
-    synth(&setup("test3"), None, 2, &a);
-    synth(&setup("test2"), None, 12, &b);
-    let v = diagnose(&[(&a, &setup("test3")), (&b, &setup("test2"))], &d.join("out"));
+    let v = campaign(&d, [(&setup("test3"), None, 2), (&setup("test2"), None, 12)]);
     eprintln!("none: {}", summary(&v));
     assert!(v["best"].is_null(), "an effect was declared best on data without one: {}", summary(&v));
     assert!(v["combined"].is_null(), "a combination was fitted without a best effect");

@@ -130,9 +130,8 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         if let Err(invalid) = crate::model::prepare(&scenario, &design) {
             bail!("--setup {}: the design cannot be simulated ({}): {invalid}", setup.display(), invalid.rule());
         }
-        let resolution_g = config
-            .measurement
-            .as_ref()
+        let measurement = config.measurement.as_ref();
+        let resolution_g = measurement
             .and_then(|m| m.scale_resolution_g)
             .unwrap_or_else(|| objective::infer_resolution(runs.runs.iter().flat_map(|r| r.teeth_g.iter().copied())));
         let mut name = stem(data);
@@ -149,10 +148,10 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
             design,
             resolution_g,
             motion: KnownMotion {
-                delay_s: config.measurement.as_ref().and_then(|m| m.motion_delay_s),
-                return_speed_m_s: config.measurement.as_ref().and_then(|m| m.motion_return_speed_m_s),
+                delay_s: measurement.and_then(|m| m.motion_delay_s),
+                return_speed_m_s: measurement.and_then(|m| m.motion_return_speed_m_s),
             },
-            motion_profile: config.measurement.as_ref().and_then(|m| m.motion_profile.clone()),
+            motion_profile: measurement.and_then(|m| m.motion_profile.clone()),
         });
     }
     let seed = seed.unwrap_or(0);

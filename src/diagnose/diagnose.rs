@@ -503,13 +503,25 @@ pub struct ModelResult {
     pub evaluations: u64,
 }
 
+/// A model's name: `baseline`, an effect's name, or the effects' names joined by `+`.
+fn model_name(effects: &[EffectKind]) -> String {
+    if effects.is_empty() {
+        "baseline".into()
+    } else {
+        effects.iter().map(|e| e.name()).collect::<Vec<_>>().join("+")
+    }
+}
+
+/// Paired bootstrap interval of `a`'s held-out gap minus `b`'s (the replicates share their
+/// resamples, `bootstrap_heldout`): above 0 when `b` improves on `a`.
+fn paired_interval(a: &ModelResult, b: &ModelResult) -> [f64; 2] {
+    let d: Vec<f64> = a.replicates.iter().zip(&b.replicates).map(|(x, y)| x - y).collect();
+    interval(&d)
+}
+
 impl ModelResult {
     pub fn name(&self) -> String {
-        if self.effects.is_empty() {
-            "baseline".into()
-        } else {
-            self.effects.iter().map(|e| e.name()).collect::<Vec<_>>().join("+")
-        }
+        model_name(&self.effects)
     }
     /// The candidate effect, when this is a one-effect model.
     pub fn single(&self) -> Option<EffectKind> {
@@ -749,7 +761,7 @@ fn cross_validate(
         }
     }
     let heldout = heldout_by_condition.iter().sum();
-    let name = if joint.effects.is_empty() { "baseline".to_string() } else { joint.effects.iter().map(|e| e.name()).collect::<Vec<_>>().join("+") };
+    let name = model_name(&joint.effects);
     log(format!("diagnose: {name}: in-sample SSE {:.1} %², held-out gap {heldout:.1} %²", full.value));
     Ok(ModelResult {
         effects: joint.effects.clone(),
@@ -769,7 +781,9 @@ fn cross_validate(
     })
 }
 
-/// The bootstrap replicates of every model's held-out gap (paired: one resample for all).
+/// The bootstrap replicates of every model's held-out gap (paired: one resample for all; the
+/// resamples depend only on `seed`, the conditions and `k`, so calls with the same ones pair
+/// their models too).
 fn bootstrap_heldout(conds: &[Condition], k: usize, models: &mut [ModelResult], replicates: usize, seed: u64) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xD1A6_0005);
     for m in models.iter_mut() {
@@ -1014,8 +1028,7 @@ pub fn diagnose(
     baseline.improvement_interval = [0.0, 0.0];
     let mut ranking: Vec<ModelResult> = models.collect();
     for m in ranking.iter_mut() {
-        let d: Vec<f64> = baseline.replicates.iter().zip(&m.replicates).map(|(b, e)| b - e).collect();
-        m.improvement_interval = interval(&d);
+        m.improvement_interval = paired_interval(&baseline, m);
     }
     ranking.sort_by(|a, b| a.score.total_cmp(&b.score).then(a.heldout.total_cmp(&b.heldout)));
     let top = ranking.first().context("no effect ranked")?;
@@ -1037,15 +1050,13 @@ pub fn diagnose(
     let combined = if best.is_some() && beating.len() == 2 {
         let pair: Vec<EffectKind> = beating.iter().filter_map(|m| m.single()).collect();
         log(format!("diagnose: {} together", pair.iter().map(|e| e.name()).collect::<Vec<_>>().join(" + ")));
-        let m = cross_validate(&joint_for(&pair), k, budget, &[beating[0], beating[1], &baseline], log)?;
-        // the same paired resamples as the single models (the bootstrap is seeded)
-        let mut four = vec![baseline.clone(), beating[0].clone(), beating[1].clone(), m];
-        bootstrap_heldout(&conditions, k, &mut four, settings.bootstrap, budget.seed);
-        let mut m = four.pop().context("combined")?;
-        let diff = |a: &ModelResult| -> Vec<f64> { a.replicates.iter().zip(&m.replicates).map(|(x, y)| x - y).collect() };
-        let over_singles = vec![interval(&diff(&four[1])), interval(&diff(&four[2]))];
-        m.improvement_interval = interval(&diff(&four[0]));
-        Some(Combined { model: m, improvement_over_singles: over_singles })
+        let mut m = cross_validate(&joint_for(&pair), k, budget, &[beating[0], beating[1], &baseline], log)?;
+        // the resamples depend only on the seed, conditions and folds, so bootstrapping the
+        // pair alone pairs it with the models bootstrapped above
+        bootstrap_heldout(&conditions, k, std::slice::from_mut(&mut m), settings.bootstrap, budget.seed);
+        m.improvement_interval = paired_interval(&baseline, &m);
+        let improvement_over_singles = beating.iter().map(|single| paired_interval(single, &m)).collect();
+        Some(Combined { model: m, improvement_over_singles })
     } else {
         None
     };

@@ -355,13 +355,18 @@ mod tests {
         assert!((s - 0.5).abs() < 1e-15 && (p[0] - 1.0).abs() < 1e-15 && p[1].abs() < 1e-15);
     }
 
-    #[test]
-    fn exact_boundary_agrees_with_a_fine_polygon() {
+    /// The physical fill of lunar solution C (α 35°, launch offset 18.434°, AOR 58°).
+    fn solution_c_fill() -> Fill {
         use crate::model::{geometry::{check_design, Profile}, Design};
         let d = Design::lunar_solution_c();
         let prof = Profile::new(&d, check_design(&d).unwrap(), 35.0, 10);
         let ang = (35.0f64 + 18.434 + d.delta_deg).to_radians();
-        let f = build_fill(&prof, 1.625, &d, ang, 58.0, PhysicsMode::Physical).unwrap();
+        build_fill(&prof, 1.625, &d, ang, 58.0, PhysicsMode::Physical).unwrap()
+    }
+
+    #[test]
+    fn exact_boundary_agrees_with_a_fine_polygon() {
+        let f = solution_c_fill();
         let b = f.exact.as_ref().unwrap();
         let (mut disagree, mut inside) = (0, 0);
         for i in 1..20_000u64 {
@@ -379,11 +384,7 @@ mod tests {
 
     #[test]
     fn the_fill_lies_below_its_surface_line() {
-        use crate::model::{geometry::{check_design, Profile}, Design};
-        let d = Design::lunar_solution_c();
-        let prof = Profile::new(&d, check_design(&d).unwrap(), 35.0, 10);
-        let ang = (35.0f64 + 18.434 + d.delta_deg).to_radians();
-        let f = build_fill(&prof, 1.625, &d, ang, 58.0, PhysicsMode::Physical).unwrap();
+        let f = solution_c_fill();
         assert!(f.depth(f.p_fill) < 1e-15);
         // every vertex on one side (the surface is an edge of the fill), some well below it
         let signed: Vec<f64> = f.polygon.iter().map(|v| f.signed_surface_distance(*v)).collect();
