@@ -31,7 +31,7 @@ fn effects_are_off_by_default_and_each_one_moves_the_distribution() {
     let cases = [
         Effects { impact_scatter: Some(ImpactScatter { sigma_deg: 10.0 }), ..Default::default() },
         Effects { launch_spread: Some(LaunchSpread { speed_spread: 0.4, angle_sigma_deg: 5.0 }), ..Default::default() },
-        Effects { polydisperse: Some(Polydisperse { sigma_ln: 0.5 }), ..Default::default() },
+        Effects { polydisperse: Some(Polydisperse { sigma_ln: 0.5, form: Default::default() }), ..Default::default() },
     ];
     for e in cases {
         let mut s2 = s.clone();
@@ -48,7 +48,7 @@ fn polydispersity_does_nothing_in_vacuum() {
     s.sim.particles = 200;
     let d = Design::lunar_solution_c();
     let base = sim(&s, &d);
-    s.effects.polydisperse = Some(Polydisperse { sigma_ln: 0.5 });
+    s.effects.polydisperse = Some(Polydisperse { sigma_ln: 0.5, form: Default::default() });
     assert_eq!(base.distribution, sim(&s, &d).distribution);
 }
 

@@ -70,7 +70,7 @@ fn gpu_conforms_with_each_effect_switched_on() {
     for (name, e) in [
         ("impact-scatter", sawtooth::model::effects::Effects { impact_scatter: Some(ImpactScatter { sigma_deg: 8.0 }), ..Default::default() }),
         ("launch-spread", sawtooth::model::effects::Effects { launch_spread: Some(LaunchSpread { speed_spread: 0.4, angle_sigma_deg: 5.0 }), ..Default::default() }),
-        ("polydisperse", sawtooth::model::effects::Effects { polydisperse: Some(Polydisperse { sigma_ln: 0.5 }), ..Default::default() }),
+        ("polydisperse", sawtooth::model::effects::Effects { polydisperse: Some(Polydisperse { sigma_ln: 0.5, form: Default::default() }), ..Default::default() }),
     ] {
         for (env, base) in [("lunar", Scenario::lunar()), ("earth", Scenario::earth())] {
             let mut s = base;

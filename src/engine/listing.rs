@@ -167,6 +167,7 @@ impl ParticleEngine for ListingEngine {
             launch_speed_spread: 0.0,
             launch_angle_sigma: 0.0,
             size_sigma_ln: 0.0,
+            size_uniform: false,
             sled_delay: 0.0,
             sled_speed: 0.0,
             qd_k0: 0.0,

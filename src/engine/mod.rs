@@ -132,12 +132,38 @@ pub fn evaluate_batch(engine: &dyn ParticleEngine, scenario: &Scenario, designs:
         .collect()
 }
 
+/// Several groups as one parallel job: every (group, design) pair is a task, so groups of one
+/// design each (a calibration: candidates × conditions) keep every core busy.
+pub fn evaluate_groups_flat(engine: &dyn ParticleEngine, groups: &[(Scenario, Vec<Design>)]) -> Vec<Vec<Result<Evaluation, Invalid>>> {
+    let contexts: Vec<Context> = groups.iter().map(|(s, _)| Context::new(s)).collect();
+    let tasks: Vec<(usize, &Design)> = groups.iter().enumerate().flat_map(|(g, (_, ds))| ds.iter().map(move |d| (g, d))).collect();
+    let mut flat: Vec<Result<Evaluation, Invalid>> = tasks
+        .par_iter()
+        .with_max_len(1)
+        .map(|(g, d)| {
+            let scenario = &groups[*g].0;
+            let prep = prepare(scenario, d)?;
+            let run = engine.run(&prep, &contexts[*g], None);
+            Ok(finish(scenario, &prep, &run))
+        })
+        .collect();
+    let mut out = Vec::with_capacity(groups.len());
+    for (_, ds) in groups.iter().rev() {
+        out.push(flat.split_off(flat.len() - ds.len()));
+    }
+    out.reverse();
+    out
+}
+
 impl BatchEvaluator for cpu::CpuEngine {
     fn backend(&self) -> &'static str {
         ParticleEngine::name(self)
     }
     fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
         evaluate_batch(self, scenario, designs)
+    }
+    fn evaluate_groups(&self, groups: &[(Scenario, Vec<Design>)]) -> Vec<Vec<Result<Evaluation, Invalid>>> {
+        evaluate_groups_flat(self, groups)
     }
 }
 
@@ -197,6 +223,18 @@ pub fn particle_engine(kind: EngineKind) -> Box<dyn Engine> {
     }
 }
 
+/// Effects only the `cpu` kernel follows: its piecewise flights (sled motion, quadratic drag)
+/// and the uniform size law.
+pub fn cpu_only_effects(e: &crate::model::effects::Effects) -> Vec<&'static str> {
+    use crate::model::effects::{EffectKind, SizeForm};
+    let mut v: Vec<&'static str> =
+        [EffectKind::SledMotion, EffectKind::QuadraticDrag].into_iter().filter(|k| e.is_on(*k)).map(EffectKind::name).collect();
+    if e.polydisperse.is_some_and(|p| p.form == SizeForm::Uniform) {
+        v.push("polydisperse (uniform sizes)");
+    }
+    v
+}
+
 /// The engine for a scenario: the effects of issue 5 live in the `cpu` and `gpu` kernels;
 /// the `listing` port (the thesis's algorithm) refuses a scenario that switches one on.
 pub fn make_engine_for(kind: EngineKind, scenario: &Scenario) -> anyhow::Result<Box<dyn Engine>> {
@@ -204,12 +242,13 @@ pub fn make_engine_for(kind: EngineKind, scenario: &Scenario) -> anyhow::Result<
         let active = scenario.effects.active().join(", ");
         anyhow::bail!("--engine listing: the effects ({active}) are in the cpu and gpu engines only; use --engine cpu");
     }
-    if scenario.effects.sled_motion.is_some() || scenario.effects.quadratic_drag.is_some() {
-        // piecewise flights (sled motion, quadratic drag) are in the cpu kernel only
+    let cpu_only = cpu_only_effects(&scenario.effects);
+    if !cpu_only.is_empty() {
+        let list = cpu_only.join(", ");
         match kind {
-            EngineKind::Gpu => anyhow::bail!("--engine gpu: the sled-motion and quadratic-drag effects are in the cpu engine only; use --engine cpu"),
+            EngineKind::Gpu => anyhow::bail!("--engine gpu: {list} are in the cpu engine only; use --engine cpu"),
             EngineKind::Auto => {
-                eprintln!("engine auto: sled-motion/quadratic-drag are in the cpu engine only, using it");
+                eprintln!("engine auto: {list} are in the cpu engine only, using it");
                 return Ok(particle_engine(EngineKind::Cpu));
             }
             _ => {}

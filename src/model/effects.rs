@@ -22,13 +22,40 @@ pub struct LaunchSpread {
     pub angle_sigma_deg: f64,
 }
 
-/// Particle diameters log-normal around the reference size whose drag k_drag describes:
-/// d/d_ref = exp(sigma_ln z), z ~ N(0, 1); Stokes b/m ∝ 1/d² (Eq. 4.16, 4.20), so each
-/// grain's k_drag is k_drag (d_ref/d)². Only matters with drag.
+/// Particle diameters vary, and the measurement weighs grains (a tooth's mass counts each
+/// grain by its mass ∝ d³). Stokes b/m ∝ 1/d² (Eq. 4.16, 4.20), so each grain's k_drag is
+/// k_drag (d_ref/d)². Only matters with drag.
+///
+/// **Each simulated grain stands for an equal mass.** The simulated diameters are drawn
+/// from the *mass-weighted* size law q₃(d) ∝ d³ q₀(d) (importance sampling with equal
+/// weights), so the engines count grains and the counts are mass fractions — no weight
+/// variance, and the GPU reduction stays a count. `form` is the number-weighted law q₀:
+/// - `lognormal` (default): d/d_ref = exp(sigma_ln z), z ~ N(0, 1). A log-normal q₀ with
+///   median d₀ has a log-normal q₃ with the same σ and median d₀ e^{3σ²}; `d_ref` is that
+///   mass-median size, the one k_drag describes.
+/// - `uniform`: q₀ uniform on [d_ref e^{-√3 σ}, d_ref e^{√3 σ}] (the same log-sd for small
+///   σ); q₃ ∝ d³ on that range, drawn by inverting its CDF: d⁴ = a⁴ + u (b⁴ − a⁴).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Polydisperse {
     pub sigma_ln: f64,
+    #[serde(default, skip_serializing_if = "SizeForm::is_lognormal")]
+    pub form: SizeForm,
+}
+
+/// The number-weighted size law of [`Polydisperse`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SizeForm {
+    #[default]
+    Lognormal,
+    Uniform,
+}
+
+impl SizeForm {
+    fn is_lognormal(&self) -> bool {
+        *self == SizeForm::Lognormal
+    }
 }
 
 /// The sled keeps moving after the launch (the thesis assumes it stops): it rests for
@@ -83,8 +110,139 @@ pub struct Effects {
     pub polydisperse: Option<Polydisperse>,
 }
 
-/// Names as the CLI spells them.
-pub const EFFECT_NAMES: [&str; 5] = ["impact-scatter", "launch-spread", "polydisperse", "sled-motion", "quadratic-drag"];
+/// One optional effect, described once: its name (CLI, configs, outputs), its parameters
+/// (config keys, the bounds `validate` enforces, the narrower bounds a calibration searches,
+/// the values at which it does nothing) and how it is switched on in [`Effects`]. Every list
+/// of effects in the crate (CLI parsing, validation, the engines' support checks, the
+/// diagnosis's candidates) is derived from [`EffectKind::ALL`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum EffectKind {
+    ImpactScatter,
+    LaunchSpread,
+    Polydisperse,
+    SledMotion,
+    QuadraticDrag,
+}
+
+impl EffectKind {
+    pub const ALL: [EffectKind; 5] =
+        [EffectKind::ImpactScatter, EffectKind::LaunchSpread, EffectKind::Polydisperse, EffectKind::SledMotion, EffectKind::QuadraticDrag];
+
+    /// The name on the command line and in the outputs.
+    pub fn name(self) -> &'static str {
+        match self {
+            EffectKind::ImpactScatter => "impact-scatter",
+            EffectKind::LaunchSpread => "launch-spread",
+            EffectKind::Polydisperse => "polydisperse",
+            EffectKind::SledMotion => "sled-motion",
+            EffectKind::QuadraticDrag => "quadratic-drag",
+        }
+    }
+
+    /// The config table's name (`[effects.<key>]`).
+    pub fn key(self) -> &'static str {
+        match self {
+            EffectKind::ImpactScatter => "impact_scatter",
+            EffectKind::LaunchSpread => "launch_spread",
+            EffectKind::Polydisperse => "polydisperse",
+            EffectKind::SledMotion => "sled_motion",
+            EffectKind::QuadraticDrag => "quadratic_drag",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<EffectKind> {
+        EffectKind::ALL.iter().copied().find(|e| e.name() == name)
+    }
+
+    /// The effect's parameters, as the config file names them.
+    pub fn param_names(self) -> &'static [&'static str] {
+        match self {
+            EffectKind::ImpactScatter => &["sigma_deg"],
+            EffectKind::LaunchSpread => &["speed_spread", "angle_sigma_deg"],
+            EffectKind::Polydisperse => &["sigma_ln"],
+            EffectKind::SledMotion => &["delay_s", "return_speed_m_s"],
+            EffectKind::QuadraticDrag => &["diameter_m", "density_kg_m3"],
+        }
+    }
+
+    /// The range every value must lie in (`Effects::validate`).
+    pub fn valid_bounds(self) -> &'static [(f64, f64)] {
+        match self {
+            EffectKind::ImpactScatter => &[(0.0, 45.0)],
+            EffectKind::LaunchSpread => &[(0.0, 0.95), (0.0, 45.0)],
+            EffectKind::Polydisperse => &[(0.0, 1.5)],
+            EffectKind::SledMotion => &[(0.0, 100.0), (1e-6, 10.0)],
+            EffectKind::QuadraticDrag => &[(1e-6, 0.01), (100.0, 20_000.0)],
+        }
+    }
+
+    /// The range a calibration searches (inside `valid_bounds`).
+    pub fn search_bounds(self) -> &'static [(f64, f64)] {
+        match self {
+            EffectKind::ImpactScatter => &[(0.0, 30.0)],
+            EffectKind::LaunchSpread => &[(0.0, 0.9), (0.0, 30.0)],
+            EffectKind::Polydisperse => &[(0.0, 1.2)],
+            // a delay beyond the flights is the same as no motion; the POC's v_d is 0.05 m/s
+            EffectKind::SledMotion => &[(0.0, 0.3), (0.01, 1.0)],
+            // glass beads 100-200 µm, quartz sand 125-500 µm (4.3.6); soda-lime to quartz
+            EffectKind::QuadraticDrag => &[(50e-6, 600e-6), (2000.0, 2700.0)],
+        }
+    }
+
+    /// Parameters at which the effect does nothing (a nested baseline), where they exist:
+    /// quadratic drag replaces the linear drag law, so no setting of it is the baseline; a
+    /// sled-motion delay at its search bound outlasts the rig's flights.
+    pub fn neutral(self) -> Option<&'static [f64]> {
+        match self {
+            EffectKind::ImpactScatter => Some(&[0.0]),
+            EffectKind::LaunchSpread => Some(&[0.0, 0.0]),
+            EffectKind::Polydisperse => Some(&[0.0]),
+            EffectKind::SledMotion => Some(&[0.3, 0.05]),
+            EffectKind::QuadraticDrag => None,
+        }
+    }
+
+    /// Only changes drag: nothing to see in vacuum.
+    pub fn needs_air(self) -> bool {
+        matches!(self, EffectKind::Polydisperse | EffectKind::QuadraticDrag)
+    }
+
+    /// Switch the effect on in `e` with parameters `v` (one per `param_names`).
+    pub fn apply(self, e: &mut Effects, v: &[f64]) {
+        match self {
+            EffectKind::ImpactScatter => e.impact_scatter = Some(ImpactScatter { sigma_deg: v[0] }),
+            EffectKind::LaunchSpread => e.launch_spread = Some(LaunchSpread { speed_spread: v[0], angle_sigma_deg: v[1] }),
+            EffectKind::Polydisperse => {
+                // keep a size law set by a config (the calibration fits only sigma_ln)
+                let form = e.polydisperse.map(|p| p.form).unwrap_or_default();
+                e.polydisperse = Some(Polydisperse { sigma_ln: v[0], form })
+            }
+            EffectKind::SledMotion => e.sled_motion = Some(SledMotion { delay_s: v[0], return_speed_m_s: v[1] }),
+            EffectKind::QuadraticDrag => e.quadratic_drag = Some(QuadraticDrag { diameter_m: v[0], density_kg_m3: v[1] }),
+        }
+    }
+
+    /// The effect's parameters in `e`, None when it is off.
+    pub fn values(self, e: &Effects) -> Option<Vec<f64>> {
+        match self {
+            EffectKind::ImpactScatter => e.impact_scatter.map(|x| vec![x.sigma_deg]),
+            EffectKind::LaunchSpread => e.launch_spread.map(|x| vec![x.speed_spread, x.angle_sigma_deg]),
+            EffectKind::Polydisperse => e.polydisperse.map(|x| vec![x.sigma_ln]),
+            EffectKind::SledMotion => e.sled_motion.map(|x| vec![x.delay_s, x.return_speed_m_s]),
+            EffectKind::QuadraticDrag => e.quadratic_drag.map(|x| vec![x.diameter_m, x.density_kg_m3]),
+        }
+    }
+
+    /// The CLI's `NAME=p1[,p2]` form of the parameters, for messages.
+    pub fn cli_form(self) -> String {
+        format!("{}={}", self.name(), self.param_names().iter().map(|p| p.to_uppercase()).collect::<Vec<_>>().join(","))
+    }
+}
+
+/// The effects' names, comma-separated (for messages).
+pub fn known_effects() -> String {
+    EffectKind::ALL.map(|e| e.name()).join(", ")
+}
 
 impl Effects {
     pub fn is_default(&self) -> bool {
@@ -92,28 +250,21 @@ impl Effects {
     }
 
     pub fn any(&self) -> bool {
-        self.impact_scatter.is_some() || self.launch_spread.is_some() || self.polydisperse.is_some() || self.sled_motion.is_some() || self.quadratic_drag.is_some()
+        !self.active_kinds().is_empty()
+    }
+
+    pub fn is_on(&self, kind: EffectKind) -> bool {
+        kind.values(self).is_some()
+    }
+
+    /// The effects switched on.
+    pub fn active_kinds(&self) -> Vec<EffectKind> {
+        EffectKind::ALL.into_iter().filter(|k| self.is_on(*k)).collect()
     }
 
     /// Names of the effects switched on.
     pub fn active(&self) -> Vec<&'static str> {
-        let mut v = Vec::new();
-        if self.impact_scatter.is_some() {
-            v.push("impact-scatter");
-        }
-        if self.launch_spread.is_some() {
-            v.push("launch-spread");
-        }
-        if self.polydisperse.is_some() {
-            v.push("polydisperse");
-        }
-        if self.sled_motion.is_some() {
-            v.push("sled-motion");
-        }
-        if self.quadratic_drag.is_some() {
-            v.push("quadratic-drag");
-        }
-        v
+        self.active_kinds().into_iter().map(EffectKind::name).collect()
     }
 
     /// Parse `NAME=p1[,p2]` (CLI): impact-scatter=SIGMA_DEG, launch-spread=SPEED,ANGLE_DEG,
@@ -121,68 +272,27 @@ impl Effects {
     /// quadratic-drag=DIAMETER_M,DENSITY_KG_M3.
     pub fn set_from_cli(&mut self, spec: &str) -> Result<(), String> {
         let (name, params) = spec.split_once('=').ok_or_else(|| format!("--effect `{spec}`: expected NAME=PARAMS, e.g. impact-scatter=5"))?;
+        let kind = EffectKind::from_name(name).ok_or_else(|| format!("--effect: unknown effect `{name}` (known: {})", known_effects()))?;
         let values: Vec<f64> = params
             .split(',')
             .map(|p| p.trim().parse::<f64>().map_err(|_| format!("--effect {name}: `{p}` is not a number")))
             .collect::<Result<_, _>>()?;
-        let want = |n: usize| {
-            if values.len() == n {
-                Ok(())
-            } else {
-                Err(format!("--effect {name} takes {n} value(s), got {}", values.len()))
-            }
-        };
-        match name {
-            "impact-scatter" => {
-                want(1)?;
-                self.impact_scatter = Some(ImpactScatter { sigma_deg: values[0] });
-            }
-            "launch-spread" => {
-                want(2)?;
-                self.launch_spread = Some(LaunchSpread { speed_spread: values[0], angle_sigma_deg: values[1] });
-            }
-            "polydisperse" => {
-                want(1)?;
-                self.polydisperse = Some(Polydisperse { sigma_ln: values[0] });
-            }
-            "sled-motion" => {
-                want(2)?;
-                self.sled_motion = Some(SledMotion { delay_s: values[0], return_speed_m_s: values[1] });
-            }
-            "quadratic-drag" => {
-                want(2)?;
-                self.quadratic_drag = Some(QuadraticDrag { diameter_m: values[0], density_kg_m3: values[1] });
-            }
-            other => return Err(format!("--effect: unknown effect `{other}` (known: {})", EFFECT_NAMES.join(", "))),
+        let n = kind.param_names().len();
+        if values.len() != n {
+            return Err(format!("--effect {name} takes {n} value(s) ({}), got {}", kind.cli_form(), values.len()));
         }
+        kind.apply(self, &values);
         self.validate()
     }
 
     pub fn validate(&self) -> Result<(), String> {
-        let check = |name: &str, v: f64, lo: f64, hi: f64| {
-            if v.is_finite() && v >= lo && v <= hi {
-                Ok(())
-            } else {
-                Err(format!("`effects.{name}` must lie in [{lo}, {hi}], got {v}"))
+        for kind in EffectKind::ALL {
+            let Some(values) = kind.values(self) else { continue };
+            for ((v, (lo, hi)), name) in values.iter().zip(kind.valid_bounds()).zip(kind.param_names()) {
+                if !(v.is_finite() && v >= lo && v <= hi) {
+                    return Err(format!("`effects.{}.{name}` must lie in [{lo}, {hi}], got {v}", kind.key()));
+                }
             }
-        };
-        if let Some(e) = self.impact_scatter {
-            check("impact_scatter.sigma_deg", e.sigma_deg, 0.0, 45.0)?;
-        }
-        if let Some(e) = self.launch_spread {
-            check("launch_spread.speed_spread", e.speed_spread, 0.0, 0.95)?;
-            check("launch_spread.angle_sigma_deg", e.angle_sigma_deg, 0.0, 45.0)?;
-        }
-        if let Some(e) = self.polydisperse {
-            check("polydisperse.sigma_ln", e.sigma_ln, 0.0, 1.5)?;
-        }
-        if let Some(e) = self.sled_motion {
-            check("sled_motion.delay_s", e.delay_s, 0.0, 100.0)?;
-            check("sled_motion.return_speed_m_s", e.return_speed_m_s, 1e-6, 10.0)?;
-        }
-        if let Some(e) = self.quadratic_drag {
-            check("quadratic_drag.diameter_m", e.diameter_m, 1e-6, 0.01)?;
-            check("quadratic_drag.density_kg_m3", e.density_kg_m3, 100.0, 20_000.0)?;
         }
         Ok(())
     }
@@ -201,6 +311,7 @@ mod tests {
         assert_eq!(e.active(), vec!["impact-scatter", "launch-spread", "polydisperse"]);
         assert!(e.set_from_cli("rotation=1").unwrap_err().contains("unknown effect"));
         assert!(e.set_from_cli("launch-spread=0.3").unwrap_err().contains("takes 2"));
+        assert!(e.set_from_cli("polydisperse=-0.1").unwrap_err().contains("effects.polydisperse.sigma_ln"));
         assert!(e.set_from_cli("impact-scatter=90").unwrap_err().contains("sigma_deg"));
     }
 }
