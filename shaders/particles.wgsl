@@ -245,15 +245,18 @@ fn step_particle(d: Design, p: ptr<function, Particle>, index: u32, bounce: u32)
     let pos = vec2<f32>((*p).pos_x, (*p).pos_y);
     let fl = Flight(pos, vec2<f32>((*p).vel_x, (*p).vel_y), ph.g, (*p).k_drag);
     let v_in = flight_vel(fl, hit.t);
-    var n = normal_of(d, hit.surface);
+    let n_true = normal_of(d, hit.surface);
+    var v_out = bounce_velocity(v_in, n_true);
     if (ph.scatter_sigma > 0.0) {
-        // impact-scatter effect: tilt the local normal unless that would let the grain leave
-        // through the surface
+        // impact-scatter effect (CPU twin: kernel.rs step_particle): the tilt is admissible
+        // when the grain arrives against the tilted facet and leaves the true surface
         let sc = ksin_cos(ph.scatter_sigma * normal01(ph.seed, index, bounce, 2u));
-        let tilted = vec2<f32>(sc.y * n.x - sc.x * n.y, sc.x * n.x + sc.y * n.y);
-        if (dot(v_in, tilted) < 0.0) { n = tilted; }
+        let tilted = vec2<f32>(sc.y * n_true.x - sc.x * n_true.y, sc.x * n_true.x + sc.y * n_true.y);
+        if (dot(v_in, tilted) < 0.0) {
+            let out = bounce_velocity(v_in, tilted);
+            if (dot(out, n_true) > 0.0) { v_out = out; }
+        }
     }
-    let v_out = bounce_velocity(v_in, n);
     (*p).hop = abs(hit.pos.x - pos.x);         // Eq. 4.50 per particle
     let back = offset(d, hit.tooth - (*p).tooth, vec2<f32>(0.0));
     (*p).pos_x = hit.pos.x - back.x;

@@ -68,6 +68,7 @@ pub fn kernel_physics<T: Real>(ctx: &Context) -> KPhysics<T> {
         launch_speed_spread: T::c(ctx.effects.launch_spread.map_or(0.0, |e| e.speed_spread)),
         launch_angle_sigma: T::c(ctx.effects.launch_spread.map_or(0.0, |e| e.angle_sigma_deg.to_radians())),
         size_sigma_ln: T::c(ctx.effects.polydisperse.map_or(0.0, |e| e.sigma_ln)),
+        size_uniform: ctx.effects.polydisperse.is_some_and(|e| e.form == crate::model::effects::SizeForm::Uniform),
         sled_delay: T::c(ctx.effects.sled_motion.map_or(0.0, |e| e.delay_s)),
         sled_speed: T::c(ctx.effects.sled_motion.map_or(0.0, |e| e.return_speed_m_s)),
         // quadratic drag needs air: it replaces the linear drag where there is some

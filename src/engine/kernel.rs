@@ -74,6 +74,8 @@ pub struct KPhysics<T> {
     pub launch_speed_spread: T,
     pub launch_angle_sigma: T,
     pub size_sigma_ln: T,
+    /// Sizes uniform (not log-normal) in number (`SizeForm::Uniform`; cpu only).
+    pub size_uniform: bool,
     /// Sled motion after the launch (cpu only; speed 0 = off): rest for `sled_delay` s, then
     /// return at `sled_speed` m/s over the design's stroke.
     pub sled_delay: T,
@@ -139,8 +141,15 @@ pub fn normal_of<T: Real>(d: &KDesign<T>, surface: u32) -> [T; 2] {
 /// A particle at its launch point (global = tooth 0 frame), moving at v0 along the launch
 /// angle (listing lines 45, 206-210).
 pub fn init_particle<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, launch: [T; 2], index: u32) -> KParticle<T> {
-    // polydisperse: k ∝ 1/d² with d = d_ref e^{σ z}
-    let k_drag = if ph.size_sigma_ln > T::zero() {
+    // polydisperse: k ∝ 1/d² (Eq. 4.16, 4.20), d drawn from the mass-weighted size law so
+    // that every simulated grain stands for an equal mass (`effects::Polydisperse`)
+    let k_drag = if ph.size_sigma_ln > T::zero() && ph.size_uniform {
+        let half = T::c(3f64.sqrt()) * ph.size_sigma_ln;
+        let (a4, b4) = ((T::c(-4.0) * half).exp(), (T::c(4.0) * half).exp());
+        let u = T::c(uniform(ph.seed, index, PER_PARTICLE, DRAW_SIZE));
+        // k_ref / d² with d = (a⁴ + u (b⁴ − a⁴))^{1/4}
+        ph.k_drag / (a4 + u * (b4 - a4)).sqrt()
+    } else if ph.size_sigma_ln > T::zero() {
         ph.k_drag * (T::c(-2.0) * ph.size_sigma_ln * T::c(normal(ph.seed, index, PER_PARTICLE, DRAW_SIZE))).exp()
     } else {
         ph.k_drag
@@ -476,17 +485,23 @@ pub fn step_particle<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KParticl
     // restitution acts on the velocity relative to the (possibly moving) surface
     let v_air = fl.vel(hit.t - piece_start);
     let v_in = [v_air[0] + fl.drift[0], v_air[1] + fl.drift[1]];
-    let mut n = normal_of(d, hit.surface);
+    let n_true = normal_of(d, hit.surface);
+    let mut v_rel_out = ph.restitution.bounce(v_in, n_true);
     if ph.scatter_sigma > T::zero() {
-        // impact-scatter effect: the local normal is tilted; a tilt that would make the grain
-        // leave through the surface is not applied
+        // impact-scatter effect: the local normal is tilted. A tilt is admissible only when
+        // the grain arrives against the tilted facet and leaves the true surface: without the
+        // second test a grazing grain's rebound points into the surface, the next flight
+        // touches it at t = 0 (`contact`) and the grain stops dead, so even a 1° tilt froze
+        // ~1 % of the grains where they first landed.
         let (s, c) = (ph.scatter_sigma * T::c(normal(ph.seed, index, bounce, DRAW_SCATTER))).ksin_cos();
-        let tilted = [c * n[0] - s * n[1], s * n[0] + c * n[1]];
+        let tilted = [c * n_true[0] - s * n_true[1], s * n_true[0] + c * n_true[1]];
         if dot(v_in, tilted) < T::zero() {
-            n = tilted;
+            let out = ph.restitution.bounce(v_in, tilted);
+            if dot(out, n_true) > T::zero() {
+                v_rel_out = out;
+            }
         }
     }
-    let v_rel_out = ph.restitution.bounce(v_in, n);
     let v_out = [v_rel_out[0] - fl.drift[0], v_rel_out[1] - fl.drift[1]];
     p.hop = (hit.pos[0] - p.pos[0]).abs(); // Eq. 4.50, per particle
     p.clock = p.clock + hit.t;
