@@ -5,6 +5,7 @@
 //! - [`io`]: configuration files, trajectory CSV, SVG plots.
 //! - [`cli`]: the thin command-line layer.
 
+pub mod calibrate;
 pub mod cli;
 pub mod diagnose;
 pub mod engine;

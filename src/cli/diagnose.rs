@@ -9,6 +9,7 @@ use std::process::ExitCode;
 use anyhow::{bail, Context as _};
 use clap::Args;
 
+use crate::calibrate::Normalise;
 use crate::diagnose::diagnose::{diagnose, parse_effects, to_json, Budget, Condition, KnownMotion, Settings};
 use crate::diagnose::render;
 use crate::engine::{make_engine, EngineKind};
@@ -29,28 +30,38 @@ pub struct DiagnoseArgs {
     /// sled-motion, quadratic-drag, or `all`.
     #[arg(long, default_value = "all")]
     pub effects: String,
-    /// Cross-validation folds (run i of each condition is in fold i mod K).
-    #[arg(long, default_value_t = 3)]
-    pub folds: usize,
-    /// Seed of the particle streams, the GAs and the bootstrap (default: the first setup's
+    /// Seed of the particle streams, the solver and the bootstrap (default: the first setup's
     /// sim.seed).
     #[arg(long)]
     pub seed: Option<u64>,
     /// Particle engine for the fits: cpu, gpu or auto (the listing port has no effects).
     #[arg(long, value_enum, default_value = "cpu")]
     pub engine: EngineKind,
-    /// Particles per simulation (the same streams for every candidate).
-    #[arg(long, default_value_t = 600)]
-    pub particles: u32,
-    /// GA population size per fit (>= 4).
-    #[arg(long, default_value_t = 24)]
+    /// Particles per simulation at the full budget (the same streams for every candidate);
+    /// default: what the data call for (Monte-Carlo variance per tooth at most a quarter of
+    /// the measured mean's), up to --max-particles.
+    #[arg(long)]
+    pub particles: Option<u32>,
+    /// The most particles per simulation the data may call for.
+    #[arg(long, default_value_t = 12_000)]
+    pub max_particles: u32,
+    /// Differential-evolution population per model (>= 5), screening at 1/8 of the particles.
+    #[arg(long, default_value_t = 20)]
     pub pop: usize,
-    /// GA generations per fit after the initial population.
-    #[arg(long, default_value_t = 15)]
-    pub generations: u64,
-    /// Nelder-Mead evaluations polishing each GA result.
-    #[arg(long, default_value_t = 40)]
+    /// Differential-evolution generations per model.
+    #[arg(long, default_value_t = 20)]
+    pub generations: usize,
+    /// Compass-search iterations polishing each fit at the full budget.
+    #[arg(long, default_value_t = 12)]
     pub polish: usize,
+    /// What the compared fractions are fractions of: `loaded` (the input mass: the weighed
+    /// teeth plus a "not recovered" bin; the default when every run records input_mass) or
+    /// `recovered` (listing D.4: the weighed teeth's sum).
+    #[arg(long, value_enum)]
+    pub normalise: Option<Normalise>,
+    /// Fresh particle streams every fitted model is re-scored with.
+    #[arg(long, default_value_t = 4)]
+    pub rescore_streams: usize,
     /// Bootstrap replicates for the intervals (resampling held-out runs).
     #[arg(long, default_value_t = 400)]
     pub bootstrap: usize,
@@ -79,14 +90,17 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     if a.engine == EngineKind::Listing {
         bail!("--engine listing: the effects are in the cpu and gpu engines only; use --engine cpu or auto");
     }
-    if a.folds < 2 {
-        bail!("--folds must be >= 2, got {}", a.folds);
-    }
-    if a.particles == 0 {
+    if a.particles == Some(0) {
         bail!("--particles must be >= 1, got 0");
     }
-    if a.pop < 4 {
-        bail!("--pop must be >= 4, got {}", a.pop);
+    if a.max_particles < 1000 {
+        bail!("--max-particles must be >= 1000, got {}", a.max_particles);
+    }
+    if a.pop < 5 {
+        bail!("--pop must be >= 5, got {}", a.pop);
+    }
+    if a.rescore_streams < 1 {
+        bail!("--rescore-streams must be >= 1, got 0");
     }
     if a.bootstrap < 2 {
         bail!("--bootstrap must be >= 2, got {}", a.bootstrap);
@@ -110,7 +124,6 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
             scenario.effects = Default::default();
         }
         let seed = *seed.get_or_insert(scenario.sim.seed);
-        scenario.sim.particles = a.particles;
         scenario.sim.seed = seed;
         if let Err(e) = scenario.validate() {
             bail!("--setup {}: invalid setting: {e}", setup.display());
@@ -124,8 +137,8 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
                 setup.display()
             );
         }
-        if runs.runs.len() < a.folds {
-            bail!("--folds {}: --data {} has only {} runs (each fold needs a held-out run)", a.folds, data.display(), runs.runs.len());
+        if runs.runs.len() < 2 {
+            bail!("--data {}: has {} run(s); the diagnosis needs at least 2 (their spread is the measurement's uncertainty)", data.display(), runs.runs.len());
         }
         if let Err(invalid) = crate::model::prepare(&scenario, &design) {
             bail!("--setup {}: the design cannot be simulated ({}): {invalid}", setup.display(), invalid.rule());
@@ -139,6 +152,14 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
             name = format!("{name}#{}", names.len() + 1);
         }
         names.push(name.clone());
+        let normalise = match a.normalise {
+            Some(Normalise::Loaded) if !Condition::has_input_mass(&runs) => {
+                bail!("--normalise loaded: --data {} lacks input_mass in some run", data.display())
+            }
+            Some(n) => n,
+            None if Condition::has_input_mass(&runs) => Normalise::Loaded,
+            None => Normalise::Recovered,
+        };
         conditions.push(Condition {
             name,
             data: data.display().to_string(),
@@ -152,14 +173,22 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
                 return_speed_m_s: measurement.and_then(|m| m.motion_return_speed_m_s),
             },
             motion_profile: measurement.and_then(|m| m.motion_profile.clone()),
+            normalise,
         });
     }
     let seed = seed.unwrap_or(0);
     let engine = make_engine(a.engine)?;
     let settings = Settings {
         effects,
-        folds: a.folds,
-        budget: Budget { pop: a.pop, generations: a.generations, polish: a.polish, seed },
+        budget: Budget {
+            particles: a.particles,
+            max_particles: a.max_particles,
+            pop: a.pop,
+            generations: a.generations,
+            polish: a.polish,
+            rescore_seeds: a.rescore_streams,
+            seed,
+        },
         bootstrap: a.bootstrap,
     };
     let started = std::time::Instant::now();
@@ -171,17 +200,17 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         writeln!(out, "{}", serde_json::to_string_pretty(&json)?).context("writing output")?;
     } else {
         let b = &d.baseline;
-        writeln!(out, "baseline held-out gap {:.1} %² [{:.1}, {:.1}]", b.heldout, b.interval[0], b.interval[1])?;
+        writeln!(out, "baseline gap {:.1} %² [{:.1}, {:.1}]", b.gap, b.interval[0], b.interval[1])?;
         for (i, m) in d.ranking.iter().enumerate() {
             writeln!(
                 out,
-                "{}. {:<15} held-out gap {:>8.1} %² [{:.1}, {:.1}]  reduction {:>6.1} %",
+                "{}. {:<15} gap {:>8.1} %² [{:.1}, {:.1}]  reduction {:>6.1} %",
                 i + 1,
                 m.name(),
-                m.heldout,
+                m.gap,
                 m.interval[0],
                 m.interval[1],
-                100.0 * (1.0 - m.heldout / b.heldout)
+                100.0 * (1.0 - m.gap / b.gap)
             )?;
         }
         writeln!(out, "best: {}", d.best.map_or("none (the data cannot tell)", |e| e.name()))?;

@@ -1,53 +1,50 @@
-//! `diagnose` (issue 5 §2): where the calibrated model misses measured data, which of the
-//! optional effects ([`crate::model::effects`]) closes the gap on runs it was not fitted on,
-//! and by how much.
+//! `diagnose` (issues 5 and 11): where the calibrated model misses measured data, which of
+//! the optional effects ([`crate::model::effects`]) closes the gap, and by how much.
 //!
 //! - **Conditions.** One or more measured campaigns, each with its own setup (geometry,
 //!   kinematics, environment). They share the material and collision parameters being fitted:
 //!   `k_elastic`, `mu_fric`, and `k_drag` when any setup has drag (applied only to the setups
-//!   with drag). The joint objective is the sum over conditions of the SSE of Eq. 4.62 (the
-//!   fit module's [`objective::sse_percent2`] over the teeth and a lost bin, against the mean
-//!   distribution of the runs used).
-//! - **Where.** The baseline (no effect) is fitted on all runs. Per condition and tooth: the
-//!   residual sim − measured (percentage points) with an uncertainty combining, in
-//!   quadrature, the run-to-run spread (sd of the run fractions / √n), the scale resolution
-//!   (resolution/√12 per tooth relative to the mean recovered mass) and the simulation's
-//!   Monte-Carlo error (√(p(1−p)/N)); z = residual / uncertainty, flagged when |z| > 2. The
-//!   same for the centre of mass and the dispersion (Eq. 4.58-4.59; the sd of the per-run
-//!   metric / √n and a Monte-Carlo term). And where the simulated mass comes from: per tooth,
-//!   the share of launched particles that rest in the tooth of their first impact ("first
-//!   flight") and the share that the bounce chain moved there from another tooth; and per
-//!   third of the fill by launch depth below its free surface (`Fill::depth`), where that
-//!   third's grains come to rest.
-//! - **Which.** K-fold cross-validation over runs (run i of each condition, in file order,
-//!   is in fold i mod K). For the baseline and every candidate effect the shared parameters
-//!   and the effect's own ones are refitted on the training folds (GA, then a short bounded
-//!   Nelder-Mead; an effect's fit also starts from the baseline's fold fit with the effect
-//!   switched off, so a nested model is never fitted worse than the baseline; quadratic drag
-//!   replaces the linear drag law, so it is not nested and has no such start, and sled
-//!   motion stated by a setup stays on in that start), and the
-//!   held-out folds' mean distributions are scored: the **held-out gap** is the SSE summed
-//!   over conditions and folds. Every candidate sees the same particle streams (common
-//!   random numbers: same seed and particle count, effect draws on their own counters).
-//! - **Intervals.** A bootstrap over held-out runs: each replicate resamples, with
-//!   replacement, the runs of every (condition, fold) cell (so runs are resampled within
-//!   conditions and every fold keeps its size) and recomputes every model's held-out gap
-//!   from the same predictions (paired across models). Intervals are the 5-95 % percentiles
-//!   ([`INTERVAL`]); the standard error is the replicates' sd.
-//! - **Ranking.** By the penalised score `held-out gap + 2 × (extra parameters) × SE` (the
-//!   parameters beyond the baseline's: the effect's own, less k_drag for quadratic drag, which
-//!   replaces the linear law and is fitted without it; SE its held-out gap's bootstrap standard error): an extra
-//!   parameter must buy two standard errors of held-out improvement. `best` is the top-ranked
-//!   effect only when it beats the baseline beyond the uncertainty: the baseline's held-out
-//!   gap lies above the effect's interval and the paired bootstrap interval of the
-//!   improvement (baseline − effect) lies above 0; otherwise `best` is null. Effects whose
-//!   intervals overlap the top-ranked effect's are `indistinguishable` (the top one included
-//!   when any other overlaps).
+//!   with drag). The joint objective is the sum over conditions of the SSE of Eq. 4.62 (%²).
+//! - **Measurement model.** Where every run records its loaded mass, the compared fractions
+//!   are fractions of it: the weighed teeth and a "not recovered" bin that the simulation
+//!   fills with what rests beyond the weighed teeth or is lost ([`crate::calibrate::Normalise::Loaded`]);
+//!   otherwise D.4's fractions of the recovered mass. With varying grain sizes each simulated
+//!   grain stands for an equal mass (`effects::Polydisperse`), so simulated fractions are mass
+//!   fractions, as a scale weighs them.
+//! - **Monte-Carlo budget from the data.** The particle count per simulation is chosen so
+//!   that the simulation's variance p(1−p)/N of every tooth holding ≥ 2 % of the mass is at
+//!   most a quarter of the variance of the measured mean (run-to-run variance / runs, floored
+//!   by the scale's resolution), within [`MIN_PARTICLES`, `--max-particles`]; a note says when
+//!   the cap, not the data, limits the answer.
+//! - **Fits** ([`crate::calibrate`]): all candidate models are fitted in lockstep, each
+//!   stage's points of every model and condition simulated as one engine call: differential
+//!   evolution at 1/8 of the particles screens the box (seeded, for a nested effect, with the
+//!   baseline's optimum and the effect switched off), a compass search polishes at the full
+//!   budget. Common random numbers throughout.
+//! - **Gap.** Each fitted model is re-simulated on fresh particle streams (not the ones it
+//!   was fitted on) and scored against all runs: the gap is that SSE, averaged over the
+//!   streams. A fit adapts to its own streams' Monte-Carlo noise, and a model with more
+//!   parameters adapts more; fresh streams remove that flattery. (Holding out runs, as issue
+//!   5 did, tests only the run-to-run noise, which in these rigs is far below the gaps.)
+//! - **Intervals.** A bootstrap over runs and streams: each replicate resamples, with
+//!   replacement, the runs of every condition and draws one of the fresh streams, and
+//!   recomputes every model's gap (paired across models). Intervals are the 5-95 %
+//!   percentiles ([`INTERVAL`]); the standard error is the replicates' sd.
+//! - **Ranking.** By the penalised score `gap + 2 × (extra parameters) × SE` (the parameters
+//!   beyond the baseline's: the effect's own, less k_drag for quadratic drag, which replaces
+//!   the linear law and is fitted without it). `best` is the top-ranked effect only when it
+//!   beats the baseline beyond the uncertainty *and* by a material share: the baseline's gap
+//!   lies above the effect's interval, the paired interval of the improvement (baseline −
+//!   effect) lies above 0, and the effect removes at least [`MIN_REDUCTION`] of the
+//!   baseline's gap. The last test is what keeps a control null when the baseline physics
+//!   is itself slightly off: an extra parameter always buys a little of a systematic misfit.
+//!   Effects whose gap intervals overlap the top-ranked effect's are `indistinguishable`
+//!   (the top one included when any other overlaps).
 //! - **How far.** Per tooth, centre of mass and dispersion before and after the top-ranked
 //!   effect, with bootstrap intervals over runs; and, when two candidates each beat the
-//!   baseline, the two fitted together (GA starts from both single fits and the baseline),
-//!   with paired intervals of its improvement over each alone. The combination is reported
-//!   beside the ranking, not in it: `best` stays a single effect.
+//!   baseline, the two fitted together (from both single fits and the baseline), with paired
+//!   intervals of its improvement over each alone. The combination is reported beside the
+//!   ranking, not in it: `best` stays a single effect.
 //! - **Known sled motion.** A setup may state the sled's motion after the launch
 //!   ([measurement] `motion_delay_s`, `motion_return_speed_m_s`; e.g. the POC profile of Test
 //!   1 returns at once at v_d ≈ 0.05 m/s, 5.3.1). The baseline and the other candidates
@@ -55,121 +52,43 @@
 //!   fixed for that condition and fits the ones left out, shared by the conditions that
 //!   leave them out. Conditions that differ only in their motion are what identifies it.
 //! - **Limits.** With one condition, a shift of the whole distribution cannot be told apart
-//!   from refitted collision/drag parameters; the report says so. The Monte-Carlo noise of
-//!   the fixed particle streams is part of every held-out gap (rerun with other `--seed`s).
+//!   from refitted collision/drag parameters; the report says so.
 
 use anyhow::{bail, Context as _};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rayon::prelude::*;
 use serde_json::{json, Map, Value};
 
+pub use crate::calibrate::{Condition, KnownMotion};
+use crate::calibrate::{fit_models, Fit, Model, Simulator, SolverBudget, Space};
 use crate::engine::{evaluate_detailed, particle_engine, BatchEvaluator, EngineKind};
-use crate::fit::{nelder_mead, objective, percentile, subset, MeasuredSummary, Param, Target};
-use crate::io::measured::MeasuredRuns;
-use crate::model::effects::{ImpactScatter, LaunchSpread, Polydisperse, QuadraticDrag, SledMotion};
+use crate::fit::{objective, percentile, MeasuredSummary, Param, Target};
+pub use crate::model::effects::EffectKind;
+use crate::model::effects::known_effects;
 use crate::model::outcome::{centre_and_dispersion, end_tooth, ParticleState};
-use crate::model::{Design, Scenario};
-use crate::optim::nsga2::{BatchProblem, Config, Evaluation as GaEvaluation, Mode, Nsga2};
+use crate::model::Scenario;
 
 /// Lower and upper percentile of every bootstrap interval.
 pub const INTERVAL: (f64, f64) = (0.05, 0.95);
 
+/// The ranking rule, as diagnosis.json states it.
+pub const RANKING_RULE: &str = "score = gap + 2 x (extra parameters) x bootstrap SE of the gap";
+
+/// The smallest share of the baseline's gap that `best` must remove.
+pub const MIN_REDUCTION: f64 = 0.25;
+
 /// |z| above which a residual is flagged.
 pub const Z_FLAG: f64 = 2.0;
 
-/// A candidate effect with its own parameters and diagnosis bounds.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum EffectKind {
-    ImpactScatter,
-    LaunchSpread,
-    Polydisperse,
-    SledMotion,
-    QuadraticDrag,
-}
-
-impl EffectKind {
-    pub const ALL: [EffectKind; 5] =
-        [EffectKind::ImpactScatter, EffectKind::LaunchSpread, EffectKind::Polydisperse, EffectKind::SledMotion, EffectKind::QuadraticDrag];
-
-    /// The name on the command line and in the outputs.
-    pub fn name(self) -> &'static str {
-        match self {
-            EffectKind::ImpactScatter => "impact-scatter",
-            EffectKind::LaunchSpread => "launch-spread",
-            EffectKind::Polydisperse => "polydisperse",
-            EffectKind::SledMotion => "sled-motion",
-            EffectKind::QuadraticDrag => "quadratic-drag",
-        }
-    }
-
-    /// The effect's parameters, as the config file names them.
-    pub fn param_names(self) -> &'static [&'static str] {
-        match self {
-            EffectKind::ImpactScatter => &["sigma_deg"],
-            EffectKind::LaunchSpread => &["speed_spread", "angle_sigma_deg"],
-            EffectKind::Polydisperse => &["sigma_ln"],
-            EffectKind::SledMotion => &["delay_s", "return_speed_m_s"],
-            EffectKind::QuadraticDrag => &["diameter_m", "density_kg_m3"],
-        }
-    }
-
-    /// Bounds of the effect's parameters in the diagnosis (inside `Effects::validate`'s).
-    pub fn bounds(self) -> &'static [(f64, f64)] {
-        match self {
-            EffectKind::ImpactScatter => &[(0.0, 30.0)],
-            EffectKind::LaunchSpread => &[(0.0, 0.9), (0.0, 30.0)],
-            EffectKind::Polydisperse => &[(0.0, 1.2)],
-            // a delay beyond the flights is the same as no motion; the POC's v_d is 0.05 m/s
-            EffectKind::SledMotion => &[(0.0, 0.3), (0.01, 1.0)],
-            // glass beads 100-200 µm, quartz sand 125-500 µm (4.3.6); soda-lime to quartz
-            EffectKind::QuadraticDrag => &[(50e-6, 600e-6), (2000.0, 2700.0)],
-        }
-    }
-
-    /// Parameters at which the effect does nothing (a nested baseline), where they exist:
-    /// quadratic drag replaces the linear drag law, so no setting of it is the baseline; a
-    /// sled-motion delay at its bound outlasts the rig's flights.
-    pub fn neutral(self) -> Option<&'static [f64]> {
-        match self {
-            EffectKind::ImpactScatter => Some(&[0.0]),
-            EffectKind::LaunchSpread => Some(&[0.0, 0.0]),
-            EffectKind::Polydisperse => Some(&[0.0]),
-            EffectKind::SledMotion => Some(&[0.3, 0.05]),
-            EffectKind::QuadraticDrag => None,
-        }
-    }
-
-    /// Switch the effect on in `s` with parameters `v` (the others are left as they are).
-    pub fn apply(self, s: &mut Scenario, v: &[f64]) {
-        match self {
-            EffectKind::ImpactScatter => s.effects.impact_scatter = Some(ImpactScatter { sigma_deg: v[0] }),
-            EffectKind::LaunchSpread => {
-                s.effects.launch_spread = Some(LaunchSpread { speed_spread: v[0], angle_sigma_deg: v[1] })
-            }
-            EffectKind::Polydisperse => s.effects.polydisperse = Some(Polydisperse { sigma_ln: v[0] }),
-            EffectKind::SledMotion => s.effects.sled_motion = Some(SledMotion { delay_s: v[0], return_speed_m_s: v[1] }),
-            EffectKind::QuadraticDrag => {
-                s.effects.quadratic_drag = Some(QuadraticDrag { diameter_m: v[0], density_kg_m3: v[1] })
-            }
-        }
-    }
-
-    pub fn from_name(name: &str) -> Option<EffectKind> {
-        EffectKind::ALL.iter().copied().find(|e| e.name() == name)
-    }
-}
-
 /// `all` or a comma list of effect names, each once.
 pub fn parse_effects(list: &str) -> anyhow::Result<Vec<EffectKind>> {
-    let known = || EffectKind::ALL.map(|e| e.name()).join(", ");
     if list.trim() == "all" {
         return Ok(EffectKind::ALL.to_vec());
     }
     let mut out = Vec::new();
     for name in list.split(',').map(str::trim) {
         let Some(e) = EffectKind::from_name(name) else {
-            bail!("--effects: unknown effect `{name}` (known: all, {})", known());
+            bail!("--effects: unknown effect `{name}` (known: all, {})", known_effects());
         };
         if out.contains(&e) {
             bail!("--effects: effect `{name}` given twice");
@@ -177,54 +96,6 @@ pub fn parse_effects(list: &str) -> anyhow::Result<Vec<EffectKind>> {
         out.push(e);
     }
     Ok(out)
-}
-
-/// What a setup states of the sled's motion after the launch ([measurement]
-/// motion_delay_s, motion_return_speed_m_s): the sled-motion candidate holds these fixed for
-/// the condition and fits the values left out.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct KnownMotion {
-    pub delay_s: Option<f64>,
-    pub return_speed_m_s: Option<f64>,
-}
-
-impl KnownMotion {
-    fn get(&self, i: usize) -> Option<f64> {
-        [self.delay_s, self.return_speed_m_s][i]
-    }
-    pub fn any(&self) -> bool {
-        self.delay_s.is_some() || self.return_speed_m_s.is_some()
-    }
-}
-
-/// One measured condition: runs and the setup they were measured with.
-#[derive(Clone, Debug)]
-pub struct Condition {
-    /// Short name (the data file's stem).
-    pub name: String,
-    pub data: String,
-    pub setup: String,
-    pub runs: MeasuredRuns,
-    /// The setup's scenario with the diagnosis's particle count and seed, effects off.
-    pub base: Scenario,
-    pub design: Design,
-    pub resolution_g: f64,
-    /// The sled's motion as far as the setup knows it.
-    pub motion: KnownMotion,
-    /// The setup's motion-profile label (`poc`, `delayed`), if any.
-    pub motion_profile: Option<String>,
-}
-
-impl Condition {
-    pub fn teeth(&self) -> usize {
-        self.base.sim.teeth as usize
-    }
-    fn has_drag(&self) -> bool {
-        self.base.environment.k_drag.is_some()
-    }
-    fn target(&self, idx: &[usize]) -> Target {
-        Target::new(&subset(&self.runs, idx), self.teeth(), self.resolution_g)
-    }
 }
 
 /// The shared parameters the conditions call for: k_elastic, mu_fric, and k_drag when any
@@ -237,268 +108,59 @@ pub fn shared_params(conditions: &[Condition]) -> Vec<Param> {
     p
 }
 
-/// The joint simulation problem of one model (the baseline when `effect` is None).
-pub struct Joint<'a> {
-    pub engine: &'a dyn BatchEvaluator,
-    pub conditions: &'a [Condition],
-    pub shared: Vec<Param>,
-    /// The effects switched on (none for the baseline, two for a combination).
-    pub effects: Vec<EffectKind>,
-    /// The effects' fitted parameters, as (index into `effects`, parameter index): all of
-    /// them, except sled-motion values that every setup states (`KnownMotion`).
-    pub effect_free: Vec<(usize, usize)>,
-}
-
-impl<'a> Joint<'a> {
-    pub fn new(engine: &'a dyn BatchEvaluator, conditions: &'a [Condition], mut shared: Vec<Param>, effects: &[EffectKind]) -> Self {
-        if effects.contains(&EffectKind::QuadraticDrag) {
-            // Schiller-Naumann drag replaces the linear law: k_drag would be a dead parameter
-            // (the setups' own value only marks which of them are in air)
-            shared.retain(|p| *p != Param::KDrag);
-        }
-        let mut effect_free = Vec::new();
-        for (k, e) in effects.iter().enumerate() {
-            for i in 0..e.bounds().len() {
-                let stated_everywhere = *e == EffectKind::SledMotion && conditions.iter().all(|c| c.motion.get(i).is_some());
-                if !stated_everywhere {
-                    effect_free.push((k, i));
-                }
-            }
-        }
-        Joint { engine, conditions, shared, effects: effects.to_vec(), effect_free }
-    }
-
-    pub fn dim(&self) -> usize {
-        self.shared.len() + self.effect_free.len()
-    }
-
-    pub fn bounds(&self) -> (Vec<f64>, Vec<f64>) {
-        let mut b: Vec<(f64, f64)> = self.shared.iter().map(|p| p.bounds()).collect();
-        b.extend(self.effect_free.iter().map(|(k, i)| self.effects[*k].bounds()[*i]));
-        b.into_iter().unzip()
-    }
-
-    /// Parameter names, shared first (effect parameter names are unique across effects).
-    pub fn names(&self) -> Vec<&'static str> {
-        let mut n: Vec<&'static str> = self.shared.iter().map(|p| p.name()).collect();
-        n.extend(self.effect_free.iter().map(|(k, i)| self.effects[*k].param_names()[*i]));
-        n
-    }
-
-    /// A start for this model from another model's point (`names`, `x`): each parameter
-    /// takes the other model's value where it has one, an effect parameter the other lacks
-    /// its neutral value (`EffectKind::neutral`). From the baseline that is the baseline
-    /// itself (a nested model) unless a setup states its sled motion, which stays on; none
-    /// when a parameter has no such value (quadratic drag).
-    pub fn start_from(&self, names: &[&'static str], x: &[f64]) -> Option<Vec<f64>> {
-        let own = self.names();
-        let mut v = Vec::with_capacity(own.len());
-        for (j, n) in own.iter().enumerate() {
-            if let Some(p) = names.iter().position(|m| m == n) {
-                v.push(x[p]);
-            } else if j >= self.shared.len() {
-                let (k, i) = self.effect_free[j - self.shared.len()];
-                v.push(self.effects[k].neutral()?[i]);
-            } else {
-                return None;
-            }
-        }
-        Some(v)
-    }
-
-    /// Condition `c`'s scenario at parameters `x` (k_drag only where the setup has drag).
-    pub fn scenario_at(&self, c: usize, x: &[f64]) -> Scenario {
-        let cond = &self.conditions[c];
-        let mut s = cond.base.clone();
-        for (p, v) in self.shared.iter().zip(x) {
-            if *p == Param::KDrag && !cond.has_drag() {
-                continue;
-            }
-            p.apply(&mut s, *v);
-        }
-        for (k, e) in self.effects.iter().enumerate() {
-            let e = *e;
-            // the effect's full parameter vector: fitted values, then what the setup states
-            let mut v: Vec<f64> = e.bounds().iter().map(|b| b.0).collect();
-            for ((ek, i), xv) in self.effect_free.iter().zip(&x[self.shared.len()..]) {
-                if *ek == k {
-                    v[*i] = *xv;
-                }
-            }
-            if e == EffectKind::SledMotion {
-                for (i, vi) in v.iter_mut().enumerate() {
-                    if let Some(known) = cond.motion.get(i) {
-                        *vi = known;
-                    }
-                }
-            }
-            e.apply(&mut s, &v);
-        }
-        s
-    }
-
-    /// Simulated bins (teeth, then lost) of every condition; None when one is rejected.
-    pub fn bins_at(&self, x: &[f64]) -> Option<Vec<Vec<f64>>> {
-        (0..self.conditions.len())
-            .map(|c| {
-                let s = self.scenario_at(c, x);
-                self.engine
-                    .evaluate(&s, std::slice::from_ref(&self.conditions[c].design))
-                    .pop()
-                    .and_then(|r| r.ok())
-                    .map(|e| objective::simulated_bins(&e.sim))
-            })
-            .collect()
-    }
-
-    fn unit_to_params(&self, u: &[f64]) -> Vec<f64> {
-        let (lo, hi) = self.bounds();
-        u.iter().zip(lo.iter().zip(&hi)).map(|(u, (l, h))| l + u.clamp(0.0, 1.0) * (h - l)).collect()
-    }
-
-    fn to_unit(&self, x: &[f64]) -> Vec<f64> {
-        let (lo, hi) = self.bounds();
-        x.iter().zip(lo.iter().zip(&hi)).map(|(x, (l, h))| if h > l { ((x - l) / (h - l)).clamp(0.0, 1.0) } else { 0.0 }).collect()
-    }
-}
-
-/// The joint objective: Σ over conditions of the SSE (%²); +inf when not simulable.
-pub fn joint_sse(bins: Option<&[Vec<f64>]>, targets: &[Target]) -> f64 {
-    match bins {
-        None => f64::INFINITY,
-        Some(b) => b.iter().zip(targets).map(|(b, t)| t.sse(b)).sum(),
-    }
-}
-
-/// Optimiser budget of one fit.
+/// How hard a diagnosis works.
 #[derive(Clone, Copy, Debug)]
 pub struct Budget {
+    /// Particles per simulation at the full budget; None: chosen from the data
+    /// ([`particles_from_data`]).
+    pub particles: Option<u32>,
+    /// The most particles the data may call for.
+    pub max_particles: u32,
+    /// Differential-evolution population and generations of the screen.
     pub pop: usize,
-    pub generations: u64,
-    /// Nelder-Mead evaluations of the polish.
+    pub generations: usize,
+    /// Compass-search iterations of the polish at the full budget.
     pub polish: usize,
+    /// Fresh particle streams every fitted model is re-scored with.
+    pub rescore_seeds: usize,
     pub seed: u64,
-}
-
-/// One joint fit.
-#[derive(Clone, Debug)]
-pub struct JointFit {
-    pub x: Vec<f64>,
-    /// The joint training SSE, %².
-    pub value: f64,
-    /// Simulated bins per condition at `x`.
-    pub bins: Vec<Vec<f64>>,
-    pub evaluations: u64,
-}
-
-struct JointGa<'p, 'a> {
-    joint: &'p Joint<'a>,
-    targets: &'p [Target],
-    best: Option<(f64, Vec<f64>, Vec<Vec<f64>>)>,
-}
-
-impl BatchProblem for JointGa<'_, '_> {
-    fn dim(&self) -> usize {
-        self.joint.dim()
-    }
-    fn n_objectives(&self) -> usize {
-        1
-    }
-    fn bounds(&self) -> (Vec<f64>, Vec<f64>) {
-        self.joint.bounds()
-    }
-    fn evaluate_batch(&mut self, xs: &[Vec<f64>], _generation: u64) -> Vec<GaEvaluation> {
-        let bins: Vec<Option<Vec<Vec<f64>>>> = xs.par_iter().map(|x| self.joint.bins_at(x)).collect();
-        let mut out = Vec::with_capacity(xs.len());
-        for (x, b) in xs.iter().zip(bins) {
-            let v = joint_sse(b.as_deref(), self.targets);
-            if let Some(b) = b {
-                if self.best.as_ref().is_none_or(|(bv, _, _)| v < *bv) {
-                    self.best = Some((v, x.clone(), b));
-                }
-            }
-            out.push(GaEvaluation { objectives: vec![v], violation: 0.0 });
-        }
-        out
-    }
-}
-
-/// Fit the joint model to `targets` (one per condition): the GA, the extra `starts` (e.g. a
-/// nested model's optimum), then a bounded Nelder-Mead polish from the best point found.
-pub fn fit_joint(joint: &Joint, targets: &[Target], budget: Budget, starts: &[Vec<f64>]) -> anyhow::Result<JointFit> {
-    if budget.pop < 4 {
-        bail!("--pop must be >= 4, got {}", budget.pop);
-    }
-    let ga = Nsga2::new(Config {
-        pop: budget.pop,
-        seed: budget.seed,
-        max_generations: budget.generations,
-        mode: Mode::Standard,
-        ..Config::default()
-    });
-    let mut gp = JointGa { joint, targets, best: None };
-    let (state, _) = ga.run(&mut gp, |_, _| {});
-    let mut evaluations = state.evaluations;
-    if !starts.is_empty() {
-        gp.evaluate_batch(starts, 0);
-        evaluations += starts.len() as u64;
-    }
-    let Some((value, x, bins)) = gp.best else {
-        bail!("no candidate could be simulated (every evaluation was rejected by the engine)");
-    };
-    let m = nelder_mead::minimise(
-        |u| joint_sse(joint.bins_at(&joint.unit_to_params(u)).as_deref(), targets),
-        &joint.to_unit(&x),
-        0.05,
-        budget.polish,
-        1e-4,
-    );
-    evaluations += m.evaluations as u64;
-    if m.value < value {
-        let xp = joint.unit_to_params(&m.x);
-        if let Some(bp) = joint.bins_at(&xp) {
-            return Ok(JointFit { x: xp, value: m.value, bins: bp, evaluations: evaluations + 1 });
-        }
-    }
-    Ok(JointFit { x, value, bins, evaluations })
 }
 
 /// Settings of a diagnosis.
 #[derive(Clone, Debug)]
 pub struct Settings {
     pub effects: Vec<EffectKind>,
-    pub folds: usize,
     pub budget: Budget,
     pub bootstrap: usize,
 }
 
-/// One model's cross-validated result.
+/// One model's result.
 #[derive(Clone, Debug)]
 pub struct ModelResult {
     /// The effects switched on: none for the baseline, one for a candidate, two for the
     /// combination of the two best.
     pub effects: Vec<EffectKind>,
     pub names: Vec<&'static str>,
-    /// Fit on all runs.
-    pub full: JointFit,
-    /// Per fold: the training fit's parameters.
-    pub fold_params: Vec<Vec<f64>>,
-    /// Predictions `[condition][fold]` (bins) of the fold's training fit.
-    pub predictions: Vec<Vec<Vec<f64>>>,
-    /// Held-out gap: SSE summed over conditions and folds, %².
-    pub heldout: f64,
-    /// Held-out gap per condition, %².
-    pub heldout_by_condition: Vec<f64>,
-    /// Bootstrap replicates of the held-out gap.
+    /// The fit on all runs (its SSE is on the particle streams it was fitted with).
+    pub full: Fit,
+    /// `[stream][condition]` bins at the fitted parameters with fresh particle streams.
+    pub fresh: Vec<Vec<Vec<f64>>>,
+    /// The gap: the joint SSE (%², all runs) of the fitted model on fresh streams, averaged
+    /// over the streams. Fresh streams remove the fit's adaptation to its own Monte-Carlo
+    /// noise, which flatters a model with more parameters.
+    pub gap: f64,
+    pub gap_by_condition: Vec<f64>,
+    /// Bootstrap replicates of the gap (runs resampled within conditions, one fresh stream
+    /// drawn; paired across models).
     pub replicates: Vec<f64>,
     pub interval: [f64; 2],
-    /// Bootstrap standard error of the held-out gap.
+    /// Bootstrap standard error of the gap.
     pub se: f64,
-    /// Paired bootstrap interval of (baseline − this model)'s held-out gap.
+    /// Paired bootstrap interval of (baseline − this model)'s gap.
     pub improvement_interval: [f64; 2],
     /// Extra parameters over the baseline.
     pub extra_params: usize,
-    /// Held-out gap + 2 × extra parameters × SE.
+    /// The ranking score (see the module's doc).
     pub score: f64,
     pub evaluations: u64,
 }
@@ -512,8 +174,8 @@ fn model_name(effects: &[EffectKind]) -> String {
     }
 }
 
-/// Paired bootstrap interval of `a`'s held-out gap minus `b`'s (the replicates share their
-/// resamples, `bootstrap_heldout`): above 0 when `b` improves on `a`.
+/// Paired bootstrap interval of `a`'s gap minus `b`'s (the replicates share their
+/// resamples, `bootstrap_gaps`): above 0 when `b` improves on `a`.
 fn paired_interval(a: &ModelResult, b: &ModelResult) -> [f64; 2] {
     let d: Vec<f64> = a.replicates.iter().zip(&b.replicates).map(|(x, y)| x - y).collect();
     interval(&d)
@@ -683,7 +345,7 @@ pub struct Combined {
     /// Its `improvement_interval` is against the baseline.
     pub model: ModelResult,
     /// Per effect of the pair (in `model.effects` order): paired bootstrap interval of
-    /// (that effect alone − the combination)'s held-out gap, %².
+    /// (that effect alone − the combination)'s gap, %².
     pub improvement_over_singles: Vec<[f64; 2]>,
 }
 
@@ -692,10 +354,6 @@ impl Diagnosis {
     pub fn gap_model(&self) -> Option<&ModelResult> {
         self.ranking.first()
     }
-}
-
-fn fold_indices(n: usize, k: usize, fold: usize) -> (Vec<usize>, Vec<usize>) {
-    (0..n).partition(|i| i % k != fold)
 }
 
 /// JSON numbers cannot be NaN/inf: those become null.
@@ -720,85 +378,53 @@ fn interval(v: &[f64]) -> [f64; 2] {
     [percentile(v, INTERVAL.0), percentile(v, INTERVAL.1)]
 }
 
-/// Cross-validate one model: the fit on all runs and the K training fits.
-fn cross_validate(
-    joint: &Joint,
-    k: usize,
-    budget: Budget,
-    start_models: &[&ModelResult],
-    log: &mut dyn FnMut(String),
-) -> anyhow::Result<ModelResult> {
-    let conds = joint.conditions;
-    // parameters beyond the baseline's (quadratic drag trades k_drag for its own two)
-    let extra = joint.dim().saturating_sub(shared_params(conds).len());
-    // extra GA starts: the given models' points carried over (`Joint::start_from`), e.g. the
-    // baseline's with the effect switched off
-    let starts_at = |x_of: &dyn Fn(&ModelResult) -> &[f64]| -> Vec<Vec<f64>> {
-        start_models.iter().filter_map(|m| joint.start_from(&m.names, x_of(m))).collect()
-    };
-    let all_targets: Vec<Target> = conds.iter().map(|c| c.target(&(0..c.runs.runs.len()).collect::<Vec<_>>())).collect();
-    let starts = starts_at(&|m| &m.full.x);
-    let full = fit_joint(joint, &all_targets, budget, &starts)?;
-    let mut evaluations = full.evaluations;
-    let mut fold_params = Vec::with_capacity(k);
-    let mut predictions = vec![Vec::with_capacity(k); conds.len()];
-    for f in 0..k {
-        let targets: Vec<Target> = conds.iter().map(|c| c.target(&fold_indices(c.runs.runs.len(), k, f).0)).collect();
-        // the start models' fold fits (never their full fits: those have seen the held-out runs)
-        let starts = starts_at(&|m| &m.fold_params[f]);
-        let b = Budget { seed: budget.seed.wrapping_add(1 + f as u64), ..budget };
-        let fit = fit_joint(joint, &targets, b, &starts)?;
-        evaluations += fit.evaluations;
-        for (c, bins) in fit.bins.into_iter().enumerate() {
-            predictions[c].push(bins);
-        }
-        fold_params.push(fit.x);
+/// Re-score fitted models with fresh particle streams: one engine call for every model and
+/// stream. Fills `fresh`, `gap` and `gap_by_condition`.
+fn rescore(sim: &Simulator, spaces: &[&Space], models: &mut [ModelResult], particles: u32, streams: usize, seed: u64) {
+    let conds = sim.conditions;
+    let mut points = Vec::with_capacity(models.len() * streams);
+    for (space, m) in spaces.iter().zip(models.iter()) {
+        points.push((*space, m.full.x.clone()));
     }
-    let mut heldout_by_condition = vec![0.0; conds.len()];
-    for (c, cond) in conds.iter().enumerate() {
-        for (f, pred) in predictions[c].iter().enumerate() {
-            heldout_by_condition[c] += cond.target(&fold_indices(cond.runs.runs.len(), k, f).1).sse(pred);
+    for m in models.iter_mut() {
+        m.fresh = Vec::with_capacity(streams);
+    }
+    for r in 0..streams {
+        // stream r + 1: the fit used `seed` itself
+        let bins = sim.simulate(&points, particles, seed.wrapping_add(1 + r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        for (m, b) in models.iter_mut().zip(bins) {
+            // a point the fit simulated cannot fail on another stream; keep the fit's bins
+            m.fresh.push(b.unwrap_or_else(|| m.full.bins.clone()));
         }
     }
-    let heldout = heldout_by_condition.iter().sum();
-    let name = model_name(&joint.effects);
-    log(format!("diagnose: {name}: in-sample SSE {:.1} %², held-out gap {heldout:.1} %²", full.value));
-    Ok(ModelResult {
-        effects: joint.effects.clone(),
-        names: joint.names(),
-        full,
-        fold_params,
-        predictions,
-        heldout,
-        heldout_by_condition,
-        replicates: Vec::new(),
-        interval: [f64::NAN; 2],
-        se: f64::NAN,
-        improvement_interval: [f64::NAN; 2],
-        extra_params: extra,
-        score: f64::NAN,
-        evaluations,
-    })
+    let targets: Vec<Target> = conds.iter().map(Condition::target_all).collect();
+    for m in models.iter_mut() {
+        m.gap_by_condition = (0..conds.len())
+            .map(|c| m.fresh.iter().map(|f| targets[c].sse(&f[c])).sum::<f64>() / m.fresh.len().max(1) as f64)
+            .collect();
+        m.gap = m.gap_by_condition.iter().sum();
+    }
 }
 
-/// The bootstrap replicates of every model's held-out gap (paired: one resample for all; the
-/// resamples depend only on `seed`, the conditions and `k`, so calls with the same ones pair
-/// their models too).
-fn bootstrap_heldout(conds: &[Condition], k: usize, models: &mut [ModelResult], replicates: usize, seed: u64) {
+/// The bootstrap replicates of every model's gap (paired: one resample of the runs and one
+/// fresh stream per replicate for all models; the resamples depend only on `seed` and the
+/// conditions, so calls with the same ones pair their models too).
+fn bootstrap_gaps(conds: &[Condition], models: &mut [ModelResult], replicates: usize, seed: u64) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xD1A6_0005);
+    let streams = models.iter().map(|m| m.fresh.len()).min().unwrap_or(0).max(1);
     for m in models.iter_mut() {
         m.replicates = Vec::with_capacity(replicates);
     }
     for _ in 0..replicates {
+        let r = rng.random_range(0..streams);
         let mut totals = vec![0.0; models.len()];
         for (c, cond) in conds.iter().enumerate() {
-            for f in 0..k {
-                let held = fold_indices(cond.runs.runs.len(), k, f).1;
-                let idx: Vec<usize> = (0..held.len()).map(|_| held[rng.random_range(0..held.len())]).collect();
-                let t = cond.target(&idx);
-                for (m, total) in models.iter().zip(totals.iter_mut()) {
-                    *total += t.sse(&m.predictions[c][f]);
-                }
+            let n = cond.runs.runs.len();
+            let idx: Vec<usize> = (0..n).map(|_| rng.random_range(0..n)).collect();
+            let t = cond.target(&idx);
+            for (m, total) in models.iter().zip(totals.iter_mut()) {
+                let bins = m.fresh.get(r).unwrap_or(&m.full.bins);
+                *total += t.sse(&bins[c]);
             }
         }
         for (m, t) in models.iter_mut().zip(totals) {
@@ -808,9 +434,26 @@ fn bootstrap_heldout(conds: &[Condition], k: usize, models: &mut [ModelResult], 
     for m in models.iter_mut() {
         m.interval = interval(&m.replicates);
         m.se = sample_sd(&m.replicates);
-        m.score = m.heldout + 2.0 * m.extra_params as f64 * if m.se.is_finite() { m.se } else { 0.0 };
+        m.score = m.gap + 2.0 * m.extra_params as f64 * if m.se.is_finite() { m.se } else { 0.0 };
     }
 }
+
+/// Particles per simulation that the data call for: the Monte-Carlo variance of every
+/// tooth holding ≥ 2 % of a condition's mass at most a quarter of the variance of its
+/// measured mean ([`Condition::particles_for`]), rounded up to a thousand, within
+/// [`MIN_PARTICLES`, `max`]. Returns the count and whether `max` limited it.
+pub fn particles_from_data(conditions: &[Condition], max: u32) -> (u32, bool) {
+    let want = conditions.iter().map(|c| c.particles_for(0.25)).fold(0.0, f64::max);
+    let rounded = ((want / 1000.0).ceil() * 1000.0).max(MIN_PARTICLES as f64);
+    if rounded > max as f64 {
+        (max, true)
+    } else {
+        (rounded as u32, false)
+    }
+}
+
+/// Fewest particles per simulation a diagnosis uses.
+pub const MIN_PARTICLES: u32 = 2000;
 
 /// Where the baseline misses, in one condition.
 fn where_condition(cond: &Condition, scenario: &Scenario, bins: &[f64], particles: u32) -> anyhow::Result<WhereCondition> {
@@ -948,6 +591,25 @@ fn sled_motion_notes(conditions: &[Condition]) -> Vec<String> {
     notes
 }
 
+fn new_result(space: &Space, fit: Fit, baseline_dim: usize) -> ModelResult {
+    ModelResult {
+        effects: space.effects.clone(),
+        names: space.names(),
+        evaluations: fit.evaluations,
+        full: fit,
+        fresh: Vec::new(),
+        gap: f64::NAN,
+        gap_by_condition: Vec::new(),
+        replicates: Vec::new(),
+        interval: [f64::NAN; 2],
+        se: f64::NAN,
+        improvement_interval: [f64::NAN; 2],
+        // parameters beyond the baseline's (quadratic drag trades k_drag for its own two)
+        extra_params: space.dim().saturating_sub(baseline_dim),
+        score: f64::NAN,
+    }
+}
+
 /// Run the diagnosis. `log` receives progress lines.
 pub fn diagnose(
     engine: &dyn BatchEvaluator,
@@ -958,14 +620,10 @@ pub fn diagnose(
     if conditions.is_empty() {
         bail!("--data/--setup: at least one condition is required");
     }
-    let k = settings.folds;
-    if k < 2 {
-        bail!("--folds must be >= 2, got {k}");
-    }
     for c in &conditions {
         let n = c.runs.runs.len();
-        if n < k {
-            bail!("--folds {k}: {} has only {n} runs (every fold needs at least one held-out run)", c.data);
+        if n < 2 {
+            bail!("--data {}: has {n} run(s); the diagnosis needs at least 2 (their spread is the measurement's uncertainty)", c.data);
         }
         if c.runs.teeth > c.teeth() {
             bail!(
@@ -986,11 +644,15 @@ pub fn diagnose(
     if settings.bootstrap < 2 {
         bail!("--bootstrap must be >= 2, got {}", settings.bootstrap);
     }
+    let budget = settings.budget;
+    if budget.rescore_seeds < 1 {
+        bail!("--rescore-streams must be >= 1, got 0");
+    }
     let mut notes = Vec::new();
     let any_drag = conditions.iter().any(Condition::has_drag);
     let mut effects = Vec::new();
     for e in &settings.effects {
-        if matches!(*e, EffectKind::Polydisperse | EffectKind::QuadraticDrag) && !any_drag {
+        if e.needs_air() && !any_drag {
             notes.push(format!("{} skipped: it only changes drag, and every setup is in vacuum (k_drag 0)", e.name()));
         } else {
             effects.push(*e);
@@ -1009,30 +671,71 @@ pub fn diagnose(
                 .to_string(),
         );
     }
-    let shared = shared_params(&conditions);
-    let budget = settings.budget;
-    let particles = conditions[0].base.sim.particles;
-    let joint_for = |effects: &[EffectKind]| Joint::new(engine, &conditions, shared.clone(), effects);
-
-    log(format!("diagnose: baseline ({} conditions, {k} folds)", conditions.len()));
-    let base = cross_validate(&joint_for(&[]), k, budget, &[], log)?;
-    let mut models = vec![base];
-    for e in &effects {
-        log(format!("diagnose: {}", e.name()));
-        let m = cross_validate(&joint_for(&[*e]), k, budget, &[&models[0]], log)?;
-        models.push(m);
+    let (particles, limited) = match budget.particles {
+        Some(n) => (n, false),
+        None => particles_from_data(&conditions, budget.max_particles),
+    };
+    let wanted = conditions.iter().map(|c| c.particles_for(0.25)).fold(0.0, f64::max);
+    if limited || (particles as f64) < wanted {
+        notes.push(format!(
+            "Monte-Carlo budget: {particles} particles per simulation; keeping the simulation's noise per tooth at half the \
+             measured mean's would take {wanted:.0}. The simulation's noise, not the data, limits how small a gap can be \
+             told apart (raise --max-particles, or use a GPU engine)"
+        ));
     }
-    bootstrap_heldout(&conditions, k, &mut models, settings.bootstrap, budget.seed);
-    let mut models = models.into_iter();
+    let screen_particles = (particles / 8).clamp(MIN_PARTICLES.min(particles), particles);
+    let solver = SolverBudget {
+        pop: budget.pop,
+        generations: budget.generations,
+        screen_particles,
+        particles,
+        polish_iterations: budget.polish,
+        seed: budget.seed,
+    };
+    let shared = shared_params(&conditions);
+    let sim = Simulator { engine, conditions: &conditions };
+    let targets: Vec<Target> = conditions.iter().map(Condition::target_all).collect();
+    log(format!(
+        "diagnose: {} conditions, {particles} particles per simulation (screen {screen_particles}), {} candidate effects",
+        conditions.len(),
+        effects.len()
+    ));
+
+    // the baseline first: its optimum starts every nested effect
+    let base_space = Space::new(shared.clone(), &[], &conditions);
+    let base_fit = fit_models(&sim, &targets, &[Model { space: &base_space, starts: Vec::new() }], &solver, log)?.remove(0);
+    log(format!("diagnose: baseline: SSE {:.1} %² (fit streams)", base_fit.value));
+    let baseline_dim = base_space.dim();
+    let spaces: Vec<Space> = effects.iter().map(|e| Space::new(shared.clone(), &[*e], &conditions)).collect();
+    let base_names = base_space.names();
+    let models: Vec<Model> = spaces
+        .iter()
+        .map(|sp| Model { space: sp, starts: sp.start_from(&base_names, &base_fit.x).into_iter().collect() })
+        .collect();
+    let fits = fit_models(&sim, &targets, &models, &solver, log)?;
+    let mut all: Vec<ModelResult> = vec![new_result(&base_space, base_fit, baseline_dim)];
+    for (sp, f) in spaces.iter().zip(fits) {
+        log(format!("diagnose: {}: SSE {:.1} %² (fit streams)", model_name(&sp.effects), f.value));
+        all.push(new_result(sp, f, baseline_dim));
+    }
+    let all_spaces: Vec<&Space> = std::iter::once(&base_space).chain(spaces.iter()).collect();
+    rescore(&sim, &all_spaces, &mut all, particles, budget.rescore_seeds, budget.seed);
+    bootstrap_gaps(&conditions, &mut all, settings.bootstrap, budget.seed);
+    for m in &all {
+        log(format!("diagnose: {}: gap {:.1} %² on fresh streams, interval [{:.1}, {:.1}]", m.name(), m.gap, m.interval[0], m.interval[1]));
+    }
+    let mut models = all.into_iter();
     let mut baseline = models.next().context("no baseline")?;
     baseline.improvement_interval = [0.0, 0.0];
     let mut ranking: Vec<ModelResult> = models.collect();
     for m in ranking.iter_mut() {
         m.improvement_interval = paired_interval(&baseline, m);
     }
-    ranking.sort_by(|a, b| a.score.total_cmp(&b.score).then(a.heldout.total_cmp(&b.heldout)));
+    ranking.sort_by(|a, b| a.score.total_cmp(&b.score).then(a.gap.total_cmp(&b.gap)));
     let top = ranking.first().context("no effect ranked")?;
-    let best = (baseline.heldout > top.interval[1] && top.improvement_interval[0] > 0.0 && top.heldout < baseline.heldout)
+    let best = (baseline.gap > top.interval[1]
+        && top.improvement_interval[0] > 0.0
+        && top.gap <= (1.0 - MIN_REDUCTION) * baseline.gap)
         .then_some(top.single())
         .flatten();
     let overlaps = |a: [f64; 2], b: [f64; 2]| a[0] <= b[1] && b[0] <= a[1];
@@ -1046,14 +749,19 @@ pub fn diagnose(
 
     // How far two effects go together: the two best candidates that each beat the baseline
     // beyond the uncertainty, refitted jointly from both single fits (and the baseline's).
-    let beating: Vec<&ModelResult> = ranking.iter().filter(|m| m.improvement_interval[0] > 0.0 && m.heldout < baseline.heldout).take(2).collect();
+    let beating: Vec<&ModelResult> = ranking.iter().filter(|m| m.improvement_interval[0] > 0.0 && m.gap < baseline.gap).take(2).collect();
     let combined = if best.is_some() && beating.len() == 2 {
         let pair: Vec<EffectKind> = beating.iter().filter_map(|m| m.single()).collect();
         log(format!("diagnose: {} together", pair.iter().map(|e| e.name()).collect::<Vec<_>>().join(" + ")));
-        let mut m = cross_validate(&joint_for(&pair), k, budget, &[beating[0], beating[1], &baseline], log)?;
-        // the resamples depend only on the seed, conditions and folds, so bootstrapping the
+        let space = Space::new(shared.clone(), &pair, &conditions);
+        let starts: Vec<Vec<f64>> =
+            [beating[0], beating[1], &baseline].iter().filter_map(|m| space.start_from(&m.names, &m.full.x)).collect();
+        let fit = fit_models(&sim, &targets, &[Model { space: &space, starts }], &solver, log)?.remove(0);
+        let mut m = new_result(&space, fit, baseline_dim);
+        rescore(&sim, &[&space], std::slice::from_mut(&mut m), particles, budget.rescore_seeds, budget.seed);
+        // the resamples depend only on the seed and the conditions, so bootstrapping the
         // pair alone pairs it with the models bootstrapped above
-        bootstrap_heldout(&conditions, k, std::slice::from_mut(&mut m), settings.bootstrap, budget.seed);
+        bootstrap_gaps(&conditions, std::slice::from_mut(&mut m), settings.bootstrap, budget.seed);
         m.improvement_interval = paired_interval(&baseline, &m);
         let improvement_over_singles = beating.iter().map(|single| paired_interval(single, &m)).collect();
         Some(Combined { model: m, improvement_over_singles })
@@ -1061,11 +769,12 @@ pub fn diagnose(
         None
     };
 
-    let base_joint = joint_for(&[]);
     let mut where_ = Vec::new();
     let mut gap = Vec::new();
     for (c, cond) in conditions.iter().enumerate() {
-        let s = base_joint.scenario_at(c, &baseline.full.x);
+        let mut s = base_space.scenario_at(cond, &baseline.full.x);
+        s.sim.particles = particles;
+        s.sim.seed = budget.seed;
         where_.push(where_condition(cond, &s, &baseline.full.bins[c], particles)?);
         gap.push(gap_condition(cond, &baseline.full.bins[c], &top.full.bins[c], settings.bootstrap, budget.seed));
     }
@@ -1142,8 +851,8 @@ pub fn to_json(d: &Diagnosis) -> Value {
         .map(|m| {
             json!({
                 "effect": m.name(),
-                "heldout_gap": num(m.heldout),
-                "reduction": num(1.0 - m.heldout / b.heldout),
+                "gap": num(m.gap),
+                "reduction": num(1.0 - m.gap / b.gap),
                 "interval": [num(m.interval[0]), num(m.interval[1])],
                 "improvement_interval": [num(m.improvement_interval[0]), num(m.improvement_interval[1])],
                 "extra_params": m.extra_params,
@@ -1187,11 +896,11 @@ pub fn to_json(d: &Diagnosis) -> Value {
             json!({
                 "effect": t.name(),
                 "is_best": d.best.is_some(),
-                "heldout_before": num(b.heldout),
-                "heldout_before_interval": [num(b.interval[0]), num(b.interval[1])],
-                "heldout_after": num(t.heldout),
-                "heldout_after_interval": [num(t.interval[0]), num(t.interval[1])],
-                "reduction": num(1.0 - t.heldout / b.heldout),
+                "gap_before": num(b.gap),
+                "gap_before_interval": [num(b.interval[0]), num(b.interval[1])],
+                "gap_after": num(t.gap),
+                "gap_after_interval": [num(t.interval[0]), num(t.interval[1])],
+                "reduction": num(1.0 - t.gap / b.gap),
                 "improvement_interval": [num(t.improvement_interval[0]), num(t.improvement_interval[1])],
                 "in_sample_before": num(b.full.value),
                 "in_sample_after": num(t.full.value),
@@ -1209,9 +918,9 @@ pub fn to_json(d: &Diagnosis) -> Value {
         "indistinguishable": d.indistinguishable.iter().map(|e| e.name()).collect::<Vec<_>>(),
         "combined": d.combined.as_ref().map(|cb| json!({
             "effects": cb.model.effects.iter().map(|e| e.name()).collect::<Vec<_>>(),
-            "heldout_gap": num(cb.model.heldout),
+            "gap": num(cb.model.gap),
             "interval": [num(cb.model.interval[0]), num(cb.model.interval[1])],
-            "reduction": num(1.0 - cb.model.heldout / d.baseline.heldout),
+            "reduction": num(1.0 - cb.model.gap / d.baseline.gap),
             "improvement_interval": [num(cb.model.improvement_interval[0]), num(cb.model.improvement_interval[1])],
             "improvement_over_singles": cb.model.effects.iter().zip(&cb.improvement_over_singles).map(|(e, i)| json!({"effect": e.name(), "interval": [num(i[0]), num(i[1])]})).collect::<Vec<_>>(),
             "params": cb.model.params_object(),
@@ -1221,18 +930,18 @@ pub fn to_json(d: &Diagnosis) -> Value {
         "baseline": {
             "params": b.params_object(),
             "in_sample_sse": num(b.full.value),
-            "heldout_gap": num(b.heldout),
+            "gap": num(b.gap),
             "interval": [num(b.interval[0]), num(b.interval[1])],
             "se": num(b.se),
-            "folds": d.settings.folds,
+            "rescore_streams": d.settings.budget.rescore_seeds,
             "bootstrap": d.settings.bootstrap,
             "interval_percentiles": [INTERVAL.0, INTERVAL.1],
             "particles": d.particles,
             "engine": d.engine,
             "shared_params": d.shared.iter().map(|p| p.name()).collect::<Vec<_>>(),
-            "ranking_rule": "score = heldout_gap + 2 x (extra parameters) x bootstrap SE of the held-out gap",
+            "ranking_rule": RANKING_RULE,
             "scores": scores,
-            "heldout_by_condition": d.conditions.iter().zip(&b.heldout_by_condition).map(|(c, v)| (c.name.clone(), num(*v))).collect::<Map<String, Value>>(),
+            "gap_by_condition": d.conditions.iter().zip(&b.gap_by_condition).map(|(c, v)| (c.name.clone(), num(*v))).collect::<Map<String, Value>>(),
         },
         "where": {
             "params": b.params_object(),

@@ -80,8 +80,8 @@ pub fn to_markdown(d: &Diagnosis) -> String {
     let _ = writeln!(
         s,
         "\nShared parameters fitted jointly: {}. Engine `{}`, {} particles (common random numbers, seed {}), \
-         GA {} × {} generations + Nelder-Mead {} evaluations per fit, {} folds (run i in fold i mod {}), \
-         {} bootstrap replicates; intervals are the {:.0}-{:.0} % percentiles.\n",
+         differential evolution {} × {} generations at 1/8 of the particles + {} compass-search iterations per fit, \
+         every fit re-scored on {} fresh particle streams, {} bootstrap replicates; intervals are the {:.0}-{:.0} % percentiles.\n",
         d.shared.iter().map(|p| p.name()).collect::<Vec<_>>().join(", "),
         d.engine,
         d.particles,
@@ -89,8 +89,7 @@ pub fn to_markdown(d: &Diagnosis) -> String {
         bu.pop,
         bu.generations,
         bu.polish,
-        d.settings.folds,
-        d.settings.folds,
+        bu.rescore_seeds,
         d.settings.bootstrap,
         100.0 * INTERVAL.0,
         100.0 * INTERVAL.1
@@ -167,21 +166,23 @@ pub fn to_markdown(d: &Diagnosis) -> String {
     }
 
     // WHICH
-    let _ = writeln!(s, "## Which: candidate effects by held-out error\n");
+    let _ = writeln!(s, "## Which: candidate effects by their gap on fresh particle streams\n");
     let _ = writeln!(
         s,
-        "Each model is refitted on the training folds and scored on the held-out folds' mean distributions; the \
-         held-out gap is the SSE (%²) summed over conditions and folds. Ranked by score = held-out gap + 2 × \
-         (extra parameters) × SE (bootstrap standard error of the gap). Reduction = 1 − gap / baseline gap; the \
-         improvement interval is the paired bootstrap interval of (baseline − effect).\n"
+        "Each model is fitted on all runs and re-simulated on fresh particle streams (not the ones it was fitted \
+         on); the gap is the SSE (%²) summed over conditions, averaged over the streams. Ranked by score = gap + 2 × \
+         (extra parameters) × SE (bootstrap standard error of the gap, runs and streams resampled). Reduction = \
+         1 − gap / baseline gap; the improvement interval is the paired bootstrap interval of (baseline − effect). \
+         `best` must also remove at least {:.0} % of the baseline's gap.\n",
+        100.0 * super::diagnose::MIN_REDUCTION
     );
-    let _ = writeln!(s, "| rank | model | fitted parameters (all runs) | held-out gap | interval | SE | score | reduction | improvement interval |");
+    let _ = writeln!(s, "| rank | model | fitted parameters (all runs) | gap | interval | SE | score | reduction | improvement interval |");
     let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
     let _ = writeln!(
         s,
         "| – | baseline | {} | {} | {} | {} | {} | 0 | – |",
         params_text(b),
-        f(b.heldout, 1),
+        f(b.gap, 1),
         iv(b.interval, 1),
         f(b.se, 1),
         f(b.score, 1)
@@ -193,11 +194,11 @@ pub fn to_markdown(d: &Diagnosis) -> String {
             i + 1,
             m.name(),
             params_text(m),
-            f(m.heldout, 1),
+            f(m.gap, 1),
             iv(m.interval, 1),
             f(m.se, 1),
             f(m.score, 1),
-            f(100.0 * (1.0 - m.heldout / b.heldout), 1),
+            f(100.0 * (1.0 - m.gap / b.gap), 1),
             iv(m.improvement_interval, 1)
         );
     }
@@ -205,8 +206,8 @@ pub fn to_markdown(d: &Diagnosis) -> String {
         s,
         "\n**Best:** {}.",
         match d.best {
-            Some(e) => format!("`{}` (it beats the baseline beyond the bootstrap uncertainty)", e.name()),
-            None => "none — no effect's held-out gap beats the baseline's beyond the uncertainty (the data cannot tell)".to_string(),
+            Some(e) => format!("`{}` (it beats the baseline beyond the bootstrap uncertainty and by a material share)", e.name()),
+            None => "none — no effect's gap beats the baseline's beyond the uncertainty by a material share (the data cannot tell)".to_string(),
         }
     );
     if d.indistinguishable.is_empty() {
@@ -226,11 +227,11 @@ pub fn to_markdown(d: &Diagnosis) -> String {
             s,
             "Held-out gap: {} %² {} before, {} %² {} after (reduction {} %, paired improvement interval {} %²). \
              In sample: {} → {} %².\n",
-            f(b.heldout, 1),
+            f(b.gap, 1),
             iv(b.interval, 1),
-            f(t.heldout, 1),
+            f(t.gap, 1),
             iv(t.interval, 1),
-            f(100.0 * (1.0 - t.heldout / b.heldout), 1),
+            f(100.0 * (1.0 - t.gap / b.gap), 1),
             iv(t.improvement_interval, 1),
             f(b.full.value, 1),
             f(t.full.value, 1)
@@ -239,10 +240,10 @@ pub fn to_markdown(d: &Diagnosis) -> String {
             let teeth = c.teeth();
             let _ = writeln!(
                 s,
-                "### {} (held-out gap {} → {} %²)\n",
+                "### {} (gap {} → {} %²)\n",
                 c.name,
-                f(b.heldout_by_condition[ci], 1),
-                f(t.heldout_by_condition[ci], 1)
+                f(b.gap_by_condition[ci], 1),
+                f(t.gap_by_condition[ci], 1)
             );
             let _ = writeln!(s, "| tooth | measured % | before % | residual before [interval] | after % | residual after [interval] |");
             let _ = writeln!(s, "|---|---|---|---|---|---|");
@@ -272,11 +273,11 @@ pub fn to_markdown(d: &Diagnosis) -> String {
         let _ = writeln!(
             s,
             "The two best candidates that each beat the baseline, refitted jointly (starting from both single fits): \
-             held-out gap {} %² {} (reduction {} % against the baseline; paired improvement over each effect alone: {}; \
+             gap {} %² {} (reduction {} % against the baseline; paired improvement over each effect alone: {}; \
              an improvement only where the interval lies above 0). Fitted on all runs: {}; in-sample SSE {} %².\n",
-            f(m.heldout, 1),
+            f(m.gap, 1),
             iv(m.interval, 1),
-            f(100.0 * (1.0 - m.heldout / b.heldout), 1),
+            f(100.0 * (1.0 - m.gap / b.gap), 1),
             m.effects.iter().zip(&cb.improvement_over_singles).map(|(e, i)| format!("`{}` {} %²", e.name(), iv(*i, 1))).collect::<Vec<_>>().join(", "),
             params_text(m),
             f(m.full.value, 1)
@@ -431,7 +432,7 @@ pub fn ranking_svg(d: &Diagnosis) -> String {
     let (x0, w) = (150.0, 440.0);
     let h = row * models.len() as f64;
     let mut s = svg_open(x0 + w + 60.0, h + 110.0);
-    let (lo, hi) = range_of(models.iter().flat_map(|m| [m.interval[0], m.interval[1], m.heldout]), 0.08, true);
+    let (lo, hi) = range_of(models.iter().flat_map(|m| [m.interval[0], m.interval[1], m.gap]), 0.08, true);
     let xp = |v: f64| x0 + (v.clamp(lo, hi) - lo) / (hi - lo) * w;
     let y0 = 40.0;
     let _ = writeln!(
@@ -449,7 +450,7 @@ pub fn ranking_svg(d: &Diagnosis) -> String {
         let _ = writeln!(s, r##"<text x="{x:.1}" y="{:.1}" font-size="11" text-anchor="middle">{}</text>"##, y0 + h + 15.0, fmt_tick(t));
         t += step;
     }
-    let bx = xp(d.baseline.heldout);
+    let bx = xp(d.baseline.gap);
     let _ = writeln!(s, r##"<line x1="{bx:.1}" y1="{y0:.1}" x2="{bx:.1}" y2="{:.1}" stroke="#888" stroke-dasharray="4 3"/>"##, y0 + h);
     for (i, m) in models.iter().enumerate() {
         let y = y0 + row * (i as f64 + 0.5);
@@ -465,7 +466,7 @@ pub fn ranking_svg(d: &Diagnosis) -> String {
         };
         let _ = writeln!(s, r##"<text x="{:.1}" y="{:.1}" font-size="12" text-anchor="end">{}</text>"##, x0 - 8.0, y + 4.0, esc(&m.name()));
         let _ = writeln!(s, r##"<line x1="{:.1}" y1="{y:.1}" x2="{:.1}" y2="{y:.1}" stroke="{colour}" stroke-width="3"/>"##, xp(m.interval[0]), xp(m.interval[1]));
-        let _ = writeln!(s, r##"<circle cx="{:.1}" cy="{y:.1}" r="5" fill="{colour}"/>"##, xp(m.heldout));
+        let _ = writeln!(s, r##"<circle cx="{:.1}" cy="{y:.1}" r="5" fill="{colour}"/>"##, xp(m.gap));
     }
     let _ = writeln!(
         s,

@@ -134,6 +134,27 @@ pub struct Target {
 }
 
 impl Target {
+    /// Fractions of the *loaded* mass (every run must record `input_mass`): the weighed teeth
+    /// (Σ masses / Σ input masses), zeros for the teeth not weighed, and a last bin for what
+    /// was not recovered (grains beyond the weighed teeth or lost, and spill), which
+    /// [`collapse_to_weighed`] makes of the simulated bins. Unlike [`Target::new`] (D.4's
+    /// normalisation to the recovered mass, with simulated mass beyond the weighed teeth
+    /// counted as misfit), it stays right when the weighed teeth do not hold every grain.
+    pub fn of_loaded_mass(runs: &MeasuredRuns, teeth: usize, resolution_g: f64) -> Option<Self> {
+        let input: f64 = runs.runs.iter().map(|r| r.input_mass_g).sum::<Option<f64>>()?;
+        if !(input > 0.0) {
+            return None;
+        }
+        let mut bins = vec![0.0; teeth + 1];
+        for r in &runs.runs {
+            for (b, m) in bins.iter_mut().zip(&r.teeth_g) {
+                *b += m / input;
+            }
+        }
+        bins[teeth] = (1.0 - bins[..runs.teeth].iter().sum::<f64>()).max(0.0);
+        Some(Target { bins, counts: runs.runs.iter().map(|r| objective::quantised_counts(&r.teeth_g, teeth, resolution_g)).collect() })
+    }
+
     pub fn new(runs: &MeasuredRuns, teeth: usize, resolution_g: f64) -> Self {
         Target {
             bins: objective::measured_bins(&runs.mean_fractions(), teeth),
@@ -165,6 +186,17 @@ impl Target {
     pub fn measured_mean_likelihood(&self) -> Profiled {
         objective::profile_nll(&self.counts, &self.bins, 1e-12)
     }
+}
+
+/// Simulated bins (teeth, then lost) as a rig that weighs only the first `weighed` teeth
+/// sees them: those teeth, zeros for the others, and everything else in the last bin (the
+/// counterpart of [`Target::of_loaded_mass`]).
+pub fn collapse_to_weighed(bins: &[f64], weighed: usize) -> Vec<f64> {
+    let n = bins.len();
+    let mut out = vec![0.0; n];
+    out[..weighed].copy_from_slice(&bins[..weighed]);
+    out[n - 1] = (1.0 - bins[..weighed].iter().sum::<f64>()).max(0.0);
+    out
 }
 
 /// `runs` restricted to the given indices (repeats allowed, for the bootstrap).

@@ -1,0 +1,119 @@
+//! A measured condition: the runs and the setup they were measured with.
+
+use crate::fit::{collapse_to_weighed, subset, Target};
+use crate::io::measured::MeasuredRuns;
+use crate::model::{Design, Scenario};
+
+/// What a setup states of the sled's motion after the launch ([measurement]
+/// motion_delay_s, motion_return_speed_m_s): the sled-motion effect holds these fixed for
+/// the condition and fits the values left out.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct KnownMotion {
+    pub delay_s: Option<f64>,
+    pub return_speed_m_s: Option<f64>,
+}
+
+impl KnownMotion {
+    pub fn get(&self, i: usize) -> Option<f64> {
+        [self.delay_s, self.return_speed_m_s][i]
+    }
+    pub fn any(&self) -> bool {
+        self.delay_s.is_some() || self.return_speed_m_s.is_some()
+    }
+}
+
+/// One measured condition: runs and the setup they were measured with.
+#[derive(Clone, Debug)]
+pub struct Condition {
+    /// Short name (the data file's stem).
+    pub name: String,
+    pub data: String,
+    pub setup: String,
+    pub runs: MeasuredRuns,
+    /// The setup's scenario (effects off); particle count and seed are set per simulation.
+    pub base: Scenario,
+    pub design: Design,
+    pub resolution_g: f64,
+    /// The sled's motion as far as the setup knows it.
+    pub motion: KnownMotion,
+    /// The setup's motion-profile label (`poc`, `delayed`), if any.
+    pub motion_profile: Option<String>,
+    /// How tooth masses become the compared fractions.
+    pub normalise: Normalise,
+}
+
+/// The measurement model: what the compared fractions are fractions of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Normalise {
+    /// Of the loaded mass (`input_mass`): the weighed teeth and a "not recovered" bin that
+    /// the simulation fills with what rests beyond the weighed teeth or is lost
+    /// ([`Target::of_loaded_mass`]).
+    Loaded,
+    /// Of the recovered mass, with simulated mass beyond the weighed teeth as misfit
+    /// (listing D.4; right when the weighed teeth hold every grain).
+    Recovered,
+}
+
+impl Condition {
+    pub fn teeth(&self) -> usize {
+        self.base.sim.teeth as usize
+    }
+    pub fn has_drag(&self) -> bool {
+        self.base.environment.k_drag.is_some()
+    }
+    /// The target of the runs `idx` (repeats allowed: bootstrap).
+    pub fn target(&self, idx: &[usize]) -> Target {
+        self.target_of(&subset(&self.runs, idx))
+    }
+    pub fn target_all(&self) -> Target {
+        self.target_of(&self.runs)
+    }
+    fn target_of(&self, runs: &MeasuredRuns) -> Target {
+        match self.normalise {
+            Normalise::Loaded => Target::of_loaded_mass(runs, self.teeth(), self.resolution_g)
+                .expect("Normalise::Loaded is chosen only when every run records input_mass"),
+            Normalise::Recovered => Target::new(runs, self.teeth(), self.resolution_g),
+        }
+    }
+    /// Simulated bins (teeth, then lost) as this condition's measurement sees them.
+    pub fn observe(&self, bins: Vec<f64>) -> Vec<f64> {
+        match self.normalise {
+            Normalise::Loaded => collapse_to_weighed(&bins, self.runs.teeth),
+            Normalise::Recovered => bins,
+        }
+    }
+    /// Whether every run records its loaded mass (so `Normalise::Loaded` is possible).
+    pub fn has_input_mass(runs: &MeasuredRuns) -> bool {
+        runs.runs.iter().all(|r| r.input_mass_g.is_some_and(|m| m > 0.0))
+    }
+
+    /// Variance of the measured mean fraction per bin (teeth, then lost): the run-to-run
+    /// variance over the number of runs, floored by the scale's quantisation
+    /// (resolution²/12 relative to the mean recovered mass², per run, over the runs).
+    pub fn mean_variance(&self) -> Vec<f64> {
+        let n = self.runs.runs.len().max(1) as f64;
+        let sd = self.runs.std_fractions();
+        let recovered = self.runs.runs.iter().map(|r| r.recovered_g()).sum::<f64>() / n;
+        let scale = (self.resolution_g / recovered).powi(2) / 12.0 / n;
+        (0..=self.teeth())
+            .map(|j| {
+                let s = sd.get(j).copied().filter(|s| s.is_finite()).unwrap_or(0.0);
+                s * s / n + scale
+            })
+            .collect()
+    }
+
+    /// The particle count whose Monte-Carlo variance p(1−p)/N stays at or below
+    /// `ratio` × the measured mean's variance in every tooth holding ≥ 2 % of the mass.
+    pub fn particles_for(&self, ratio: f64) -> f64 {
+        let t = self.target_all();
+        let var = self.mean_variance();
+        t.bins
+            .iter()
+            .zip(&var)
+            .filter(|(p, _)| **p >= 0.02)
+            .map(|(p, v)| p * (1.0 - p) / (ratio * v.max(1e-12)))
+            .fold(0.0, f64::max)
+    }
+}

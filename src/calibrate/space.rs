@@ -1,0 +1,114 @@
+//! The calibration's parameter space: the shared collision/drag parameters ([`Param`]) and
+//! the switched-on effects' own parameters ([`EffectKind`]), searched in a unit box.
+
+use super::condition::Condition;
+use crate::fit::Param;
+use crate::model::effects::{EffectKind, Effects};
+use crate::model::Scenario;
+
+/// One model's parameters: `shared` first, then the effects' free parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Space {
+    pub shared: Vec<Param>,
+    /// The effects switched on (none for the baseline).
+    pub effects: Vec<EffectKind>,
+    /// The effects' fitted parameters, as (index into `effects`, parameter index): all of
+    /// them, except sled-motion values that every condition states (`KnownMotion`).
+    pub free: Vec<(usize, usize)>,
+}
+
+impl Space {
+    pub fn new(mut shared: Vec<Param>, effects: &[EffectKind], conditions: &[Condition]) -> Self {
+        if effects.contains(&EffectKind::QuadraticDrag) {
+            // Schiller-Naumann drag replaces the linear law: k_drag would be a dead parameter
+            // (the setups' own value only marks which of them are in air)
+            shared.retain(|p| *p != Param::KDrag);
+        }
+        let mut free = Vec::new();
+        for (k, e) in effects.iter().enumerate() {
+            for i in 0..e.param_names().len() {
+                let stated_everywhere = *e == EffectKind::SledMotion && conditions.iter().all(|c| c.motion.get(i).is_some());
+                if !stated_everywhere {
+                    free.push((k, i));
+                }
+            }
+        }
+        Space { shared, effects: effects.to_vec(), free }
+    }
+
+    pub fn dim(&self) -> usize {
+        self.shared.len() + self.free.len()
+    }
+
+    pub fn bounds(&self) -> Vec<(f64, f64)> {
+        let mut b: Vec<(f64, f64)> = self.shared.iter().map(|p| p.bounds()).collect();
+        b.extend(self.free.iter().map(|(k, i)| self.effects[*k].search_bounds()[*i]));
+        b
+    }
+
+    /// Parameter names, shared first (effect parameter names are unique across effects).
+    pub fn names(&self) -> Vec<&'static str> {
+        let mut n: Vec<&'static str> = self.shared.iter().map(|p| p.name()).collect();
+        n.extend(self.free.iter().map(|(k, i)| self.effects[*k].param_names()[*i]));
+        n
+    }
+
+    /// A start for this model from another model's point (`names`, `x`): each parameter
+    /// takes the other model's value where it has one, an effect parameter the other lacks
+    /// its neutral value. From the baseline that is the baseline itself (a nested model);
+    /// None when a parameter has no such value (quadratic drag).
+    pub fn start_from(&self, names: &[&'static str], x: &[f64]) -> Option<Vec<f64>> {
+        let own = self.names();
+        let mut v = Vec::with_capacity(own.len());
+        for (j, n) in own.iter().enumerate() {
+            if let Some(p) = names.iter().position(|m| m == n) {
+                v.push(x[p]);
+            } else if j >= self.shared.len() {
+                let (k, i) = self.free[j - self.shared.len()];
+                v.push(self.effects[k].neutral()?[i]);
+            } else {
+                return None;
+            }
+        }
+        Some(v)
+    }
+
+    /// Condition `cond`'s scenario at parameters `x` (k_drag only where the setup has drag;
+    /// sled motion as the setup states it, fitted where it does not).
+    pub fn scenario_at(&self, cond: &Condition, x: &[f64]) -> Scenario {
+        let mut s = cond.base.clone();
+        for (p, v) in self.shared.iter().zip(x) {
+            if *p == Param::KDrag && !cond.has_drag() {
+                continue;
+            }
+            p.apply(&mut s, *v);
+        }
+        s.effects = Effects::default();
+        for (k, e) in self.effects.iter().enumerate() {
+            let e = *e;
+            let mut v: Vec<f64> = e.search_bounds().iter().map(|b| b.0).collect();
+            for ((ek, i), xv) in self.free.iter().zip(&x[self.shared.len()..]) {
+                if *ek == k {
+                    v[*i] = *xv;
+                }
+            }
+            if e == EffectKind::SledMotion {
+                for (i, vi) in v.iter_mut().enumerate() {
+                    if let Some(known) = cond.motion.get(i) {
+                        *vi = known;
+                    }
+                }
+            }
+            e.apply(&mut s.effects, &v);
+        }
+        s
+    }
+
+    pub fn from_unit(&self, u: &[f64]) -> Vec<f64> {
+        u.iter().zip(self.bounds()).map(|(u, (l, h))| l + u.clamp(0.0, 1.0) * (h - l)).collect()
+    }
+
+    pub fn to_unit(&self, x: &[f64]) -> Vec<f64> {
+        x.iter().zip(self.bounds()).map(|(x, (l, h))| if h > l { ((x - l) / (h - l)).clamp(0.0, 1.0) } else { 0.0 }).collect()
+    }
+}

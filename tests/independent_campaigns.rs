@@ -1,0 +1,67 @@
+//! `diagnose` on campaigns made by an **independent simulator** of the thesis's model
+//! (`../shared/campaigns/independent`, issue 11): data this project's code did not make,
+//! with its own numerical choices. A CI-sized subset runs here: one subtle effect (a normal
+//! tilt of 8° at every impact, where the refitted baseline misses by ~6× the true model) and
+//! the control without an effect. All six, at the default budget, with the grading of that
+//! folder's README: `bash scripts/diagnose-independent.sh` (README, "Diagnosis").
+
+use std::path::PathBuf;
+use std::process::Command;
+
+use serde_json::Value;
+
+/// A smaller budget than the defaults (2-3 min a campaign), so the suite stays CI-sized.
+const CI_BUDGET: [&str; 10] = ["--max-particles", "6000", "--pop", "14", "--generations", "14", "--polish", "8", "--rescore-streams", "2"];
+
+fn campaigns() -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/campaigns/independent");
+    assert!(dir.join("answers.json").exists(), "the practice campaigns are missing: {} (shared/ beside the checkout)", dir.display());
+    dir
+}
+
+fn diagnose(name: &str) -> Value {
+    let dir = campaigns().join(name);
+    let out = std::env::temp_dir().join(format!("sawtooth-independent-{name}-{}", std::process::id()));
+    let mut c = Command::new(env!("CARGO_BIN_EXE_sawtooth"));
+    c.arg("diagnose");
+    for k in ["c1", "c2", "c3"] {
+        c.arg("--data").arg(dir.join(format!("{k}.csv"))).arg("--setup").arg(dir.join(format!("{k}.toml")));
+    }
+    let o = c.args(CI_BUDGET).args(["--json", "--out"]).arg(&out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::remove_dir_all(&out).ok();
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+fn answer(name: &str) -> Option<String> {
+    let a: Value = serde_json::from_str(&std::fs::read_to_string(campaigns().join("answers.json")).unwrap()).unwrap();
+    a[name]["effect"].as_str().map(str::to_string)
+}
+
+fn summary(v: &Value) -> String {
+    let r: Vec<String> = v["ranking"].as_array().unwrap().iter().map(|m| format!("{} {:.1}", m["effect"], m["gap"])).collect();
+    format!("baseline {:.1}; {}; best {}; indistinguishable {}", v["baseline"]["gap"], r.join(", "), v["best"], v["indistinguishable"])
+}
+
+/// The README's grading: `best` is the withheld effect, or the effect is indistinguishable
+/// from `best` in a set that rules out at least two of the five candidates.
+fn graded_right(v: &Value, truth: &str) -> bool {
+    let together: Vec<&str> = v["indistinguishable"].as_array().unwrap().iter().map(|e| e.as_str().unwrap()).collect();
+    v["best"] == truth || (!v["best"].is_null() && together.contains(&truth) && together.len() <= 3)
+}
+
+#[test]
+fn a_subtle_impact_scatter_from_another_simulator_is_named() {
+    let truth = answer("campaign_1").expect("campaign_1 withholds an effect");
+    let v = diagnose("campaign_1");
+    eprintln!("campaign_1 ({truth}): {}", summary(&v));
+    assert!(graded_right(&v, &truth), "{truth} not found: {}", summary(&v));
+}
+
+#[test]
+fn the_control_from_another_simulator_names_no_effect() {
+    assert_eq!(answer("campaign_3"), None);
+    let v = diagnose("campaign_3");
+    eprintln!("campaign_3 (none): {}", summary(&v));
+    assert!(v["best"].is_null(), "an effect was named on data without one: {}", summary(&v));
+}
