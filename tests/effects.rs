@@ -29,7 +29,7 @@ fn effects_are_off_by_default_and_each_one_moves_the_distribution() {
     assert!(!s.effects.any());
     let base = sim(&s, &d);
     let cases = [
-        Effects { impact_scatter: Some(ImpactScatter { sigma_deg: 10.0 }), ..Default::default() },
+        Effects { impact_scatter: Some(ImpactScatter { sigma_deg: 25.0 }), ..Default::default() },
         Effects { launch_spread: Some(LaunchSpread { speed_spread: 0.4, angle_sigma_deg: 5.0 }), ..Default::default() },
         Effects { polydisperse: Some(Polydisperse { sigma_ln: 0.5, form: Default::default() }), ..Default::default() },
     ];
