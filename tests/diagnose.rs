@@ -1,13 +1,13 @@
-//! `sawtooth diagnose` on synthetic campaigns whose effect is known (issue 5 §3): the true
-//! effect ranks first (or is indistinguishable from the first) and closes at least half of
-//! the baseline's held-out gap; without an effect, no effect is declared best.
+//! `sawtooth diagnose` on synthetic campaigns whose effect is known (issues 5 and 11): the
+//! withheld effect is named (best, or indistinguishable from the best in a set of at most
+//! three) and closes at least 40 % of the baseline's gap; without an effect, no effect is
+//! declared best.
 //!
-//! Two conditions per campaign (one condition cannot separate an effect from refitted
-//! parameters when the setup fills only three teeth): Test 3's setup with Test 2's
-//! (same rig, quartz sand), with Test 3's rig at a faster launch (v0 1.2 m/s, teeth 3-4:
-//! there impact scatter leaves a shape the baseline cannot make; v0 1.4 m/s for
-//! speed-dependent drag), or Tests 1 and 2 (the same rig with two motion profiles, for sled
-//! motion). Every candidate effect competes in every campaign.
+//! Three conditions per campaign on the rig of the independent practice campaigns
+//! (`data/campaign_rig`: glass beads, v0 1.1 and 1.4 m/s on 30°, 1.1 m/s on 15°), made by
+//! `synth` and diagnosed with every candidate at a CI-sized budget. Moderate strengths, and
+//! forms that differ from the candidates' where the model allows: sizes uniform in number
+//! against the log-normal candidate; a sled motion that only one condition has.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -29,15 +29,6 @@ fn tmp(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("sawtooth-diagnose-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
-}
-
-/// Test 3's rig with a faster launch (v0 in m/s; 1.2 reaches teeth 3-4, 1.4 teeth 4-5).
-fn fast_setup(dir: &Path, v0: &str) -> String {
-    let text = std::fs::read_to_string(setup("test3")).unwrap().replace("v0_m_s = 1.0", &format!("v0_m_s = {v0}"));
-    assert!(text.contains(&format!("v0_m_s = {v0}")));
-    let p = dir.join(format!("fast{v0}.toml"));
-    std::fs::write(&p, text).unwrap();
-    p.to_str().unwrap().to_string()
 }
 
 fn synth(setup: &str, effect: Option<&str>, seed: u64, out: &Path) {
@@ -116,42 +107,69 @@ fn check_combined(v: &Value) {
     assert_eq!(c["improvement_over_singles"].as_array().unwrap().len(), 2, "{c}");
 }
 
-/// The true effect is first or indistinguishable from the first, and cuts the gap by at
-/// least half.
+/// The withheld effect is named: `best`, or indistinguishable from `best` in a set that
+/// rules out at least two of the five candidates (the independent campaigns' grading), and
+/// it removes at least 40 % of the baseline's gap.
 fn check_found(v: &Value, truth: &str) {
     let s = summary(v);
     eprintln!("{truth}: {s}");
-    let ranking = v["ranking"].as_array().unwrap();
-    let first = ranking[0]["effect"].as_str().unwrap();
     let indist: Vec<&str> = v["indistinguishable"].as_array().unwrap().iter().map(|e| e.as_str().unwrap()).collect();
-    assert!(first == truth || indist.contains(&truth), "{truth} neither first nor indistinguishable: {s}");
+    let named = v["best"] == truth || (!v["best"].is_null() && indist.contains(&truth) && indist.len() <= 3);
+    assert!(named, "{truth} not named: {s}");
     check_combined(v);
+    let ranking = v["ranking"].as_array().unwrap();
     let m = ranking.iter().find(|m| m["effect"] == truth).unwrap();
-    assert!(m["reduction"].as_f64().unwrap() >= 0.5, "{truth} closes less than half the gap: {s}");
+    assert!(m["reduction"].as_f64().unwrap() >= 0.4, "{truth} closes less than 40 % of the gap: {s}");
     let lo = m["interval"][0].as_f64().unwrap();
     let hi = m["interval"][1].as_f64().unwrap();
     assert!(lo <= hi && lo >= 0.0, "{s}");
 }
 
-/// A two-condition campaign: each (setup, effect, seed) synthesised into `dir`, then
-/// diagnosed jointly with every candidate.
-fn campaign(dir: &Path, conditions: [(&str, Option<&str>, u64); 2]) -> Value {
+/// The rig of the independent practice campaigns (`data/campaign_rig`): glass beads on the
+/// Table-4.3 rig at v0 1.1 and 1.4 m/s on a 30° incline and 1.1 m/s on 15°.
+const RIG: [&str; 3] = ["slow", "fast", "shallow"];
+
+fn rig_setup(name: &str) -> String {
+    format!("{}/data/campaign_rig/{name}.toml", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A rig setup edited by `edit` (an effect table appended, a line replaced), written into
+/// `dir`.
+fn rig_variant(dir: &Path, name: &str, edit: impl Fn(String) -> String) -> String {
+    let text = edit(std::fs::read_to_string(rig_setup(name)).unwrap());
+    let p = dir.join(format!("{name}-variant.toml"));
+    std::fs::write(&p, text).unwrap();
+    p.to_str().unwrap().to_string()
+}
+
+/// A campaign: each (data-making setup, effect, seed) synthesised into `dir`, then
+/// diagnosed jointly with every candidate, each condition with its `diagnose_setups` entry
+/// (what the experimenter knows: no effect tables).
+fn campaign_with(dir: &Path, conditions: &[(&str, Option<&str>, u64)], diagnose_setups: &[&str]) -> Value {
     let data: Vec<PathBuf> = (0..conditions.len()).map(|i| dir.join(format!("c{i}.csv"))).collect();
     for ((setup, effect, seed), out) in conditions.iter().zip(&data) {
         synth(setup, *effect, *seed, out);
     }
-    let pairs: Vec<(&Path, &str)> = data.iter().zip(&conditions).map(|(p, c)| (p.as_path(), c.0)).collect();
+    let pairs: Vec<(&Path, &str)> = data.iter().zip(diagnose_setups).map(|(p, s)| (p.as_path(), *s)).collect();
     diagnose(&pairs, &dir.join("out"))
+}
+
+/// The three rig conditions, the same effect in each, diagnosed with the plain setups.
+fn rig_campaign(dir: &Path, effect: Option<&str>, seed: u64) -> Value {
+    let setups: Vec<String> = RIG.iter().map(|n| rig_setup(n)).collect();
+    let conditions: Vec<(&str, Option<&str>, u64)> = setups.iter().enumerate().map(|(i, s)| (s.as_str(), effect, seed + i as u64)).collect();
+    let plain: Vec<&str> = setups.iter().map(String::as_str).collect();
+    campaign_with(dir, &conditions, &plain)
 }
 
 #[test]
 fn launch_spread_is_found() {
     let d = tmp("ls");
-    let v = campaign(&d, [(&setup("test3"), Some("launch-spread=0.5,8"), 3), (&setup("test2"), Some("launch-spread=0.5,8"), 13)]);
+    let v = rig_campaign(&d, Some("launch-spread=0.3,6"), 30);
     check_found(&v, "launch-spread");
     // where: the conditions are reported tooth by tooth, with the first-flight split
     let w = &v["where"]["conditions"];
-    assert_eq!(w.as_array().unwrap().len(), 2);
+    assert_eq!(w.as_array().unwrap().len(), 3);
     let t = &w[0]["teeth"][0];
     for k in ["measured", "simulated", "residual", "uncertainty", "z", "flag", "first_flight", "bounce_chain"] {
         assert!(t.get(k).is_some(), "where tooth lacks {k}: {t}");
@@ -162,44 +180,56 @@ fn launch_spread_is_found() {
 #[test]
 fn polydispersity_is_found() {
     let d = tmp("pd");
-    let v = campaign(&d, [(&setup("test3"), Some("polydisperse=0.6"), 4), (&setup("test2"), Some("polydisperse=0.6"), 14)]);
+    let v = rig_campaign(&d, Some("polydisperse=0.35"), 40);
     check_found(&v, "polydisperse");
     std::fs::remove_dir_all(&d).ok();
 }
 
 #[test]
-#[ignore = "fails since the impact-scatter kernel fix (issue 11): the synthetic sigma 12 campaign is weaker now; re-tune its strength (the independent campaign_1 test covers impact scatter)"]
+fn uniform_sizes_are_found_as_polydispersity() {
+    // the data's sizes are uniform in number, the candidate's log-normal: another form
+    let d = tmp("pdu");
+    let makers: Vec<String> =
+        RIG.iter().map(|n| rig_variant(&d, n, |t| t + "\n[effects.polydisperse]\nsigma_ln = 0.3\nform = \"uniform\"\n")).collect();
+    let conditions: Vec<(&str, Option<&str>, u64)> = makers.iter().enumerate().map(|(i, s)| (s.as_str(), None, 50 + i as u64)).collect();
+    let plain: Vec<String> = RIG.iter().map(|n| rig_setup(n)).collect();
+    let v = campaign_with(&d, &conditions, &plain.iter().map(String::as_str).collect::<Vec<_>>());
+    check_found(&v, "polydisperse");
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
 fn impact_scatter_is_found() {
     let d = tmp("is");
-    let fast = fast_setup(&d, "1.2");
-    let v = campaign(&d, [(&setup("test3"), Some("impact-scatter=12"), 1), (&fast, Some("impact-scatter=12"), 21)]);
+    let v = rig_campaign(&d, Some("impact-scatter=10"), 60);
     check_found(&v, "impact-scatter");
     std::fs::remove_dir_all(&d).ok();
 }
 
 #[test]
 fn sled_motion_is_found() {
-    // Tests 1 and 2 of the thesis: one sand, one rig, two motion profiles. Test 1's setup
-    // states the POC profile's return (at once, 0.05 m/s); Test 2's delayed profile is left
-    // for the fit. The data come from a POC-like return and from a delayed, slower one.
+    // one condition's sled returns at once at 0.3 m/s and its setup says so; the others rest
+    // 5 s (as in the practice campaign 4)
     let d = tmp("sm");
-    let v = campaign(&d, [(&setup("test1"), Some("sled-motion=0,0.05"), 5), (&setup("test2"), Some("sled-motion=0.04,0.03"), 15)]);
+    let moving = rig_variant(&d, "slow", |t| {
+        t.replace("motion_delay_s = 5.0", "motion_delay_s = 0.0").replace("motion_return_speed_m_s = 0.05", "motion_return_speed_m_s = 0.3")
+    });
+    let (fast, shallow) = (rig_setup("fast"), rig_setup("shallow"));
+    let v = campaign_with(
+        &d,
+        &[(&moving, Some("sled-motion=0,0.3"), 70), (&fast, None, 71), (&shallow, None, 72)],
+        &[&moving, &fast, &shallow],
+    );
     check_found(&v, "sled-motion");
-    // only the delayed profile's values were fitted
-    let m = v["ranking"].as_array().unwrap().iter().find(|m| m["effect"] == "sled-motion").unwrap();
-    let params = m["params"].as_object().unwrap();
-    assert!(params.contains_key("delay_s") && params.contains_key("return_speed_m_s"), "{params:?}");
     std::fs::remove_dir_all(&d).ok();
 }
 
 #[test]
-#[ignore = "fails with issue 11's method at the CI budget: with loaded-mass fractions the baseline gap is only ~23 %2 and polydisperse (7.9) beats quadratic drag (14.8); open in issue 11"]
 fn quadratic_drag_is_found() {
-    // Speed-dependent drag: a linear k_drag fitted jointly to a slow and a fast launch
-    // cannot serve both.
+    // Schiller-Naumann drag on 150 µm beads: a linear k_drag cannot serve a slow and a fast
+    // launch alike
     let d = tmp("qd");
-    let fast = fast_setup(&d, "1.4");
-    let v = campaign(&d, [(&setup("test3"), Some("quadratic-drag=150e-6,2500"), 6), (&fast, Some("quadratic-drag=150e-6,2500"), 16)]);
+    let v = rig_campaign(&d, Some("quadratic-drag=150e-6,2500"), 80);
     check_found(&v, "quadratic-drag");
     std::fs::remove_dir_all(&d).ok();
 }
@@ -207,7 +237,7 @@ fn quadratic_drag_is_found() {
 #[test]
 fn no_effect_no_best() {
     let d = tmp("none");
-    let v = campaign(&d, [(&setup("test3"), None, 2), (&setup("test2"), None, 12)]);
+    let v = rig_campaign(&d, None, 90);
     eprintln!("none: {}", summary(&v));
     assert!(v["best"].is_null(), "an effect was declared best on data without one: {}", summary(&v));
     assert!(v["combined"].is_null(), "a combination was fitted without a best effect");

@@ -10,7 +10,8 @@
 //! 2. **Polish** at the full budget: the screen's best point and the starts are re-scored
 //!    with the full particle count, and a compass search (Kolda, Lewis & Torczon 2003) moves
 //!    from the best of them: the 2d points ±step along each axis, move to the best that
-//!    improves, else halve the step. Each iteration of every model is one engine call.
+//!    improves and double the step (up to 0.2 of the box), else halve it. Each iteration of
+//!    every model is one engine call.
 //!
 //! The objective is the joint SSE of Eq. 4.62 summed over the conditions. Every point of a
 //! stage sees the same particle streams (common random numbers), so differences between
@@ -69,6 +70,7 @@ pub fn joint_sse(bins: &Bins, targets: &[Target]) -> f64 {
 /// Polish steps in the unit box: the first and the smallest.
 const FIRST_STEP: f64 = 0.05;
 const MIN_STEP: f64 = 0.05 / 32.0;
+const MAX_STEP: f64 = 0.2;
 
 struct Member {
     pop: Vec<(Vec<f64>, f64)>,
@@ -236,9 +238,9 @@ pub fn fit_models(
                     moved = true;
                 }
             }
-            if !moved {
-                steps[m] *= 0.5;
-            }
+            // expand after a success (the screen's best can lie several steps away), contract
+            // after a failure
+            steps[m] = if moved { (steps[m] * 2.0).min(MAX_STEP) } else { steps[m] * 0.5 };
         }
     }
 

@@ -591,6 +591,39 @@ fn sled_motion_notes(conditions: &[Condition]) -> Vec<String> {
     notes
 }
 
+/// Starts for an effect's fit: the baseline's optimum with the effect switched off (when
+/// the effect has a neutral setting), and `extra` points that keep the baseline's shared
+/// parameters and spread the effect's own over their box (a Halton sequence, bases 2, 3, 5):
+/// the shared parameters usually move little when an effect is switched on, so these seed
+/// the screen near the answer in the dimensions it knows least.
+fn effect_starts(space: &Space, base_names: &[&'static str], base_x: &[f64], extra: usize) -> Vec<Vec<f64>> {
+    let mut starts: Vec<Vec<f64>> = space.start_from(base_names, base_x).into_iter().collect();
+    let shared: Vec<f64> = space.names().iter().take(space.shared.len()).map(|n| base_names.iter().position(|m| m == n).map(|p| base_x[p])).collect::<Option<Vec<f64>>>().unwrap_or_default();
+    if shared.len() != space.shared.len() {
+        return starts;
+    }
+    let bounds = space.bounds();
+    for i in 1..=extra {
+        let mut x = shared.clone();
+        for (k, (lo, hi)) in bounds[space.shared.len()..].iter().enumerate() {
+            x.push(lo + halton(i, [2, 3, 5, 7][k % 4]) * (hi - lo));
+        }
+        starts.push(x);
+    }
+    starts
+}
+
+/// The i-th point of the van der Corput sequence in `base`.
+fn halton(mut i: usize, base: usize) -> f64 {
+    let (mut f, mut r) = (1.0, 0.0);
+    while i > 0 {
+        f /= base as f64;
+        r += f * (i % base) as f64;
+        i /= base;
+    }
+    r
+}
+
 fn new_result(space: &Space, fit: Fit, baseline_dim: usize) -> ModelResult {
     ModelResult {
         effects: space.effects.clone(),
@@ -710,7 +743,7 @@ pub fn diagnose(
     let base_names = base_space.names();
     let models: Vec<Model> = spaces
         .iter()
-        .map(|sp| Model { space: sp, starts: sp.start_from(&base_names, &base_fit.x).into_iter().collect() })
+        .map(|sp| Model { space: sp, starts: effect_starts(sp, &base_names, &base_fit.x, budget.pop / 2) })
         .collect();
     let fits = fit_models(&sim, &targets, &models, &solver, log)?;
     let mut all: Vec<ModelResult> = vec![new_result(&base_space, base_fit, baseline_dim)];

@@ -267,9 +267,15 @@ impl<'a> Problem<'a> {
             .map(|e| objective::simulated_bins(&e.sim))
     }
 
-    /// [`Self::bins_at`] for a whole generation, candidates in parallel.
+    /// [`Self::bins_at`] for a whole generation as one engine call (one one-design group per
+    /// candidate: the engine runs them together, as the calibration engine does).
     pub fn bins_many(&self, xs: &[Vec<f64>]) -> Vec<Option<Vec<f64>>> {
-        xs.par_iter().map(|x| self.bins_at(x)).collect()
+        let groups: Vec<(Scenario, Vec<Design>)> = xs.iter().map(|x| (self.scenario_at(x), vec![self.design])).collect();
+        self.engine
+            .evaluate_groups(&groups)
+            .into_iter()
+            .map(|r| r.into_iter().next().and_then(|e| e.ok()).map(|e| objective::simulated_bins(&e.sim)))
+            .collect()
     }
 
     /// Parameters from unit-box coordinates.
