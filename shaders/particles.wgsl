@@ -2,6 +2,9 @@
 // particles, bounce by bounce (4.2.4), then the per-design reduction (Eq. 4.56-4.57).
 // CPU twin: src/engine/kernel.rs (same function names and structure) driven by
 // src/engine/cpu.rs. Positions are relative to a tooth's p1 so f32 suffices.
+// The uniform `ph` holds what the whole dispatch shares; each design's own physics
+// (restitution, effect parameters) is read from its `Design` record, so one dispatch may
+// carry designs of different physics (e.g. a calibration's candidates).
 
 #import shared/types.wgsl
 #import shared/rng.wgsl
@@ -48,7 +51,7 @@ fn randomise_launch(d: Design, p: ptr<function, Particle>, index: u32, bounce: u
     var apply = false;
     if (ph.randomise == RANDOMISE_FIRST_LAUNCH) { apply = bounce == 0u; }
     if (ph.randomise == RANDOMISE_EVERY_LAUNCH) { apply = true; }
-    let spread = (*p).surface == SURFACE_NONE && (ph.launch_speed_spread > 0.0 || ph.launch_angle_sigma > 0.0);
+    let spread = (*p).surface == SURFACE_NONE && (d.launch_speed_spread > 0.0 || d.launch_angle_sigma > 0.0);
     if (!apply && !spread) { return; }
     var fa = 1.0;
     var fs = 1.0;
@@ -63,8 +66,8 @@ fn randomise_launch(d: Design, p: ptr<function, Particle>, index: u32, bounce: u
         if (ang < 0.0) { ang += 2.0 * PI; }
         if (spread) {
             // launch-spread effect: earlier (slower) departures and a jittered direction
-            speed *= 1.0 - ph.launch_speed_spread * uniform01(ph.seed, index, bounce, 4u);
-            ang += ph.launch_angle_sigma * normal01(ph.seed, index, bounce, 5u);
+            speed *= 1.0 - d.launch_speed_spread * uniform01(ph.seed, index, bounce, 4u);
+            ang += d.launch_angle_sigma * normal01(ph.seed, index, bounce, 5u);
         }
         let sc = ksin_cos(ang * fa);
         (*p).vel_x = speed * sc.y;
@@ -221,17 +224,18 @@ fn first_hit(d: Design, p: Particle, bounce: u32) -> Hit {
     return best;
 }
 
-fn bounce_velocity(v: vec2<f32>, n: vec2<f32>) -> vec2<f32> {
+// CPU twin: Restitution::bounce (src/model/collision.rs), with this design's restitution law.
+fn bounce_velocity(d: Design, v: vec2<f32>, n: vec2<f32>) -> vec2<f32> {
     let vn_s = dot(v, n);                      // Eq. 4.47
     let vn = vn_s * n;
     let vt = v - vn;                           // Eq. 4.48
     let vn_abs = abs(vn_s);
     let vt_abs = sqrt(dot(vt, vt));
-    var k_norm = ph.k_elastic;                 // Eq. 4.9 above v_limit
-    if (ph.plastic != 0u && vn_abs > ph.v_limit) { k_norm = ph.k_elastic * sqrt(sqrt(ph.v_limit / vn_abs)); }
+    var k_norm = d.k_elastic;                  // Eq. 4.9 above v_limit
+    if (d.plastic != 0u && vn_abs > d.v_limit) { k_norm = d.k_elastic * sqrt(sqrt(d.v_limit / vn_abs)); }
     var k_tang = 0.0;                          // Eq. 4.14
-    if (vt_abs > 0.0) { k_tang = 1.0 - ph.tangential_factor * ph.mu_friction * (k_norm + 1.0) * vn_abs / vt_abs; }
-    if (ph.clamp_tangential != 0u) { k_tang = clamp(k_tang, 0.0, 1.0); }
+    if (vt_abs > 0.0) { k_tang = 1.0 - d.tangential_factor * d.mu_friction * (k_norm + 1.0) * vn_abs / vt_abs; }
+    if (d.clamp_tangential != 0u) { k_tang = clamp(k_tang, 0.0, 1.0); }
     return k_tang * vt - k_norm * vn;          // Eq. 4.49
 }
 
@@ -246,14 +250,14 @@ fn step_particle(d: Design, p: ptr<function, Particle>, index: u32, bounce: u32)
     let fl = Flight(pos, vec2<f32>((*p).vel_x, (*p).vel_y), ph.g, (*p).k_drag);
     let v_in = flight_vel(fl, hit.t);
     let n_true = normal_of(d, hit.surface);
-    var v_out = bounce_velocity(v_in, n_true);
-    if (ph.scatter_sigma > 0.0) {
+    var v_out = bounce_velocity(d, v_in, n_true);
+    if (d.scatter_sigma > 0.0) {
         // impact-scatter effect (CPU twin: kernel.rs step_particle): the tilt is admissible
         // when the grain arrives against the tilted facet and leaves the true surface
-        let sc = ksin_cos(ph.scatter_sigma * normal01(ph.seed, index, bounce, 2u));
+        let sc = ksin_cos(d.scatter_sigma * normal01(ph.seed, index, bounce, 2u));
         let tilted = vec2<f32>(sc.y * n_true.x - sc.x * n_true.y, sc.x * n_true.x + sc.y * n_true.y);
         if (dot(v_in, tilted) < 0.0) {
-            let out = bounce_velocity(v_in, tilted);
+            let out = bounce_velocity(d, v_in, tilted);
             if (dot(out, n_true) > 0.0) { v_out = out; }
         }
     }

@@ -2,7 +2,7 @@
 //! designs, both environments, drag on and off. Runs on any Vulkan adapter; in CI that is
 //! Mesa's lavapipe, installed by scripts/test.sh. With CI=true a missing adapter FAILS.
 
-use sawtooth::engine::conformance::{run, scenarios, Tolerances};
+use sawtooth::engine::conformance::{run, run_merged, scenarios, Tolerances};
 use sawtooth::engine::gpu::{AdapterChoice, GpuEngine};
 use sawtooth::engine::{BatchEvaluator, ParticleEngine};
 use sawtooth::model::{Design, Scenario};
@@ -84,4 +84,118 @@ fn gpu_conforms_with_each_effect_switched_on() {
         eprintln!("effects: {}", serde_json::to_string(r).unwrap());
     }
     assert!(report.passed, "{:#?}\nworst: {:#?}", report.failures, report.worst);
+}
+
+/// Physics variants as a calibration's candidates differ: k_elastic, mu_friction, k_drag and
+/// the GPU effects' parameters, everything else (mode, g, seed, randomisation, counts) shared.
+/// sigma_ln stays <= 0.5 as in `gpu_conforms_with_each_effect_switched_on`: at 0.8 some grains
+/// get k_drag ~100/s and about 4 % of their first impacts differ by a few 1e-3 mm between
+/// the kernel and its f32 twin, whether run alone or merged (tooth and state still agree).
+fn calibration_variants(base: &Scenario) -> Vec<(String, Scenario)> {
+    use sawtooth::model::effects::{Effects, ImpactScatter, LaunchSpread, Polydisperse, SizeForm};
+    let scatter = |sigma_deg| Some(ImpactScatter { sigma_deg });
+    let spread = |speed_spread, angle_sigma_deg| Some(LaunchSpread { speed_spread, angle_sigma_deg });
+    let poly = |sigma_ln| Some(Polydisperse { sigma_ln, form: SizeForm::Lognormal });
+    let variants: [(f64, f64, Option<f64>, Effects); 7] = [
+        (0.5, 0.1, None, Effects::default()),
+        (0.8, 0.3, Some(5.439), Effects { impact_scatter: scatter(8.0), ..Default::default() }),
+        (0.65, 0.2, Some(2.0), Effects { launch_spread: spread(0.4, 5.0), ..Default::default() }),
+        (0.7, 0.05, Some(8.0), Effects { polydisperse: poly(0.5), ..Default::default() }),
+        (0.6, 0.4, Some(5.439), Effects { impact_scatter: scatter(4.0), launch_spread: spread(0.2, 3.0), polydisperse: poly(0.3), ..Default::default() }),
+        (0.9, 0.15, None, Effects { impact_scatter: scatter(12.0), ..Default::default() }),
+        (0.75, 0.25, Some(3.0), Effects { polydisperse: poly(0.4), launch_spread: spread(0.1, 0.0), ..Default::default() }),
+    ];
+    variants
+        .into_iter()
+        .map(|(k_elastic, mu_friction, k_drag, effects)| {
+            let mut s = base.clone();
+            s.sim.particles = 50;
+            s.collision.k_elastic = k_elastic;
+            s.collision.mu_friction = mu_friction;
+            s.environment.k_drag = k_drag;
+            s.effects = effects;
+            (format!("k_e {k_elastic}, mu {mu_friction}, k_drag {k_drag:?}, {}", effects.active().join("+")), s)
+        })
+        .collect()
+}
+
+/// Designs whose physics differ only in per-design fields share ONE dispatch, and each
+/// design is simulated with its own physics: per particle the merged dispatch agrees with the
+/// `cpu` engine at f32 as a per-case dispatch does (first impacts within 1e-3 mm, final
+/// tooth and state for >= 98 % of the particles).
+#[test]
+fn designs_with_different_physics_share_one_dispatch_and_conform() {
+    let Some(g) = gpu() else { return };
+    let cases = calibration_variants(&Scenario::lunar());
+    let before = g.dispatches();
+    let report = run_merged(&g, &cases, 8, 11, Tolerances::default());
+    assert_eq!(g.dispatches() - before, 1, "{} cases of one batch-wide physics should be one dispatch", cases.len());
+    for r in &report.scenarios {
+        eprintln!("merged: {}", serde_json::to_string(r).unwrap());
+    }
+    assert!(report.passed, "{:#?}\nworst: {:#?}", report.failures, report.worst);
+    assert_eq!(report.tolerances.first_impact_tol_m, 1e-6);
+}
+
+/// A calibration's call: one `evaluate_groups` over one-design groups that differ only in the
+/// calibrated physics runs as one dispatch, every group's result is the one it gets alone
+/// (so no design borrowed another's physics), and the results follow the `cpu` engine at f32.
+#[test]
+fn one_design_groups_of_a_calibration_run_as_one_dispatch() {
+    use sawtooth::engine::cpu::{CpuEngine, Precision};
+    let Some(g) = gpu() else { return };
+    let base = Scenario::earth();
+    let variants = calibration_variants(&base);
+    let designs = sawtooth::model::sampling::random_valid_designs(&variants[0].1, 4, 21);
+    let groups: Vec<(Scenario, Vec<Design>)> =
+        designs.iter().flat_map(|d| variants.iter().map(move |(_, s)| (s.clone(), vec![d.clone()]))).collect();
+    let before = g.dispatches();
+    let merged = g.evaluate_groups(&groups);
+    assert_eq!(g.dispatches() - before, 1, "{} one-design groups should be one dispatch", groups.len());
+    let cpu32 = CpuEngine { precision: Precision::F32 }.evaluate_groups(&groups);
+    let mut l1_sum = 0.0;
+    let mut distinct = std::collections::HashSet::new();
+    for ((group, m), c) in groups.iter().zip(&merged).zip(&cpu32) {
+        let m = &m[0].as_ref().expect("valid design").sim;
+        let alone = g.evaluate(&group.0, &group.1);
+        let a = &alone[0].as_ref().unwrap().sim;
+        assert_eq!(m.distribution, a.distribution, "merged and alone differ");
+        assert_eq!(m.lost_fraction, a.lost_fraction);
+        assert!((m.d_avg_m - a.d_avg_m).abs() < 1e-9);
+        let c = &c[0].as_ref().unwrap().sim;
+        l1_sum += m.distribution.iter().zip(&c.distribution).map(|(x, y)| (x - y).abs()).sum::<f64>() + (m.lost_fraction - c.lost_fraction).abs();
+        distinct.insert(format!("{:?}", m.distribution));
+    }
+    let mean_l1 = l1_sum / groups.len() as f64;
+    eprintln!("{} groups: mean L1 to cpu-f32 {mean_l1:.4}, {} distinct distributions", groups.len(), distinct.len());
+    // >= 98 % of particles agree per design (see the test above): L1 <= 2 x 2 % on average
+    assert!(mean_l1 <= 0.04, "mean L1 {mean_l1}");
+    // the physics did vary: one design under seven physics gives different distributions
+    assert!(distinct.len() > designs.len() * 3, "{} distinct of {}", distinct.len(), groups.len());
+}
+
+/// Batch-wide physics (here g) still splits dispatches, and a group with an effect the
+/// kernel lacks (sled motion) runs on the `cpu` engine at f32 instead of silently without it.
+#[test]
+fn batch_wide_physics_splits_and_cpu_only_effects_leave_the_gpu() {
+    use sawtooth::engine::cpu::{CpuEngine, Precision};
+    use sawtooth::model::effects::SledMotion;
+    let Some(g) = gpu() else { return };
+    let mut lunar = Scenario::lunar();
+    lunar.sim.particles = 40;
+    let mut earth = Scenario::earth();
+    earth.sim.particles = 40;
+    let mut sled = lunar.clone();
+    sled.effects.sled_motion = Some(SledMotion { delay_s: 0.01, return_speed_m_s: 0.2 });
+    let d = Design::lunar_solution_c();
+    let groups = vec![(lunar.clone(), vec![d.clone()]), (earth, vec![Design::earth_solution_c()]), (sled.clone(), vec![d.clone()]), (lunar, vec![d.clone()])];
+    let (before, cpu_before) = (g.dispatches(), g.cpu_only_designs());
+    let out = g.evaluate_groups(&groups);
+    assert_eq!(g.dispatches() - before, 2, "one dispatch per g");
+    assert_eq!(g.cpu_only_designs() - cpu_before, 1);
+    let want = CpuEngine { precision: Precision::F32 }.evaluate(&sled, &[d]);
+    let (got, want) = (&out[2][0].as_ref().unwrap().sim, &want[0].as_ref().unwrap().sim);
+    assert_eq!(got.distribution, want.distribution);
+    assert!((got.d_avg_m - want.d_avg_m).abs() < 1e-12);
+    assert_eq!(out[0][0].as_ref().unwrap().sim.distribution, out[3][0].as_ref().unwrap().sim.distribution);
 }

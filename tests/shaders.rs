@@ -21,3 +21,34 @@ fn every_shared_file_is_imported_by_some_kernel() {
         assert!(composed.contains(first), "{path} is never imported");
     }
 }
+
+/// The records shared with the host (shaders/shared/types.wgsl) have the size of their Rust
+/// twins (src/engine/gpu/layout.rs), and every WGSL field is a 4-byte scalar at offset
+/// 4 × index: no implicit padding on the WGSL side, so equal sizes mean equal layouts as
+/// long as the field order is kept in sync.
+#[test]
+fn shared_records_match_their_rust_twins() {
+    use sawtooth::engine::gpu::layout::{GpuDesign, GpuOutcome, GpuParticle, GpuPhysics};
+    let src = compose("particles.wgsl").unwrap();
+    let module = naga::front::wgsl::parse_str(&src).unwrap();
+    for (name, rust_size) in [
+        ("Physics", std::mem::size_of::<GpuPhysics>()),
+        ("Design", std::mem::size_of::<GpuDesign>()),
+        ("Particle", std::mem::size_of::<GpuParticle>()),
+        ("Outcome", std::mem::size_of::<GpuOutcome>()),
+    ] {
+        let (members, span) = module
+            .types
+            .iter()
+            .find_map(|(_, t)| match &t.inner {
+                naga::TypeInner::Struct { members, span } if t.name.as_deref() == Some(name) => Some((members.clone(), *span)),
+                _ => None,
+            })
+            .unwrap_or_else(|| panic!("struct {name} not found"));
+        assert_eq!(span as usize, rust_size, "{name}: WGSL {span} bytes, Rust {rust_size}");
+        assert_eq!(span % 16, 0, "{name}: pad to a multiple of 16 bytes");
+        for (i, m) in members.iter().enumerate() {
+            assert_eq!(m.offset as usize, 4 * i, "{name}.{:?}: not a packed 4-byte scalar", m.name);
+        }
+    }
+}

@@ -2,15 +2,13 @@
 // Keep in sync with src/engine/gpu/layout.rs (field order, scalar types; no vec3, no padding
 // surprises: every field is a 4-byte scalar so the WGSL and #[repr(C)] layouts coincide).
 
+// Batch-wide constants: one uniform per dispatch. Everything a calibration varies between
+// candidates (restitution, the effects' parameters) lives in `Design` instead, so groups
+// that differ only in those run as one dispatch (GpuEngine::evaluate_groups keys its merge
+// on this record's bytes). Stokes k_drag is not here either: it reaches the kernel as each
+// particle's k_drag, set on the host from the design's own physics (init_particle).
 struct Physics {
     g: f32,
-    k_drag: f32,             // 1/s, 0 = vacuum
-    k_elastic: f32,
-    mu_friction: f32,
-    tangential_factor: f32,  // 3.5 (Eq. 4.14) or 1/3.5 (listing D.1 l.316)
-    plastic: u32,            // 1: k_plastic above v_limit (Eq. 4.9)
-    v_limit: f32,            // m/s
-    clamp_tangential: u32,   // 1: k_tang clamped to [0, 1]
     randomise: u32,          // 0 off, 1 first launch, 2 every launch
     band: f32,
     seed: u32,
@@ -22,12 +20,6 @@ struct Physics {
     n_particles: u32,
     n_designs: u32,          // designs in this dispatch
     teeth_hist: u32,         // histogram bins per design (= teeth)
-    // effects (issue 5; 0 = off); polydispersity arrives as each particle's k_drag
-    scatter_sigma: f32,      // impact normal tilt sigma, rad
-    launch_speed_spread: f32,
-    launch_angle_sigma: f32, // rad
-    _pad0: u32,
-    _pad1: u32,
 }
 
 struct Design {
@@ -45,7 +37,19 @@ struct Design {
     teeth: i32,
     launch_angle: f32,
     v0: f32,
-    _pad0: u32, _pad1: u32, _pad2: u32,
+    // This design's physics (per design so that one dispatch can carry the candidates of a
+    // calibration): the restitution law (Eq. 4.9, 4.14, 4.47-4.49) ...
+    k_elastic: f32,
+    mu_friction: f32,
+    tangential_factor: f32,  // 3.5 (Eq. 4.14) or 1/3.5 (listing D.1 l.316)
+    plastic: u32,            // 1: k_plastic above v_limit (Eq. 4.9)
+    v_limit: f32,            // m/s
+    clamp_tangential: u32,   // 1: k_tang clamped to [0, 1]
+    // ... and the effects (issue 5; 0 = off); polydispersity arrives as each particle's k_drag
+    scatter_sigma: f32,      // impact normal tilt sigma, rad
+    launch_speed_spread: f32,
+    launch_angle_sigma: f32, // rad
+    _pad0: u32, _pad1: u32,
 }
 
 struct Particle {

@@ -103,18 +103,44 @@ fn tooth(prep: &Prepared, p: &ParticleEnd) -> u32 {
     }
 }
 
+/// Each case's designs on the GPU, one `run_prepared` call per case.
 pub fn run(gpu: &GpuEngine, cases: &[(String, Scenario)], designs_per_case: usize, seed: u64, tol: Tolerances) -> Report {
+    run_cases(gpu, cases, designs_per_case, seed, tol, false)
+}
+
+/// As `run`, but every case's designs go to the GPU in ONE `run_jobs` call, each under its own
+/// case's context, as `evaluate_groups` sends a calibration's candidates: cases that differ
+/// only in per-design physics (restitution, drag, effect parameters) share a dispatch.
+pub fn run_merged(gpu: &GpuEngine, cases: &[(String, Scenario)], designs_per_case: usize, seed: u64, tol: Tolerances) -> Report {
+    run_cases(gpu, cases, designs_per_case, seed, tol, true)
+}
+
+fn run_cases(gpu: &GpuEngine, cases: &[(String, Scenario)], designs_per_case: usize, seed: u64, tol: Tolerances, merged: bool) -> Report {
     let cpu32 = CpuEngine { precision: Precision::F32 };
     let cpu64 = CpuEngine { precision: Precision::F64 };
     let mut reports = Vec::new();
     let mut worst: Vec<(f64, Mismatch)> = Vec::new();
     let mut failures = Vec::new();
-    for (ci, (name, s)) in cases.iter().enumerate() {
-        let ctx = Context::new(s);
-        let designs = random_valid_designs(s, designs_per_case, seed.wrapping_add(ci as u64));
-        let preps: Vec<Prepared> = designs.iter().map(|d| prepare(s, d).expect("valid by construction")).collect();
-        let refs: Vec<&Prepared> = preps.iter().collect();
-        let gpu_runs = gpu.run_prepared(&ctx, &refs, true);
+    let contexts: Vec<Context> = cases.iter().map(|(_, s)| Context::new(s)).collect();
+    let prepared: Vec<Vec<Prepared>> = cases
+        .iter()
+        .enumerate()
+        .map(|(ci, (_, s))| {
+            let designs = random_valid_designs(s, designs_per_case, seed.wrapping_add(ci as u64));
+            designs.iter().map(|d| prepare(s, d).expect("valid by construction")).collect()
+        })
+        .collect();
+    let mut gpu_by_case: Vec<Vec<_>> = if merged {
+        let jobs: Vec<(&Context, &Prepared)> = contexts.iter().zip(&prepared).flat_map(|(c, ps)| ps.iter().map(move |p| (c, p))).collect();
+        let mut all = gpu.run_jobs(&jobs, true).into_iter();
+        prepared.iter().map(|ps| all.by_ref().take(ps.len()).collect()).collect()
+    } else {
+        contexts.iter().zip(&prepared).map(|(c, ps)| gpu.run_prepared(c, &ps.iter().collect::<Vec<_>>(), true)).collect()
+    };
+    for (ci, (name, _)) in cases.iter().enumerate() {
+        let ctx = &contexts[ci];
+        let preps = &prepared[ci];
+        let gpu_runs = std::mem::take(&mut gpu_by_case[ci]);
         let mut r = ScenarioReport {
             scenario: name.clone(),
             designs: preps.len(),
@@ -130,7 +156,7 @@ pub fn run(gpu: &GpuEngine, cases: &[(String, Scenario)], designs_per_case: usiz
         };
         for (prep, (gsim, gparts)) in preps.iter().zip(gpu_runs) {
             let gparts = gparts.expect("particles requested");
-            let c32 = cpu32.run(prep, &ctx, None);
+            let c32 = cpu32.run(prep, ctx, None);
             for (i, (g, c)) in gparts.iter().zip(&c32.particles).enumerate() {
                 r.particles += 1;
                 let same = tooth(prep, g) == tooth(prep, c) && g.state == c.state;
@@ -165,7 +191,7 @@ pub fn run(gpu: &GpuEngine, cases: &[(String, Scenario)], designs_per_case: usiz
                     worst.push((if diff.is_finite() { diff } else { 1.0 }, Mismatch { scenario: name.clone(), design: prep.design.to_cli_units(), particle: i, what }));
                 }
             }
-            let c64 = cpu64.run(prep, &ctx, None);
+            let c64 = cpu64.run(prep, ctx, None);
             let csim = summarise(&prep.profile, prep.fill.area, &c64.particles, c64.iterations);
             let l1: f64 = gsim.distribution.iter().zip(&csim.distribution).map(|(a, b)| (a - b).abs()).sum::<f64>() + (gsim.lost_fraction - csim.lost_fraction).abs();
             r.mean_distribution_l1 += l1;

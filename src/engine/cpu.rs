@@ -20,7 +20,8 @@ pub struct CpuEngine {
     pub precision: Precision,
 }
 
-/// The flat per-design data of the kernel (mirrors the GPU's design record).
+/// The flat per-design data of the kernel (the geometry part of the GPU's design record,
+/// `GpuDesign`, whose physics part comes from `kernel_physics`).
 pub fn kernel_design<T: Real>(prep: &Prepared) -> KDesign<T> {
     let p: &Profile = &prep.profile;
     let [nb, nr, nc] = p.normals();

@@ -52,6 +52,13 @@ pub struct KDesign<T> {
 }
 
 /// Scenario-wide constants.
+///
+/// The GPU splits this record in two (keep in sync with shaders/shared/types.wgsl and
+/// src/engine/gpu/layout.rs): what a calibration varies per candidate (`restitution`, the
+/// effect parameters scatter_sigma, launch_speed_spread, launch_angle_sigma) travels in each
+/// design's record `GpuDesign`, the rest in the dispatch-wide `GpuPhysics`; `k_drag` and
+/// `size_sigma_ln` reach the kernel only through each particle's `k_drag` (`init_particle`,
+/// run on the host). The cpu-only fields (size_uniform, sled_*, qd_*) have no GPU twin.
 #[derive(Clone, Copy, Debug)]
 pub struct KPhysics<T> {
     pub g: T,
@@ -68,8 +75,8 @@ pub struct KPhysics<T> {
     pub min_hop_horizontal: bool,
     /// Rest per particle (text) instead of the listing's mean-hop stop for all.
     pub per_particle_rest: bool,
-    /// Effects (issue 5, `cpu` engine only; 0 = off): impact tilt σ (rad), launch speed
-    /// spread (fraction), launch angle σ (rad), log-normal size σ.
+    /// Effects (issue 5; 0 = off; in the `cpu` and `gpu` kernels): impact tilt σ (rad),
+    /// launch speed spread (fraction), launch angle σ (rad), log-normal size σ.
     pub scatter_sigma: T,
     pub launch_speed_spread: T,
     pub launch_angle_sigma: T,

@@ -113,7 +113,8 @@ pub trait BatchEvaluator: Sync {
     }
     fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>>;
     /// Several (scenario, designs) groups, e.g. the populations of several conveyor angles.
-    /// The GPU runs them as one job when their particle physics is the same.
+    /// The GPU runs them as one job when their batch-wide physics is the same (per-design
+    /// physics such as restitution, drag and effect parameters may differ; `GpuEngine::run_jobs`).
     fn evaluate_groups(&self, groups: &[(Scenario, Vec<Design>)]) -> Vec<Vec<Result<Evaluation, Invalid>>> {
         groups.iter().map(|(s, d)| self.evaluate(s, d)).collect()
     }

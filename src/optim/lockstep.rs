@@ -1,8 +1,8 @@
 //! Several optimisation runs (conveyor angles, seeds, parameter grids) in threads, their
 //! generations merged into one engine call: each run's `evaluate` deposits its population
 //! and waits; when every active run has deposited, the last one in evaluates them all with
-//! `evaluate_groups` (one GPU job where the physics is shared) and wakes the others. A run
-//! that finishes leaves the group, so the others never wait for it.
+//! `evaluate_groups` (one GPU job where the batch-wide physics is shared) and wakes the
+//! others. A run that finishes leaves the group, so the others never wait for it.
 
 use std::sync::{Condvar, Mutex};
 

@@ -1,21 +1,19 @@
 //! Records shared with the kernels. Keep in sync with shaders/shared/types.wgsl: the same
-//! field order, every field a 4-byte scalar (so #[repr(C)] and WGSL layouts coincide).
+//! field order, every field a 4-byte scalar (so #[repr(C)] and WGSL layouts coincide), and
+//! each record a multiple of 16 bytes with any padding spelled out as fields, so no implicit
+//! rounding of a struct's size (or array stride) can make the two sides differ.
 
 use bytemuck::{Pod, Zeroable};
 
 use crate::engine::kernel::{KDesign, KParticle, KPhysics};
 
+/// What a whole dispatch shares (the kernel's uniform). The physics a calibration varies per
+/// candidate is in [`GpuDesign`]; two groups whose `GpuPhysics` bytes agree can share a
+/// dispatch (`GpuEngine::evaluate_groups`).
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuPhysics {
     pub g: f32,
-    pub k_drag: f32,
-    pub k_elastic: f32,
-    pub mu_friction: f32,
-    pub tangential_factor: f32,
-    pub plastic: u32,
-    pub v_limit: f32,
-    pub clamp_tangential: u32,
     pub randomise: u32,
     pub band: f32,
     pub seed: u32,
@@ -27,12 +25,9 @@ pub struct GpuPhysics {
     pub n_particles: u32,
     pub n_designs: u32,
     pub teeth_hist: u32,
-    pub scatter_sigma: f32,
-    pub launch_speed_spread: f32,
-    pub launch_angle_sigma: f32,
-    pub _pad: [u32; 2],
 }
 
+/// One design: its geometry and its own physics (restitution and effect parameters).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuDesign {
@@ -50,7 +45,17 @@ pub struct GpuDesign {
     pub teeth: i32,
     pub launch_angle: f32,
     pub v0: f32,
-    pub _pad: [u32; 3],
+    // this design's physics
+    pub k_elastic: f32,
+    pub mu_friction: f32,
+    pub tangential_factor: f32,
+    pub plastic: u32,
+    pub v_limit: f32,
+    pub clamp_tangential: u32,
+    pub scatter_sigma: f32,
+    pub launch_speed_spread: f32,
+    pub launch_angle_sigma: f32,
+    pub _pad: [u32; 2],
 }
 
 #[repr(C)]
@@ -80,17 +85,12 @@ pub struct GpuOutcome {
 }
 
 impl GpuPhysics {
+    /// The batch-wide part of `k`. Its per-design part goes into [`GpuDesign::new`]; the
+    /// Stokes k_drag (and the polydisperse size law) into each particle's k_drag
+    /// (`init_particle`), so neither is here.
     pub fn from_kernel(k: &KPhysics<f32>, max_bounces: u32, n_particles: u32, n_designs: u32, teeth: u32) -> Self {
-        let r = &k.restitution;
         GpuPhysics {
             g: k.g,
-            k_drag: k.k_drag,
-            k_elastic: r.k_elastic,
-            mu_friction: r.mu_friction,
-            tangential_factor: r.tangential_factor,
-            plastic: r.plastic as u32,
-            v_limit: r.v_limit,
-            clamp_tangential: r.clamp_tangential as u32,
             randomise: k.randomise,
             band: k.band,
             seed: k.seed,
@@ -102,16 +102,14 @@ impl GpuPhysics {
             n_particles,
             n_designs,
             teeth_hist: teeth,
-            scatter_sigma: k.scatter_sigma,
-            launch_speed_spread: k.launch_speed_spread,
-            launch_angle_sigma: k.launch_angle_sigma,
-            _pad: [0; 2],
         }
     }
 }
 
-impl From<&KDesign<f32>> for GpuDesign {
-    fn from(d: &KDesign<f32>) -> Self {
+impl GpuDesign {
+    /// Design `d` with its own physics `k` (the per-design part of `KPhysics`).
+    pub fn new(d: &KDesign<f32>, k: &KPhysics<f32>) -> Self {
+        let r = &k.restitution;
         GpuDesign {
             pitch: d.pitch,
             p2: d.p2,
@@ -127,7 +125,16 @@ impl From<&KDesign<f32>> for GpuDesign {
             teeth: d.teeth,
             launch_angle: d.launch_angle,
             v0: d.v0,
-            _pad: [0; 3],
+            k_elastic: r.k_elastic,
+            mu_friction: r.mu_friction,
+            tangential_factor: r.tangential_factor,
+            plastic: r.plastic as u32,
+            v_limit: r.v_limit,
+            clamp_tangential: r.clamp_tangential as u32,
+            scatter_sigma: k.scatter_sigma,
+            launch_speed_spread: k.launch_speed_spread,
+            launch_angle_sigma: k.launch_angle_sigma,
+            _pad: [0; 2],
         }
     }
 }
@@ -154,9 +161,10 @@ mod tests {
 
     #[test]
     fn sizes_match_the_wgsl_structs() {
-        // 24, 24, 12 and 8 four-byte fields in shaders/shared/types.wgsl
-        assert_eq!(std::mem::size_of::<GpuPhysics>(), 96);
-        assert_eq!(std::mem::size_of::<GpuDesign>(), 96);
+        // 12, 32, 12 and 8 four-byte fields in shaders/shared/types.wgsl (tests/shaders.rs
+        // checks these sizes against naga's layout of the WGSL structs)
+        assert_eq!(std::mem::size_of::<GpuPhysics>(), 48);
+        assert_eq!(std::mem::size_of::<GpuDesign>(), 128);
         assert_eq!(std::mem::size_of::<GpuParticle>(), 48);
         assert_eq!(std::mem::size_of::<GpuOutcome>(), 32);
     }

@@ -3,6 +3,7 @@
 pub mod layout;
 pub mod shaders;
 
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -13,7 +14,7 @@ use wgpu::util::DeviceExt;
 use self::layout::{GpuDesign, GpuOutcome, GpuParticle, GpuPhysics};
 use super::cpu::{kernel_design, kernel_physics, CpuEngine, Precision};
 use super::kernel::init_particle;
-use super::{finish_outcome, BatchEvaluator, Context, Evaluation, FlightRecord, ParticleEngine, Run};
+use super::{cpu_only_effects, finish_outcome, BatchEvaluator, Context, Evaluation, FlightRecord, ParticleEngine, Run};
 use crate::model::outcome::{from_counts, ParticleEnd, ParticleState, SimOutcome};
 use crate::model::{prepare, Design, Invalid, Prepared, Scenario};
 
@@ -38,7 +39,16 @@ pub struct GpuEngine {
     limits: wgpu::Limits,
     /// Errors the device reported outside an error scope (e.g. device loss).
     uncaptured: Arc<Mutex<Option<String>>>,
+    /// Kernel dispatches submitted so far (see [`GpuEngine::dispatches`]).
+    dispatches: AtomicUsize,
+    /// Designs run on the `cpu` engine because their effects are not in the kernel.
+    cpu_only_designs: AtomicUsize,
+    /// Whether the warning about such designs has been printed (once per engine).
+    warned_cpu_only: AtomicBool,
 }
+
+/// What one simulated design returns: its outcome and, when asked for, every particle.
+type DesignRun = (SimOutcome, Option<Vec<ParticleEnd>>);
 
 /// What one dispatch of a chunk of designs returns.
 struct ChunkResult {
@@ -126,7 +136,18 @@ impl GpuEngine {
         if let Some(e) = uncaptured.lock().unwrap().take() {
             bail!("GPU pipeline creation failed: {e}");
         }
-        Ok(GpuEngine { device, queue, pipeline, bind_layout, info, limits, uncaptured })
+        Ok(GpuEngine {
+            device,
+            queue,
+            pipeline,
+            bind_layout,
+            info,
+            limits,
+            uncaptured,
+            dispatches: AtomicUsize::new(0),
+            cpu_only_designs: AtomicUsize::new(0),
+            warned_cpu_only: AtomicBool::new(false),
+        })
     }
 
     /// "name (backend, device type)" for logs and run manifests.
@@ -136,6 +157,18 @@ impl GpuEngine {
 
     pub fn is_hardware(&self) -> bool {
         self.info.device_type != wgpu::DeviceType::Cpu
+    }
+
+    /// Kernel dispatches this engine has submitted (one per chunk of designs), for tests and
+    /// profiling: a calibration's one-design groups should cost one dispatch per call.
+    pub fn dispatches(&self) -> usize {
+        self.dispatches.load(Ordering::Relaxed)
+    }
+
+    /// Designs this engine handed to the `cpu` engine because an effect they switch on is not
+    /// in the kernel (`cpu_only_effects`).
+    pub fn cpu_only_designs(&self) -> usize {
+        self.cpu_only_designs.load(Ordering::Relaxed)
     }
 
     /// Designs per dispatch: workgroups per dimension and storage binding size respected.
@@ -215,6 +248,7 @@ impl GpuEngine {
             enc.copy_buffer_to_buffer(&particle_buf, 0, &readback, outcome_size + hist_size, particle_size);
         }
         let t_submit = std::time::Instant::now();
+        self.dispatches.fetch_add(1, Ordering::Relaxed);
         let index = self.queue.submit([enc.finish()]);
         if let Some(e) = pollster::block_on(oom.pop()) {
             bail!("GPU out of memory: {e}");
@@ -256,65 +290,130 @@ impl GpuEngine {
         Ok(result)
     }
 
-    /// Simulate prepared designs; per design the outcome and (optionally) every particle.
-    /// A chunk the GPU fails on is re-run on the `cpu` engine (f32, the kernel's twin) with a
-    /// warning, so a failure loses no work.
-    pub fn run_prepared(&self, ctx: &Context, preps: &[&Prepared], want_particles: bool) -> Vec<(SimOutcome, Option<Vec<ParticleEnd>>)> {
-        let Some(first) = preps.first() else { return Vec::new() };
-        let n_particles = first.launches.len() as u32;
-        let teeth = first.profile.teeth;
-        let kp = kernel_physics::<f32>(ctx);
-        let mut out = Vec::with_capacity(preps.len());
-        for chunk in preps.chunks(self.chunk_designs(n_particles, teeth)) {
-            let designs: Vec<GpuDesign> = chunk.iter().map(|p| GpuDesign::from(&kernel_design::<f32>(p))).collect();
-            let particles: Vec<GpuParticle> = chunk
-                .iter()
-                .zip(&designs)
-                .flat_map(|(p, _)| {
-                    let kd = kernel_design::<f32>(p);
-                    p.launches.iter().enumerate().map(move |(i, l)| GpuParticle::from(&init_particle(&kd, &kp, [l[0] as f32, l[1] as f32], i as u32)))
-                })
-                .collect();
-            let phys = GpuPhysics::from_kernel(&kp, ctx.max_bounces, n_particles, chunk.len() as u32, teeth);
-            match self.run_chunk(&phys, &designs, &particles, want_particles) {
-                Ok(r) => {
-                    for (i, prep) in chunk.iter().enumerate() {
-                        let o = &r.outcomes[i];
-                        let hist = &r.histogram[i * teeth as usize..(i + 1) * teeth as usize];
-                        let sim = from_counts(
-                            hist,
-                            n_particles as usize,
-                            o.lost as usize,
-                            o.flying as usize,
-                            o.distance_sum as f64,
-                            o.advance_teeth as f64 * prep.profile.pitch_len,
-                            prep.fill.area,
-                            o.iterations,
-                            o.bounce_sum as u64,
-                        );
-                        let parts = r.particles.as_ref().map(|ps| {
-                            ps[i * n_particles as usize..(i + 1) * n_particles as usize].iter().map(|p| particle_end(prep, p)).collect()
-                        });
-                        out.push((sim, parts));
-                    }
+    /// Simulate prepared designs under one context; per design the outcome and (optionally)
+    /// every particle. See [`GpuEngine::run_jobs`].
+    pub fn run_prepared(&self, ctx: &Context, preps: &[&Prepared], want_particles: bool) -> Vec<DesignRun> {
+        let jobs: Vec<(&Context, &Prepared)> = preps.iter().map(|p| (ctx, *p)).collect();
+        self.run_jobs(&jobs, want_particles)
+    }
+
+    /// Simulate prepared designs, each under its own context; results in the order given.
+    ///
+    /// Designs whose batch-wide record ([`GpuPhysics`]: g, randomisation schedule and band,
+    /// seed, rest rule and threshold, max bounces, particle and tooth counts) is the same run in
+    /// one dispatch (split only where adapter limits demand), each design carrying its own
+    /// restitution and effect parameters in its [`GpuDesign`] and its own drag in its
+    /// particles' k_drag. The key is the f32 record the kernel reads, so designs share a
+    /// dispatch exactly when the kernel could not tell their batch-wide physics apart.
+    ///
+    /// Designs with an effect the kernel lacks (`cpu_only_effects`: sled motion, quadratic
+    /// drag, uniform sizes) run on the `cpu` engine at f32 (the kernel's twin), with a warning
+    /// printed once per engine: running them on the GPU would silently drop the effect.
+    /// (`make_engine_for` refuses `--engine gpu` for such a scenario up front; this covers the
+    /// callers whose effects vary per group, e.g. diagnose's candidates.)
+    ///
+    /// A chunk the GPU fails on is re-run on the `cpu` engine (f32) with a warning, so a
+    /// failure loses no work.
+    pub fn run_jobs(&self, jobs: &[(&Context, &Prepared)], want_particles: bool) -> Vec<DesignRun> {
+        let mut out: Vec<Option<DesignRun>> = (0..jobs.len()).map(|_| None).collect();
+        let mut batches: Vec<(GpuPhysics, Vec<usize>)> = Vec::new();
+        let mut on_cpu: Vec<usize> = Vec::new();
+        for (i, (ctx, prep)) in jobs.iter().enumerate() {
+            let cpu_only = cpu_only_effects(&ctx.effects);
+            if !cpu_only.is_empty() {
+                if !self.warned_cpu_only.swap(true, Ordering::Relaxed) {
+                    eprintln!(
+                        "warning: gpu engine: {} are in the cpu engine only; designs that switch them on run on the cpu engine (f32)",
+                        cpu_only.join(", ")
+                    );
                 }
-                Err(e) => {
-                    eprintln!("warning: GPU failed on a batch of {} designs ({e:#}); re-running it on the cpu engine", chunk.len());
-                    let cpu = CpuEngine { precision: Precision::F32 };
-                    let redo: Vec<_> = chunk
-                        .par_iter()
-                        .map(|prep| {
-                            let run = cpu.run(prep, ctx, None);
-                            let sim = crate::model::outcome::summarise(&prep.profile, prep.fill.area, &run.particles, run.iterations);
-                            (sim, want_particles.then_some(run.particles))
-                        })
-                        .collect();
-                    out.extend(redo);
+                on_cpu.push(i);
+                continue;
+            }
+            let key = GpuPhysics::from_kernel(&kernel_physics::<f32>(ctx), ctx.max_bounces, prep.launches.len() as u32, 0, prep.profile.teeth);
+            match batches.iter_mut().find(|(k, _)| bytemuck::bytes_of(k) == bytemuck::bytes_of(&key)) {
+                Some((_, members)) => members.push(i),
+                None => batches.push((key, vec![i])),
+            }
+        }
+        if !on_cpu.is_empty() {
+            self.cpu_only_designs.fetch_add(on_cpu.len(), Ordering::Relaxed);
+            let redo = run_on_cpu(jobs, &on_cpu, want_particles);
+            for (i, r) in on_cpu.into_iter().zip(redo) {
+                out[i] = Some(r);
+            }
+        }
+        for (key, members) in batches {
+            for chunk in members.chunks(self.chunk_designs(key.n_particles, key.teeth_hist)) {
+                for (i, r) in chunk.iter().zip(self.run_batch(key, jobs, chunk, want_particles)) {
+                    out[*i] = Some(r);
                 }
             }
         }
-        out
+        out.into_iter().map(|r| r.expect("every design is run")).collect()
     }
+
+    /// One dispatch of `jobs[chunk]`, which share the batch-wide record `key`.
+    fn run_batch(&self, key: GpuPhysics, jobs: &[(&Context, &Prepared)], chunk: &[usize], want_particles: bool) -> Vec<DesignRun> {
+        let n_particles = key.n_particles;
+        let teeth = key.teeth_hist;
+        let mut designs = Vec::with_capacity(chunk.len());
+        let mut particles = Vec::with_capacity(chunk.len() * n_particles as usize);
+        for &i in chunk {
+            let (ctx, prep) = jobs[i];
+            // the design's own physics: restitution and effects into its record, its drag
+            // (polydisperse or not) into its particles
+            let kp = kernel_physics::<f32>(ctx);
+            let kd = kernel_design::<f32>(prep);
+            designs.push(GpuDesign::new(&kd, &kp));
+            particles.extend(prep.launches.iter().enumerate().map(|(j, l)| GpuParticle::from(&init_particle(&kd, &kp, [l[0] as f32, l[1] as f32], j as u32))));
+        }
+        let phys = GpuPhysics { n_designs: chunk.len() as u32, ..key };
+        match self.run_chunk(&phys, &designs, &particles, want_particles) {
+            Ok(r) => chunk
+                .iter()
+                .enumerate()
+                .map(|(c, &i)| {
+                    let prep = jobs[i].1;
+                    let o = &r.outcomes[c];
+                    let hist = &r.histogram[c * teeth as usize..(c + 1) * teeth as usize];
+                    let sim = from_counts(
+                        hist,
+                        n_particles as usize,
+                        o.lost as usize,
+                        o.flying as usize,
+                        o.distance_sum as f64,
+                        o.advance_teeth as f64 * prep.profile.pitch_len,
+                        prep.fill.area,
+                        o.iterations,
+                        o.bounce_sum as u64,
+                    );
+                    let parts = r.particles.as_ref().map(|ps| {
+                        ps[c * n_particles as usize..(c + 1) * n_particles as usize].iter().map(|p| particle_end(prep, p)).collect()
+                    });
+                    (sim, parts)
+                })
+                .collect(),
+            Err(e) => {
+                eprintln!("warning: GPU failed on a batch of {} designs ({e:#}); re-running it on the cpu engine", chunk.len());
+                run_on_cpu(jobs, chunk, want_particles)
+            }
+        }
+    }
+}
+
+/// `jobs[which]` on the `cpu` engine at f32, the kernel's twin.
+fn run_on_cpu(jobs: &[(&Context, &Prepared)], which: &[usize], want_particles: bool) -> Vec<DesignRun> {
+    let cpu = CpuEngine { precision: Precision::F32 };
+    which
+        .par_iter()
+        .map(|&i| {
+            let (ctx, prep) = jobs[i];
+            let run = cpu.run(prep, ctx, None);
+            let sim = crate::model::outcome::summarise(&prep.profile, prep.fill.area, &run.particles, run.iterations);
+            (sim, want_particles.then_some(run.particles))
+        })
+        .collect()
 }
 
 fn particle_end(prep: &Prepared, p: &GpuParticle) -> ParticleEnd {
@@ -346,29 +445,28 @@ impl BatchEvaluator for GpuEngine {
         self.evaluate_groups(&[(scenario.clone(), designs.to_vec())]).pop().unwrap_or_default()
     }
 
-    /// Groups whose particle physics (Context), particle count and tooth count agree run as
-    /// one job: the conveyor angle lives in each design's geometry, not in the kernel's
-    /// uniforms. Other groups are run one after another.
+    /// All groups as one job: designs whose batch-wide physics agree share a dispatch even
+    /// when their restitution (k_elastic, mu_friction), drag or effect parameters differ, as a
+    /// calibration's candidates do; the conveyor angle lives in each design's geometry. See
+    /// [`GpuEngine::run_jobs`] for the key, and for designs whose effects are cpu-only.
     fn evaluate_groups(&self, groups: &[(Scenario, Vec<Design>)]) -> Vec<Vec<Result<Evaluation, Invalid>>> {
-        let Some((first, _)) = groups.first() else { return Vec::new() };
-        let ctx = Context::new(first);
-        let same = groups.iter().all(|(s, _)| Context::new(s) == ctx && s.sim.particles == first.sim.particles && s.sim.teeth == first.sim.teeth);
-        if !same {
-            return groups.iter().map(|(s, d)| self.evaluate_groups(&[(s.clone(), d.clone())]).pop().unwrap_or_default()).collect();
-        }
-        let prepared: Vec<Vec<Result<Prepared, Invalid>>> =
-            groups.iter().map(|(s, designs)| designs.par_iter().map(|d| prepare(s, d)).collect()).collect();
-        let ok: Vec<&Prepared> = prepared.iter().flatten().filter_map(|p| p.as_ref().ok()).collect();
-        let mut sims = self.run_prepared(&ctx, &ok, false).into_iter();
+        let contexts: Vec<Context> = groups.iter().map(|(s, _)| Context::new(s)).collect();
+        // prepare every (group, design) pair in parallel: a calibration sends one-design groups
+        let tasks: Vec<(usize, &Design)> = groups.iter().enumerate().flat_map(|(g, (_, ds))| ds.iter().map(move |d| (g, d))).collect();
+        let prepared: Vec<Result<Prepared, Invalid>> = tasks.par_iter().map(|(g, d)| prepare(&groups[*g].0, d)).collect();
+        let jobs: Vec<(&Context, &Prepared)> =
+            tasks.iter().zip(&prepared).filter_map(|((g, _), p)| p.as_ref().ok().map(|p| (&contexts[*g], p))).collect();
+        let mut sims = self.run_jobs(&jobs, false).into_iter();
+        let mut prepared = prepared.into_iter();
         groups
             .iter()
-            .zip(&prepared)
-            .map(|((s, _), preps)| {
-                preps
-                    .iter()
+            .map(|(s, ds)| {
+                prepared
+                    .by_ref()
+                    .take(ds.len())
                     .map(|p| match p {
-                        Ok(prep) => Ok(finish_outcome(s, prep, sims.next().expect("one outcome per valid design").0)),
-                        Err(e) => Err(e.clone()),
+                        Ok(prep) => Ok(finish_outcome(s, &prep, sims.next().expect("one outcome per valid design").0)),
+                        Err(e) => Err(e),
                     })
                     .collect()
             })
