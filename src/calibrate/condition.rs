@@ -83,6 +83,15 @@ impl Condition {
             Normalise::Recovered => bins,
         }
     }
+    /// What the last bin holds, for reports: "lost" (D.4's bins) or "not recovered"
+    /// (beyond the weighed teeth, lost, or spilled).
+    pub fn last_bin_label(&self) -> &'static str {
+        match self.normalise {
+            Normalise::Loaded => "not recovered",
+            Normalise::Recovered => "lost",
+        }
+    }
+
     /// Whether every run records its loaded mass (so `Normalise::Loaded` is possible).
     pub fn has_input_mass(runs: &MeasuredRuns) -> bool {
         runs.runs.iter().all(|r| r.input_mass_g.is_some_and(|m| m > 0.0))

@@ -849,7 +849,7 @@ pub fn to_json(d: &Diagnosis) -> Value {
                         o.insert("first_flight".into(), num(w.first_flight[j]));
                         o.insert("bounce_chain".into(), num(w.bounce_chain[j]));
                     } else {
-                        o.insert("tooth".into(), json!("lost"));
+                        o.insert("tooth".into(), json!(c.last_bin_label().replace(' ', "_")));
                     }
                     v
                 })
@@ -907,7 +907,7 @@ pub fn to_json(d: &Diagnosis) -> Value {
                         .chain(std::iter::once(teeth))
                         .map(|j| {
                             json!({
-                                "tooth": if j < teeth { json!(j + 1) } else { json!("lost") },
+                                "tooth": if j < teeth { json!(j + 1) } else { json!(c.last_bin_label().replace(' ', "_")) },
                                 "measured": num(100.0 * g.measured[j]),
                                 "before": num(100.0 * g.before[j]),
                                 "after": num(100.0 * g.after[j]),

@@ -29,11 +29,11 @@ fn params_text(m: &ModelResult) -> String {
     m.names.iter().zip(&m.full.x).map(|(n, v)| format!("{n} {}", show(*v))).collect::<Vec<_>>().join(", ")
 }
 
-fn tooth_label(j: usize, shown: usize) -> String {
+fn tooth_label(j: usize, shown: usize, last: &str) -> String {
     if j < shown {
         format!("{}", j + 1)
     } else {
-        "lost".into()
+        last.into()
     }
 }
 
@@ -118,7 +118,7 @@ pub fn to_markdown(d: &Diagnosis) -> String {
         let _ = writeln!(s, "| tooth | measured % | simulated % | residual | uncertainty (runs / scale / MC) | z | flag | first flight % | bounce chain % |");
         let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
         for (j, r) in w.teeth_residuals.iter().enumerate() {
-            let mut row = residual_row(&tooth_label(j, w.shown_teeth), r, 2);
+            let mut row = residual_row(&tooth_label(j, w.shown_teeth, c.last_bin_label()), r, 2);
             if j < w.shown_teeth {
                 let _ = write!(row, " {} | {} |", f(w.first_flight[j], 1), f(w.bounce_chain[j], 1));
             } else {
@@ -406,7 +406,7 @@ pub fn residuals_svg(d: &Diagnosis) -> String {
                 s,
                 r##"<text x="{x:.1}" y="{:.1}" font-size="11" text-anchor="middle">{}</text>"##,
                 fr.y0 + fr.h + 16.0,
-                tooth_label(j, w.shown_teeth)
+                tooth_label(j, w.shown_teeth, c.last_bin_label())
             );
         }
         let _ = writeln!(
