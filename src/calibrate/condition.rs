@@ -83,6 +83,23 @@ impl Condition {
             Normalise::Recovered => bins,
         }
     }
+    /// Run-to-run sd of the last bin's fraction: what each run did not recover of its loaded
+    /// mass (`Normalise::Loaded`), 0 for D.4's lost bin (measured 0 in every run).
+    pub fn last_bin_sd(&self) -> f64 {
+        let missing: Vec<f64> = match self.normalise {
+            Normalise::Loaded => {
+                self.runs.runs.iter().filter_map(|r| r.input_mass_g.map(|m| 1.0 - r.recovered_g() / m)).collect()
+            }
+            Normalise::Recovered => return 0.0,
+        };
+        let n = missing.len();
+        if n < 2 {
+            return 0.0;
+        }
+        let mean = missing.iter().sum::<f64>() / n as f64;
+        (missing.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt()
+    }
+
     /// What the last bin holds, for reports: "lost" (D.4's bins) or "not recovered"
     /// (beyond the weighed teeth, lost, or spilled).
     pub fn last_bin_label(&self) -> &'static str {

@@ -62,7 +62,7 @@ use serde_json::{json, Map, Value};
 pub use crate::calibrate::{Condition, KnownMotion};
 use crate::calibrate::{fit_models, Fit, Model, Simulator, SolverBudget, Space};
 use crate::engine::{evaluate_detailed, particle_engine, BatchEvaluator, EngineKind};
-use crate::fit::{objective, percentile, MeasuredSummary, Param, Target};
+use crate::fit::{percentile, MeasuredSummary, Param, Target};
 pub use crate::model::effects::EffectKind;
 use crate::model::effects::known_effects;
 use crate::model::outcome::{centre_and_dispersion, end_tooth, ParticleState};
@@ -460,7 +460,8 @@ fn where_condition(cond: &Condition, scenario: &Scenario, bins: &[f64], particle
     let teeth = cond.teeth();
     let runs = &cond.runs;
     let n = runs.runs.len() as f64;
-    let measured = objective::measured_bins(&runs.mean_fractions(), teeth);
+    // the measured bins as the fits compare them (fractions of the loaded or recovered mass)
+    let measured = cond.target_all().bins;
     let summary = MeasuredSummary::new(runs, teeth);
     let mean_recovered = runs.runs.iter().map(|r| r.recovered_g()).sum::<f64>() / n;
     let scale = 100.0 * cond.resolution_g / 12f64.sqrt() / mean_recovered;
@@ -469,7 +470,7 @@ fn where_condition(cond: &Condition, scenario: &Scenario, bins: &[f64], particle
     let shown = runs.teeth.max(last_sim).clamp(1, teeth);
     let mut teeth_residuals = Vec::with_capacity(shown + 1);
     for j in (0..shown).chain(std::iter::once(teeth)) {
-        let sd = if j < teeth { summary.sd[j] } else { 0.0 };
+        let sd = if j < teeth { summary.sd[j] } else { cond.last_bin_sd() };
         let run_part = if sd.is_finite() { 100.0 * sd / n.sqrt() } else { 0.0 };
         let p = bins[j];
         let mc = 100.0 * (p * (1.0 - p) / np).max(0.0).sqrt();
