@@ -67,6 +67,20 @@ pub fn joint_sse(bins: &Bins, targets: &[Target]) -> f64 {
     }
 }
 
+/// Score every model's unit-box points (`per_model[m]` for model m) in one engine call and
+/// hand the values back per model, in order.
+fn score_per_model(
+    run: &dyn Fn(&[(&Space, Vec<f64>)], u32) -> Vec<f64>,
+    models: &[Model],
+    per_model: &[Vec<Vec<f64>>],
+    particles: u32,
+) -> Vec<Vec<f64>> {
+    let points: Vec<(&Space, Vec<f64>)> =
+        per_model.iter().zip(models).flat_map(|(us, model)| us.iter().map(|u| (model.space, model.space.from_unit(u)))).collect();
+    let mut it = run(&points, particles).into_iter();
+    per_model.iter().map(|us| us.iter().map(|_| it.next().expect("one value per point")).collect()).collect()
+}
+
 /// Polish steps in the unit box: the first and the smallest.
 const FIRST_STEP: f64 = 0.05;
 const MIN_STEP: f64 = 0.05 / 32.0;
@@ -108,13 +122,10 @@ pub fn fit_models(
             Member { pop: pop.into_iter().map(|u| (u, f64::INFINITY)).collect(), rng, evaluations: 0 }
         })
         .collect();
-    let points: Vec<(&Space, Vec<f64>)> =
-        members.iter().zip(models).flat_map(|(mem, model)| mem.pop.iter().map(|(u, _)| (model.space, model.space.from_unit(u)))).collect();
-    let values = run(&points, budget.screen_particles);
-    let mut it = values.into_iter();
-    for mem in members.iter_mut() {
-        for ind in mem.pop.iter_mut() {
-            ind.1 = it.next().expect("one value per point");
+    let initial: Vec<Vec<Vec<f64>>> = members.iter().map(|mem| mem.pop.iter().map(|(u, _)| u.clone()).collect()).collect();
+    for (mem, values) in members.iter_mut().zip(score_per_model(&run, models, &initial, budget.screen_particles)) {
+        for (ind, v) in mem.pop.iter_mut().zip(values) {
+            ind.1 = v;
         }
         mem.evaluations += mem.pop.len() as u64;
     }
@@ -157,14 +168,10 @@ pub fn fit_models(
             }
             trials.push(t);
         }
-        let points: Vec<(&Space, Vec<f64>)> =
-            trials.iter().zip(models).flat_map(|(t, model)| t.iter().map(|u| (model.space, model.space.from_unit(u)))).collect();
-        let values = run(&points, budget.screen_particles);
-        let mut it = values.into_iter();
-        for (mem, t) in members.iter_mut().zip(trials) {
+        let values = score_per_model(&run, models, &trials, budget.screen_particles);
+        for ((mem, t), values) in members.iter_mut().zip(trials).zip(values) {
             mem.evaluations += t.len() as u64;
-            for (i, u) in t.into_iter().enumerate() {
-                let v = it.next().expect("one value per point");
+            for (i, (u, v)) in t.into_iter().zip(values).enumerate() {
                 if v <= mem.pop[i].1 {
                     mem.pop[i] = (u, v);
                 }
@@ -187,15 +194,11 @@ pub fn fit_models(
             c.extend(model.starts.iter().map(|x| model.space.to_unit(x)));
             cands.push(c);
         }
-        let points: Vec<(&Space, Vec<f64>)> =
-            cands.iter().zip(models).flat_map(|(c, model)| c.iter().map(|u| (model.space, model.space.from_unit(u)))).collect();
-        let values = run(&points, budget.particles);
-        let mut it = values.into_iter();
-        for (mem, c) in members.iter_mut().zip(cands) {
+        let values = score_per_model(&run, models, &cands, budget.particles);
+        for ((mem, c), values) in members.iter_mut().zip(cands).zip(values) {
             mem.evaluations += c.len() as u64;
             let mut best: Option<(Vec<f64>, f64)> = None;
-            for u in c {
-                let v = it.next().expect("one value per point");
+            for (u, v) in c.into_iter().zip(values) {
                 if best.as_ref().is_none_or(|b| v < b.1) {
                     best = Some((u, v));
                 }
@@ -224,15 +227,11 @@ pub fn fit_models(
         if probes.iter().all(Vec::is_empty) {
             break;
         }
-        let points: Vec<(&Space, Vec<f64>)> =
-            probes.iter().zip(models).flat_map(|(p, model)| p.iter().map(|u| (model.space, model.space.from_unit(u)))).collect();
-        let values = run(&points, budget.particles);
-        let mut it = values.into_iter();
-        for (m, p) in probes.into_iter().enumerate() {
+        let values = score_per_model(&run, models, &probes, budget.particles);
+        for (m, (p, values)) in probes.into_iter().zip(values).enumerate() {
             members[m].evaluations += p.len() as u64;
             let mut moved = false;
-            for y in p {
-                let v = it.next().expect("one value per point");
+            for (y, v) in p.into_iter().zip(values) {
                 if v < current[m].1 {
                     current[m] = (y, v);
                     moved = true;
