@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use sawtooth::engine::{make_engine, EngineKind};
-use sawtooth::fit::{Param, Problem};
+use sawtooth::fit::objective::simulated_bins;
 use sawtooth::io::config::ConfigFile;
 
 fn sawtooth(args: &[&str]) -> (i32, String, String) {
@@ -33,9 +33,10 @@ fn simulate_test3(k_drag: f64, particles: u32) -> Vec<f64> {
     let config = ConfigFile::load(Path::new(&data("test3.toml"))).unwrap();
     let mut scenario = config.scenario().unwrap();
     scenario.sim.particles = particles;
+    scenario.environment.k_drag = Some(k_drag);
     let engine = make_engine(EngineKind::Cpu).unwrap();
-    let problem = Problem::new(engine.as_ref(), scenario, config.design().unwrap(), vec![Param::KDrag]).unwrap();
-    problem.bins_at(&[k_drag]).unwrap()
+    let e = engine.evaluate(&scenario, &[config.design().unwrap()]).pop().unwrap().unwrap();
+    simulated_bins(&e.sim)
 }
 
 /// Runs whose tooth masses are the simulated fractions times 2 g with a small deterministic
@@ -157,9 +158,11 @@ fn json_on_test3_has_the_documented_keys_and_files_are_written() {
         "--setup",
         &data("test3.toml"),
         "--pop",
-        "4",
+        "5",
         "--generations",
         "1",
+        "--polish",
+        "2",
         "--particles",
         "50",
         "--bootstrap",
@@ -185,7 +188,11 @@ fn json_on_test3_has_the_documented_keys_and_files_are_written() {
     let fitted = v["distribution"]["fitted"].as_array().unwrap();
     assert_eq!(measured.len(), 20);
     assert_eq!(fitted.len(), 20);
-    assert!((measured[0].as_f64().unwrap() - 42.28).abs() < 0.01, "Test 3 tooth 1 in percent");
+    // Test 3 records input_mass: fractions of the loaded mass (Σ tooth 1 / Σ input) and a
+    // "not recovered" bin
+    assert!((measured[0].as_f64().unwrap() - 41.314).abs() < 0.01, "Test 3 tooth 1 in percent of the loaded mass");
+    assert_eq!(v["distribution"]["last_bin"], "not recovered");
+    assert!((v["distribution"]["last_bin_measured"].as_f64().unwrap() - 2.290).abs() < 0.01);
     for k in ["sse_heldout_percent2", "sse_in_sample_percent2", "nll_heldout", "params"] {
         assert!(v["heldout"].get(k).is_some(), "missing heldout.{k}");
     }
@@ -201,7 +208,7 @@ fn json_on_test3_has_the_documented_keys_and_files_are_written() {
     assert!(csv.starts_with(
         "tooth,measured_mean_percent,measured_sd_percent,measured_min_percent,measured_max_percent,fitted_percent\n"
     ));
-    assert_eq!(csv.lines().count(), 1 + 20 + 1);
+    assert_eq!(csv.lines().count(), 1 + 20);
     let svg = std::fs::read_to_string(dir.join("fit.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
     assert!(!std::fs::read_dir(&dir).unwrap().any(|e| e.unwrap().file_name().to_string_lossy().contains(".tmp")));
@@ -219,9 +226,11 @@ fn table_output_and_determinism() {
         "--params",
         "k_drag",
         "--pop",
-        "4",
+        "5",
         "--generations",
         "1",
+        "--polish",
+        "2",
         "--particles",
         "40",
         "--bootstrap",
@@ -249,6 +258,8 @@ fn at_scores_given_parameters_without_fitting() {
         &data("test3.toml"),
         "--at",
         "k_elastic=0.854,mu_fric=0.133,k_drag=5.347",
+        "--normalise",
+        "recovered",
         "--particles",
         "200",
         "--json",
@@ -314,7 +325,8 @@ fn bad_input_exits_2_naming_the_field() {
     // flags (each rejected before anything is simulated)
     run(&["--params", "k_elastic,gravity"], &["--params", "`gravity`", "k_elastic, mu_fric, k_drag"]);
     run(&["--params", "k_drag,k_drag"], &["--params", "twice"]);
-    run(&["--pop", "3"], &["--pop", ">= 4"]);
+    run(&["--pop", "4"], &["--pop", ">= 5"]);
+    run(&["--max-particles", "10"], &["--max-particles", ">= 1000"]);
     run(&["--particles", "0"], &["--particles", ">= 1"]);
     run(&["--holdout", "10"], &["--holdout", "number of runs", "10"]);
     run(&["--objective", "mae"], &["--objective"]);
@@ -322,5 +334,23 @@ fn bad_input_exits_2_naming_the_field() {
     run(&["--at", "k_drag=fast"], &["--at", "k_drag", "not a number"]);
     run(&["--at", "k_drag=-1"], &["--at", "k_drag", "> 0"]);
     run(&["--at", "gravity=1"], &["--at", "`gravity`"]);
+    // D.4's fractions need no input mass, the loaded-mass ones do
+    assert_bad_input(
+        &["fit", "--data", &data("test2.csv"), "--setup", &data("test2.toml"), "--normalise", "loaded"],
+        &["--normalise loaded", "test2.csv", "input_mass"],
+    );
+    // k_drag has no meaning in vacuum
+    let vacuum = dir.join("vacuum.toml");
+    let text = std::fs::read_to_string(&toml3).unwrap();
+    let text: String = text
+        .lines()
+        .filter(|l| !l.trim_start().starts_with("k_drag"))
+        .map(|l| if l.starts_with("env =") { "env = \"lunar\"\n".to_string() } else { format!("{l}\n") })
+        .collect();
+    std::fs::write(&vacuum, text).unwrap();
+    assert_bad_input(
+        &["fit", "--data", &csv3, "--setup", vacuum.to_str().unwrap(), "--params", "k_drag", "--generations", "0"],
+        &["k_drag", "vacuum"],
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -1,6 +1,7 @@
 //! A measured condition: the runs and the setup they were measured with.
 
-use crate::fit::{collapse_to_weighed, subset, Target};
+use super::stats::sample_sd;
+use crate::fit::{collapse_to_weighed, subset, MeasuredSummary, Target};
 use crate::io::measured::MeasuredRuns;
 use crate::model::{Design, Scenario};
 
@@ -83,21 +84,42 @@ impl Condition {
             Normalise::Recovered => bins,
         }
     }
-    /// Run-to-run sd of the last bin's fraction: what each run did not recover of its loaded
-    /// mass (`Normalise::Loaded`), 0 for D.4's lost bin (measured 0 in every run).
-    pub fn last_bin_sd(&self) -> f64 {
-        let missing: Vec<f64> = match self.normalise {
-            Normalise::Loaded => {
-                self.runs.runs.iter().filter_map(|r| r.input_mass_g.map(|m| 1.0 - r.recovered_g() / m)).collect()
-            }
-            Normalise::Recovered => return 0.0,
-        };
-        let n = missing.len();
-        if n < 2 {
-            return 0.0;
+    /// Each run's fractions as this condition's measurement compares them: the setup's teeth
+    /// (zeros beyond the weighed ones), then the last bin (what the run did not recover of
+    /// its loaded mass under `Normalise::Loaded`; D.4's lost bin, 0, otherwise).
+    pub fn run_fractions(&self) -> Vec<Vec<f64>> {
+        let teeth = self.teeth();
+        self.runs
+            .runs
+            .iter()
+            .map(|r| {
+                let total = match (self.normalise, r.input_mass_g) {
+                    (Normalise::Loaded, Some(m)) => m,
+                    _ => r.recovered_g(),
+                };
+                let mut f = vec![0.0; teeth + 1];
+                for (fj, m) in f.iter_mut().zip(&r.teeth_g) {
+                    *fj = m / total;
+                }
+                f[teeth] = (1.0 - r.recovered_g() / total).max(0.0);
+                f
+            })
+            .collect()
+    }
+
+    /// Per-bin statistics of the runs as the fits compare them: the mean is the target's
+    /// (mean masses over their sum, or over the summed loaded masses), sd, min and max those
+    /// of [`Self::run_fractions`].
+    pub fn summary(&self) -> MeasuredSummary {
+        let fr = self.run_fractions();
+        let bins = self.teeth() + 1;
+        let col = |j: usize| fr.iter().map(|f| f[j]).collect::<Vec<f64>>();
+        MeasuredSummary {
+            mean: self.target_all().bins,
+            sd: (0..bins).map(|j| sample_sd(&col(j))).collect(),
+            min: (0..bins).map(|j| col(j).into_iter().fold(f64::INFINITY, f64::min)).collect(),
+            max: (0..bins).map(|j| col(j).into_iter().fold(f64::NEG_INFINITY, f64::max)).collect(),
         }
-        let mean = missing.iter().sum::<f64>() / n as f64;
-        (missing.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt()
     }
 
     /// What the last bin holds, for reports: "lost" (D.4's bins) or "not recovered"

@@ -1,16 +1,20 @@
 //! One calibration engine for `fit` and `diagnose` (issue 11): a parameter space of shared
 //! collision/drag parameters and effect parameters ([`space`]), measured conditions
 //! ([`condition`]), a batch simulator that turns many (model, point) pairs across every
-//! condition into **one** engine call ([`batch`]), and a solver that screens with
-//! differential evolution at a small particle budget and polishes with a compass search at
-//! the full budget, several models in lockstep ([`solver`]).
+//! condition into **one** engine call ([`batch`]), a solver that screens with differential
+//! evolution at a small particle budget and polishes with a compass search at the full
+//! budget, several models in lockstep ([`solver`]), the effort a user asks for turned into
+//! the solver's settings ([`effort`]), and the sample statistics of the reports ([`stats`]).
 
 pub mod batch;
 pub mod condition;
+pub mod effort;
 pub mod solver;
 pub mod space;
+pub mod stats;
 
 pub use batch::Simulator;
 pub use condition::{Condition, KnownMotion, Normalise};
-pub use solver::{fit_models, Fit, Model, SolverBudget};
-pub use space::Space;
+pub use effort::{particles_from_data, Effort, MIN_PARTICLES};
+pub use solver::{Fit, Model, Probe, Solver};
+pub use space::{shared_params, Space};

@@ -11,29 +11,36 @@
 //!    with the full particle count, and a compass search (Kolda, Lewis & Torczon 2003) moves
 //!    from the best of them: the 2d points ±step along each axis, move to the best that
 //!    improves and double the step (up to 0.2 of the box), else halve it. Each iteration of
-//!    every model is one engine call.
+//!    every model is one engine call. [`Solver::polish`] runs this stage alone (the
+//!    bootstrap refits of `fit`, each replicate a model of its own).
 //!
-//! The objective is the joint SSE of Eq. 4.62 summed over the conditions. Every point of a
-//! stage sees the same particle streams (common random numbers), so differences between
-//! points are differences of physics, not of noise.
+//! The objective ([`ObjectiveKind`]) is summed over the conditions: the SSE of Eq. 4.62 or
+//! the Dirichlet-multinomial likelihood of the runs. Every point of a stage sees the same
+//! particle streams (common random numbers), so differences between points are differences
+//! of physics, not of noise.
 
 use anyhow::bail;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 
 use super::batch::{Bins, Simulator};
 use super::space::Space;
-use crate::fit::Target;
+use crate::fit::{objective, ObjectiveKind, Target};
 
-/// One model to fit: its space and extra starting points (parameter units).
+/// One model to fit: its space, what it is fitted to, and extra starting points
+/// (parameter units).
 pub struct Model<'a> {
     pub space: &'a Space,
+    /// One target per condition of the simulator.
+    pub targets: &'a [Target],
     pub starts: Vec<Vec<f64>>,
 }
 
-/// How hard the solver works.
+/// The solver's settings: what it minimises and how hard it works.
 #[derive(Clone, Copy, Debug)]
-pub struct SolverBudget {
+pub struct Solver {
+    pub objective: ObjectiveKind,
     /// DE population per model (at least 5).
     pub pop: usize,
     /// DE generations after the initial population.
@@ -44,214 +51,390 @@ pub struct SolverBudget {
     pub particles: u32,
     /// Compass-search iterations.
     pub polish_iterations: usize,
+    /// The compass search's first and smallest step, as fractions of the box (it stops
+    /// probing below the smallest).
+    pub first_step: f64,
+    pub min_step: f64,
     pub seed: u64,
+}
+
+/// One point simulated at the full budget, with its bins per condition.
+#[derive(Clone, Debug)]
+pub struct Probe {
+    pub x: Vec<f64>,
+    pub bins: Vec<Vec<f64>>,
 }
 
 /// One fitted model.
 #[derive(Clone, Debug)]
 pub struct Fit {
     pub x: Vec<f64>,
-    /// Joint SSE at `x` with the full particle count, %².
+    /// The objective at `x` with the full particle count (SSE in %², or NLL).
     pub value: f64,
     /// Simulated bins per condition at `x`.
     pub bins: Vec<Vec<f64>>,
     /// Simulations of the whole condition set this fit used.
     pub evaluations: u64,
+    /// Every point the polish simulated at the full budget (the starts of refits).
+    pub archive: Vec<Probe>,
 }
 
-/// The joint objective: Σ over conditions of the SSE (%²); +inf when not simulable.
-pub fn joint_sse(bins: &Bins, targets: &[Target]) -> f64 {
-    match bins {
-        None => f64::INFINITY,
-        Some(b) => b.iter().zip(targets).map(|(b, t)| t.sse(b)).sum(),
+impl Solver {
+    /// The objective summed over the conditions at `particles` per simulation; +inf when not
+    /// simulable.
+    pub fn value(&self, bins: &Bins, targets: &[Target], particles: u32) -> f64 {
+        let eps = objective::floor_for(particles);
+        match bins {
+            None => f64::INFINITY,
+            Some(b) => b.iter().zip(targets).map(|(b, t)| t.value(self.objective, Some(b), eps)).sum(),
+        }
+    }
+
+    /// Score every model's unit-box points (`per_model[m]` for model m) in one engine call
+    /// and hand the values and bins back per model, in order.
+    fn score(
+        &self,
+        sim: &Simulator,
+        models: &[Model],
+        per_model: &[Vec<Vec<f64>>],
+        particles: u32,
+    ) -> Vec<Vec<(f64, Bins)>> {
+        let points: Vec<(&Space, Vec<f64>)> = per_model
+            .iter()
+            .zip(models)
+            .flat_map(|(us, model)| us.iter().map(|u| (model.space, model.space.from_unit(u))))
+            .collect();
+        let bins = sim.simulate(&points, particles, self.seed);
+        // the likelihood profiles a concentration per point: worth the threads
+        let owners: Vec<&Model> = per_model.iter().zip(models).flat_map(|(us, model)| us.iter().map(move |_| model)).collect();
+        let mut it = bins
+            .into_par_iter()
+            .zip(owners)
+            .map(|(b, model)| (self.value(&b, model.targets, particles), b))
+            .collect::<Vec<_>>()
+            .into_iter();
+        per_model.iter().map(|us| us.iter().map(|_| it.next().expect("one result per point")).collect()).collect()
     }
 }
 
-/// Score every model's unit-box points (`per_model[m]` for model m) in one engine call and
-/// hand the values back per model, in order.
-fn score_per_model(
-    run: &dyn Fn(&[(&Space, Vec<f64>)], u32) -> Vec<f64>,
-    models: &[Model],
-    per_model: &[Vec<Vec<f64>>],
-    particles: u32,
-) -> Vec<Vec<f64>> {
-    let points: Vec<(&Space, Vec<f64>)> =
-        per_model.iter().zip(models).flat_map(|(us, model)| us.iter().map(|u| (model.space, model.space.from_unit(u)))).collect();
-    let mut it = run(&points, particles).into_iter();
-    per_model.iter().map(|us| us.iter().map(|_| it.next().expect("one value per point")).collect()).collect()
-}
-
-/// Polish steps in the unit box: the first and the smallest.
-const FIRST_STEP: f64 = 0.05;
-const MIN_STEP: f64 = 0.05 / 32.0;
+/// The compass search's default first and smallest steps in the unit box, and its largest.
+pub const FIRST_STEP: f64 = 0.05;
+pub const MIN_STEP: f64 = 0.05 / 32.0;
 const MAX_STEP: f64 = 0.2;
 
+impl Solver {
+    fn check(&self, sim: &Simulator, models: &[Model]) -> anyhow::Result<()> {
+        if self.pop < 5 {
+            bail!("the calibration's population must be >= 5, got {}", self.pop);
+        }
+        if let Some(m) = models.iter().find(|m| m.targets.len() != sim.conditions.len()) {
+            bail!("a model has {} targets for {} conditions", m.targets.len(), sim.conditions.len());
+        }
+        Ok(())
+    }
+
+    /// Fit every model: screen, then polish. `log` receives progress lines.
+    pub fn fit(&self, sim: &Simulator, models: &[Model], log: &mut dyn FnMut(String)) -> anyhow::Result<Vec<Fit>> {
+        self.check(sim, models)?;
+        let seed = self.seed;
+        let mut members: Vec<Member> = models
+            .iter()
+            .enumerate()
+            .map(|(m, model)| {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (0xCA11_B000 + m as u64));
+                let d = model.space.dim();
+                let mut pop: Vec<Vec<f64>> =
+                    model.starts.iter().map(|x| model.space.to_unit(x)).take(self.pop).collect();
+                while pop.len() < self.pop {
+                    pop.push((0..d).map(|_| rng.random::<f64>()).collect());
+                }
+                Member { pop: pop.into_iter().map(|u| (u, f64::INFINITY)).collect(), rng, evaluations: 0 }
+            })
+            .collect();
+        let initial: Vec<Vec<Vec<f64>>> = members.iter().map(|mem| mem.pop.iter().map(|(u, _)| u.clone()).collect()).collect();
+        for (mem, scored) in members.iter_mut().zip(self.score(sim, models, &initial, self.screen_particles)) {
+            for (ind, (v, _)) in mem.pop.iter_mut().zip(scored) {
+                ind.1 = v;
+            }
+            mem.evaluations += mem.pop.len() as u64;
+        }
+        for g in 0..self.generations {
+            let trials: Vec<Vec<Vec<f64>>> = members.iter_mut().map(Member::trials).collect();
+            let scored = self.score(sim, models, &trials, self.screen_particles);
+            for ((mem, t), scored) in members.iter_mut().zip(trials).zip(scored) {
+                mem.evaluations += t.len() as u64;
+                for (i, (u, (v, _))) in t.into_iter().zip(scored).enumerate() {
+                    if v <= mem.pop[i].1 {
+                        mem.pop[i] = (u, v);
+                    }
+                }
+            }
+            if (g + 1) % 10 == 0 || g + 1 == self.generations {
+                let best: Vec<String> =
+                    members.iter().map(|m| format!("{:.1}", m.pop.iter().map(|p| p.1).fold(f64::INFINITY, f64::min))).collect();
+                log(format!("calibrate: screen generation {}/{} (best {})", g + 1, self.generations, best.join(", ")));
+            }
+        }
+        // the polish starts from the screen's best and the model's own starts
+        let starts: Vec<Vec<Vec<f64>>> = members
+            .iter()
+            .zip(models)
+            .map(|(mem, model)| {
+                let best = mem.pop.iter().min_by(|a, b| a.1.total_cmp(&b.1)).expect("population").0.clone();
+                std::iter::once(best).chain(model.starts.iter().map(|x| model.space.to_unit(x))).collect()
+            })
+            .collect();
+        let screened: Vec<u64> = members.iter().map(|m| m.evaluations).collect();
+        self.polish_from(sim, models, starts, &screened)
+    }
+
+    /// The polish stage alone, from each model's starts (at least one each).
+    pub fn polish(&self, sim: &Simulator, models: &[Model]) -> anyhow::Result<Vec<Fit>> {
+        self.check(sim, models)?;
+        if models.iter().any(|m| m.starts.is_empty()) {
+            bail!("the polish needs a start for every model");
+        }
+        let starts = models.iter().map(|m| m.starts.iter().map(|x| m.space.to_unit(x)).collect()).collect();
+        self.polish_from(sim, models, starts, &vec![0; models.len()])
+    }
+
+    fn polish_from(
+        &self,
+        sim: &Simulator,
+        models: &[Model],
+        starts: Vec<Vec<Vec<f64>>>,
+        evaluations: &[u64],
+    ) -> anyhow::Result<Vec<Fit>> {
+        let n = models.len();
+        let mut evaluations = evaluations.to_vec();
+        let mut archives: Vec<Vec<Probe>> = vec![Vec::new(); n];
+        let mut record = |m: usize, model: &Model, u: &[f64], b: &Bins| {
+            if let Some(b) = b {
+                archives[m].push(Probe { x: model.space.from_unit(u), bins: b.clone() });
+            }
+        };
+        // the best start at the full budget
+        let mut current: Vec<(Vec<f64>, f64, Bins)> = Vec::with_capacity(n);
+        let scored = self.score(sim, models, &starts, self.particles);
+        for (m, (c, scored)) in starts.into_iter().zip(scored).enumerate() {
+            evaluations[m] += c.len() as u64;
+            let mut best: Option<(Vec<f64>, f64, Bins)> = None;
+            for (u, (v, b)) in c.into_iter().zip(scored) {
+                record(m, &models[m], &u, &b);
+                if best.as_ref().is_none_or(|best| v < best.1) {
+                    best = Some((u, v, b));
+                }
+            }
+            current.push(best.expect("at least one start"));
+        }
+        // compass search
+        let mut steps = vec![self.first_step; n];
+        for _ in 0..self.polish_iterations {
+            let probes: Vec<Vec<Vec<f64>>> = current
+                .iter()
+                .zip(&steps)
+                .map(|((u, _, _), step)| if *step >= self.min_step { compass_points(u, *step) } else { Vec::new() })
+                .collect();
+            if probes.iter().all(Vec::is_empty) {
+                break;
+            }
+            let scored = self.score(sim, models, &probes, self.particles);
+            for (m, (p, scored)) in probes.into_iter().zip(scored).enumerate() {
+                evaluations[m] += p.len() as u64;
+                let mut moved = false;
+                for (y, (v, b)) in p.into_iter().zip(scored) {
+                    record(m, &models[m], &y, &b);
+                    if v < current[m].1 {
+                        current[m] = (y, v, b);
+                        moved = true;
+                    }
+                }
+                // expand after a success (the screen's best can lie several steps away),
+                // contract after a failure
+                steps[m] = if moved { (steps[m] * 2.0).min(MAX_STEP) } else { steps[m] * 0.5 };
+            }
+        }
+        let mut fits = Vec::with_capacity(n);
+        for (((u, value, bins), model), (evaluations, archive)) in current.into_iter().zip(models).zip(evaluations.into_iter().zip(archives)) {
+            let Some(bins) = bins.filter(|_| value.is_finite()) else {
+                bail!("no candidate could be simulated (every evaluation was rejected by the engine)");
+            };
+            fits.push(Fit { x: model.space.from_unit(&u), value, bins, evaluations, archive });
+        }
+        Ok(fits)
+    }
+}
+
+/// The compass points around `u`: ±`step` along each axis, clamped to the unit box (points
+/// that the box leaves where they were are dropped).
+fn compass_points(u: &[f64], step: f64) -> Vec<Vec<f64>> {
+    let mut p = Vec::with_capacity(2 * u.len());
+    for j in 0..u.len() {
+        for sign in [-1.0, 1.0] {
+            let mut y = u.to_vec();
+            y[j] = (y[j] + sign * step).clamp(0.0, 1.0);
+            if y[j] != u[j] {
+                p.push(y);
+            }
+        }
+    }
+    p
+}
+
+/// One model's differential-evolution population in the unit box.
 struct Member {
     pop: Vec<(Vec<f64>, f64)>,
     rng: ChaCha8Rng,
     evaluations: u64,
 }
 
-/// Fit every model to `targets` (one per condition). `log` receives progress lines.
-pub fn fit_models(
-    sim: &Simulator,
-    targets: &[Target],
-    models: &[Model],
-    budget: &SolverBudget,
-    log: &mut dyn FnMut(String),
-) -> anyhow::Result<Vec<Fit>> {
-    if budget.pop < 5 {
-        bail!("the calibration's population must be >= 5, got {}", budget.pop);
-    }
-    let seed = budget.seed;
-    let run = |points: &[(&Space, Vec<f64>)], particles: u32| -> Vec<f64> {
-        sim.simulate(points, particles, seed).iter().map(|b| joint_sse(b, targets)).collect()
-    };
-
-    // 1. screen: DE at the small budget, all models' generations as one call each
-    let mut members: Vec<Member> = models
-        .iter()
-        .enumerate()
-        .map(|(m, model)| {
-            let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (0xCA11_B000 + m as u64));
-            let d = model.space.dim();
-            let mut pop: Vec<Vec<f64>> = model.starts.iter().map(|x| model.space.to_unit(x)).take(budget.pop).collect();
-            while pop.len() < budget.pop {
-                pop.push((0..d).map(|_| rng.random::<f64>()).collect());
-            }
-            Member { pop: pop.into_iter().map(|u| (u, f64::INFINITY)).collect(), rng, evaluations: 0 }
-        })
-        .collect();
-    let initial: Vec<Vec<Vec<f64>>> = members.iter().map(|mem| mem.pop.iter().map(|(u, _)| u.clone()).collect()).collect();
-    for (mem, values) in members.iter_mut().zip(score_per_model(&run, models, &initial, budget.screen_particles)) {
-        for (ind, v) in mem.pop.iter_mut().zip(values) {
-            ind.1 = v;
-        }
-        mem.evaluations += mem.pop.len() as u64;
-    }
-    for g in 0..budget.generations {
-        let mut trials: Vec<Vec<Vec<f64>>> = Vec::with_capacity(members.len());
-        for mem in members.iter_mut() {
-            let n = mem.pop.len();
-            let d = mem.pop[0].0.len();
-            let best = (0..n).min_by(|a, b| mem.pop[*a].1.total_cmp(&mem.pop[*b].1)).expect("population");
-            let f = 0.5 + 0.4 * mem.rng.random::<f64>();
-            let mut t = Vec::with_capacity(n);
-            for i in 0..n {
-                let (r1, r2) = loop {
-                    let r1 = mem.rng.random_range(0..n);
-                    let r2 = mem.rng.random_range(0..n);
-                    if r1 != r2 && r1 != i && r2 != i {
-                        break (r1, r2);
-                    }
-                };
-                let jrand = mem.rng.random_range(0..d);
-                let xi = &mem.pop[i].0;
-                let y: Vec<f64> = (0..d)
-                    .map(|j| {
-                        if j == jrand || mem.rng.random::<f64>() < 0.9 {
-                            let v = xi[j] + f * (mem.pop[best].0[j] - xi[j]) + f * (mem.pop[r1].0[j] - mem.pop[r2].0[j]);
-                            // bounce back halfway to the bound it crossed
-                            if v < 0.0 {
-                                0.5 * xi[j]
-                            } else if v > 1.0 {
-                                0.5 * (xi[j] + 1.0)
-                            } else {
-                                v
-                            }
+impl Member {
+    /// One generation's trial points (DE/rand-to-best/1/bin, F dithered, CR 0.9).
+    fn trials(&mut self) -> Vec<Vec<f64>> {
+        let n = self.pop.len();
+        let d = self.pop[0].0.len();
+        let best = (0..n).min_by(|a, b| self.pop[*a].1.total_cmp(&self.pop[*b].1)).expect("population");
+        let f = 0.5 + 0.4 * self.rng.random::<f64>();
+        let mut t = Vec::with_capacity(n);
+        for i in 0..n {
+            let (r1, r2) = loop {
+                let r1 = self.rng.random_range(0..n);
+                let r2 = self.rng.random_range(0..n);
+                if r1 != r2 && r1 != i && r2 != i {
+                    break (r1, r2);
+                }
+            };
+            let jrand = self.rng.random_range(0..d);
+            let xi = &self.pop[i].0;
+            let y: Vec<f64> = (0..d)
+                .map(|j| {
+                    if j == jrand || self.rng.random::<f64>() < 0.9 {
+                        let v = xi[j] + f * (self.pop[best].0[j] - xi[j]) + f * (self.pop[r1].0[j] - self.pop[r2].0[j]);
+                        // bounce back halfway to the bound it crossed
+                        if v < 0.0 {
+                            0.5 * xi[j]
+                        } else if v > 1.0 {
+                            0.5 * (xi[j] + 1.0)
                         } else {
-                            xi[j]
+                            v
                         }
-                    })
-                    .collect();
-                t.push(y);
-            }
-            trials.push(t);
-        }
-        let values = score_per_model(&run, models, &trials, budget.screen_particles);
-        for ((mem, t), values) in members.iter_mut().zip(trials).zip(values) {
-            mem.evaluations += t.len() as u64;
-            for (i, (u, v)) in t.into_iter().zip(values).enumerate() {
-                if v <= mem.pop[i].1 {
-                    mem.pop[i] = (u, v);
-                }
-            }
-        }
-        if (g + 1) % 10 == 0 || g + 1 == budget.generations {
-            let best: Vec<String> =
-                members.iter().map(|m| format!("{:.1}", m.pop.iter().map(|p| p.1).fold(f64::INFINITY, f64::min))).collect();
-            log(format!("calibrate: screen generation {}/{} (best SSE {} %²)", g + 1, budget.generations, best.join(", ")));
-        }
-    }
-
-    // 2. polish at the full budget: the screen's best and the starts, then a compass search
-    let mut current: Vec<(Vec<f64>, f64)> = Vec::with_capacity(models.len());
-    {
-        let mut cands: Vec<Vec<Vec<f64>>> = Vec::new();
-        for (mem, model) in members.iter().zip(models) {
-            let best = mem.pop.iter().min_by(|a, b| a.1.total_cmp(&b.1)).expect("population").0.clone();
-            let mut c = vec![best];
-            c.extend(model.starts.iter().map(|x| model.space.to_unit(x)));
-            cands.push(c);
-        }
-        let values = score_per_model(&run, models, &cands, budget.particles);
-        for ((mem, c), values) in members.iter_mut().zip(cands).zip(values) {
-            mem.evaluations += c.len() as u64;
-            let mut best: Option<(Vec<f64>, f64)> = None;
-            for (u, v) in c.into_iter().zip(values) {
-                if best.as_ref().is_none_or(|b| v < b.1) {
-                    best = Some((u, v));
-                }
-            }
-            current.push(best.expect("at least the screen's best"));
-        }
-    }
-    let mut steps = vec![FIRST_STEP; models.len()];
-    for _ in 0..budget.polish_iterations {
-        let mut probes: Vec<Vec<Vec<f64>>> = Vec::with_capacity(models.len());
-        for (m, (u, _)) in current.iter().enumerate() {
-            let mut p = Vec::new();
-            if steps[m] >= MIN_STEP {
-                for j in 0..u.len() {
-                    for sign in [-1.0, 1.0] {
-                        let mut y = u.clone();
-                        y[j] = (y[j] + sign * steps[m]).clamp(0.0, 1.0);
-                        if y[j] != u[j] {
-                            p.push(y);
-                        }
+                    } else {
+                        xi[j]
                     }
-                }
-            }
-            probes.push(p);
+                })
+                .collect();
+            t.push(y);
         }
-        if probes.iter().all(Vec::is_empty) {
-            break;
+        t
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+    use std::sync::Mutex;
+
+    use super::*;
+    use crate::calibrate::{shared_params, Condition};
+    use crate::engine::{make_engine, BatchEvaluator, EngineKind, Evaluation};
+    use crate::model::{Design, Invalid, Scenario};
+
+    /// The CPU engine, recording how many groups each `evaluate_groups` call carries.
+    struct Counting {
+        inner: Box<dyn BatchEvaluator>,
+        calls: Mutex<Vec<usize>>,
+    }
+
+    impl BatchEvaluator for Counting {
+        fn backend(&self) -> &'static str {
+            "counting"
         }
-        let values = score_per_model(&run, models, &probes, budget.particles);
-        for (m, (p, values)) in probes.into_iter().zip(values).enumerate() {
-            members[m].evaluations += p.len() as u64;
-            let mut moved = false;
-            for (y, v) in p.into_iter().zip(values) {
-                if v < current[m].1 {
-                    current[m] = (y, v);
-                    moved = true;
-                }
-            }
-            // expand after a success (the screen's best can lie several steps away), contract
-            // after a failure
-            steps[m] = if moved { (steps[m] * 2.0).min(MAX_STEP) } else { steps[m] * 0.5 };
+        fn evaluate(&self, s: &Scenario, d: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
+            self.calls.lock().unwrap().push(usize::MAX);
+            self.inner.evaluate(s, d)
+        }
+        fn evaluate_groups(&self, groups: &[(Scenario, Vec<Design>)]) -> Vec<Vec<Result<Evaluation, Invalid>>> {
+            self.calls.lock().unwrap().push(groups.len());
+            self.inner.evaluate_groups(groups)
         }
     }
 
-    // the fits' bins, one more call
-    let points: Vec<(&Space, Vec<f64>)> = current.iter().zip(models).map(|((u, _), model)| (model.space, model.space.from_unit(u))).collect();
-    let bins = sim.simulate(&points, budget.particles, seed);
-    let mut fits = Vec::with_capacity(models.len());
-    for (((x, b), (_, v)), mem) in points.into_iter().map(|(_, x)| x).zip(bins).zip(current).zip(&members) {
-        let Some(b) = b else {
-            bail!("no candidate could be simulated (every evaluation was rejected by the engine)");
-        };
-        fits.push(Fit { x, value: v, bins: b, evaluations: mem.evaluations + 1 });
+    fn test3() -> Condition {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/validation");
+        crate::cli::measured_condition::load(&dir.join("test3.csv"), &dir.join("test3.toml"), "test3".into(), None, Some(0))
+            .unwrap()
     }
-    Ok(fits)
+
+    #[test]
+    fn every_generation_of_every_model_is_one_engine_call() {
+        let conditions = vec![test3(), test3()];
+        let engine = Counting { inner: make_engine(EngineKind::Cpu).unwrap(), calls: Mutex::new(Vec::new()) };
+        let sim = Simulator { engine: &engine, conditions: &conditions };
+        let space = Space::new(shared_params(&conditions), &[], &conditions);
+        let targets: Vec<Target> = conditions.iter().map(Condition::target_all).collect();
+        let models = [
+            Model { space: &space, targets: &targets, starts: vec![] },
+            Model { space: &space, targets: &targets, starts: vec![vec![0.5, 0.5, 5.0]] },
+        ];
+        let solver = Solver {
+            objective: ObjectiveKind::Sse,
+            pop: 6,
+            generations: 3,
+            screen_particles: 40,
+            particles: 60,
+            polish_iterations: 2,
+            first_step: FIRST_STEP,
+            min_step: MIN_STEP,
+            seed: 1,
+        };
+        let fits = solver.fit(&sim, &models, &mut |_| {}).unwrap();
+        let calls = engine.calls.lock().unwrap().clone();
+        // initial population + 3 generations (2 models x 6 points x 2 conditions each), the
+        // polish's starts (the screen's best; the second model's own start too), then at
+        // most 2 compass iterations (up to 2 models x 6 probes x 2 conditions)
+        assert_eq!(calls[..4], [24, 24, 24, 24], "{calls:?}");
+        assert_eq!(calls[4], 2 * (1 + 2), "{calls:?}");
+        assert!(calls.len() <= 7 && calls[5..].iter().all(|&g| g > 0 && g <= 2 * 6 * 2), "{calls:?}");
+        for f in &fits {
+            assert!(f.value.is_finite() && f.bins.len() == 2);
+            assert!(f.archive.iter().any(|p| p.x == f.x && p.bins == f.bins), "the fit's point is in its archive");
+        }
+        // the same settings give the same fits (common random numbers, seeded solver)
+        let again = solver.fit(&sim, &models, &mut |_| {}).unwrap();
+        assert_eq!(again.iter().map(|f| f.x.clone()).collect::<Vec<_>>(), fits.iter().map(|f| f.x.clone()).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn polish_refits_many_targets_in_lockstep() {
+        let conditions = vec![test3()];
+        let engine = Counting { inner: make_engine(EngineKind::Cpu).unwrap(), calls: Mutex::new(Vec::new()) };
+        let sim = Simulator { engine: &engine, conditions: &conditions };
+        let space = Space::new(vec![crate::fit::Param::KDrag], &[], &conditions);
+        let targets: Vec<[Target; 1]> = (0..5).map(|i| [conditions[0].target(&[i, i + 1, i + 2])]).collect();
+        let models: Vec<Model> =
+            targets.iter().map(|t| Model { space: &space, targets: t, starts: vec![vec![5.0]] }).collect();
+        let solver = Solver {
+            objective: ObjectiveKind::Likelihood,
+            pop: 5,
+            generations: 0,
+            screen_particles: 50,
+            particles: 50,
+            polish_iterations: 3,
+            first_step: FIRST_STEP,
+            min_step: MIN_STEP,
+            seed: 2,
+        };
+        let fits = solver.polish(&sim, &models).unwrap();
+        assert_eq!(fits.len(), 5);
+        let calls = engine.calls.lock().unwrap().clone();
+        // one call for the five starts, then one per iteration with both probes of each
+        assert_eq!(calls[0], 5, "{calls:?}");
+        assert!(calls.len() <= 4 && calls[1..].iter().all(|&g| g <= 10), "{calls:?}");
+        for f in &fits {
+            assert_eq!(f.value, solver.value(&Some(f.bins.clone()), models[0].targets, 50).min(f.value));
+        }
+        // a model without a start is refused
+        let bare = [Model { space: &space, targets: &targets[0], starts: vec![] }];
+        assert!(solver.polish(&sim, &bare).unwrap_err().to_string().contains("start"));
+    }
 }

@@ -3,8 +3,18 @@
 
 use super::condition::Condition;
 use crate::fit::Param;
-use crate::model::effects::{EffectKind, Effects};
+use crate::model::effects::EffectKind;
 use crate::model::Scenario;
+
+/// The shared parameters the conditions call for: k_elastic, mu_fric, and k_drag when any
+/// setup has drag.
+pub fn shared_params(conditions: &[Condition]) -> Vec<Param> {
+    let mut p = vec![Param::KElastic, Param::MuFric];
+    if conditions.iter().any(Condition::has_drag) {
+        p.push(Param::KDrag);
+    }
+    p
+}
 
 /// One model's parameters: `shared` first, then the effects' free parameters.
 #[derive(Clone, Debug, PartialEq)]
@@ -74,7 +84,8 @@ impl Space {
     }
 
     /// Condition `cond`'s scenario at parameters `x` (k_drag only where the setup has drag;
-    /// sled motion as the setup states it, fitted where it does not).
+    /// sled motion as the setup states it, fitted where it does not; the setup's own effects
+    /// stay unless the space fits them).
     pub fn scenario_at(&self, cond: &Condition, x: &[f64]) -> Scenario {
         let mut s = cond.base.clone();
         for (p, v) in self.shared.iter().zip(x) {
@@ -83,7 +94,7 @@ impl Space {
             }
             p.apply(&mut s, *v);
         }
-        s.effects = Effects::default();
+        // the space's effects on top of the setup's own (none in a diagnosis; fixed in a fit)
         for (k, e) in self.effects.iter().enumerate() {
             let e = *e;
             let mut v: Vec<f64> = e.search_bounds().iter().map(|b| b.0).collect();

@@ -3,19 +3,18 @@
 //! [`crate::diagnose::diagnose`].
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{bail, Context as _};
 use clap::Args;
 
 use crate::calibrate::Normalise;
-use crate::diagnose::diagnose::{diagnose, parse_effects, to_json, Budget, Condition, KnownMotion, Settings};
+use crate::calibrate::Effort;
+use super::measured_condition::{self, stem};
+use crate::diagnose::diagnose::{diagnose, parse_effects, to_json, Condition, Settings};
 use crate::diagnose::render;
 use crate::engine::{make_engine, EngineKind};
-use crate::fit::objective;
-use crate::io::config::ConfigFile;
-use crate::io::measured;
 
 #[derive(Debug, Args)]
 pub struct DiagnoseArgs {
@@ -73,10 +72,6 @@ pub struct DiagnoseArgs {
     pub json: bool,
 }
 
-fn stem(p: &Path) -> String {
-    p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| p.display().to_string())
-}
-
 pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     // cheap checks first: nothing is simulated before every input is known to be good
     if a.data.len() != a.setup.len() {
@@ -105,90 +100,45 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     if a.bootstrap < 2 {
         bail!("--bootstrap must be >= 2, got {}", a.bootstrap);
     }
-    let mut conditions = Vec::with_capacity(a.data.len());
-    let mut seed = a.seed;
-    let mut names: Vec<String> = Vec::new();
+    let mut conditions: Vec<Condition> = Vec::with_capacity(a.data.len());
     for (data, setup) in a.data.iter().zip(&a.setup) {
-        let runs = measured::load(data).with_context(|| format!("--data {}", data.display()))?;
-        let config = ConfigFile::load(setup).with_context(|| format!("--setup {}", setup.display()))?;
-        let Some(design) = config.design() else {
-            bail!("--setup {}: no [design] table (the rig's sawtooth design is required)", setup.display());
-        };
-        let mut scenario = config.scenario().with_context(|| format!("--setup {}", setup.display()))?;
-        if scenario.effects.any() {
+        let mut name = stem(data);
+        if conditions.iter().any(|c| c.name == name) {
+            name = format!("{name}#{}", conditions.len() + 1);
+        }
+        // every condition runs on the first setup's seed unless --seed is given
+        let seed = a.seed.or(conditions.first().map(|c| c.base.sim.seed));
+        let mut c = measured_condition::load(data, setup, name, a.normalise, seed)?;
+        if c.base.effects.any() {
             eprintln!(
                 "diagnose: {}: the setup's [effects] ({}) are switched off; the diagnosis fits them itself",
                 setup.display(),
-                scenario.effects.active().join(", ")
+                c.base.effects.active().join(", ")
             );
-            scenario.effects = Default::default();
+            c.base.effects = Default::default();
         }
-        let seed = *seed.get_or_insert(scenario.sim.seed);
-        scenario.sim.seed = seed;
-        if let Err(e) = scenario.validate() {
-            bail!("--setup {}: invalid setting: {e}", setup.display());
-        }
-        if runs.teeth > scenario.sim.teeth as usize {
+        if c.runs.runs.len() < 2 {
             bail!(
-                "--data {} has {} teeth but the setup simulates only {} (sim.teeth): raise sim.teeth in {}",
+                "--data {}: has {} run(s); the diagnosis needs at least 2 (their spread is the measurement's uncertainty)",
                 data.display(),
-                runs.teeth,
-                scenario.sim.teeth,
-                setup.display()
+                c.runs.runs.len()
             );
         }
-        if runs.runs.len() < 2 {
-            bail!("--data {}: has {} run(s); the diagnosis needs at least 2 (their spread is the measurement's uncertainty)", data.display(), runs.runs.len());
-        }
-        if let Err(invalid) = crate::model::prepare(&scenario, &design) {
-            bail!("--setup {}: the design cannot be simulated ({}): {invalid}", setup.display(), invalid.rule());
-        }
-        let measurement = config.measurement.as_ref();
-        let resolution_g = measurement
-            .and_then(|m| m.scale_resolution_g)
-            .unwrap_or_else(|| objective::infer_resolution(runs.runs.iter().flat_map(|r| r.teeth_g.iter().copied())));
-        let mut name = stem(data);
-        if names.contains(&name) {
-            name = format!("{name}#{}", names.len() + 1);
-        }
-        names.push(name.clone());
-        let normalise = match a.normalise {
-            Some(Normalise::Loaded) if !Condition::has_input_mass(&runs) => {
-                bail!("--normalise loaded: --data {} lacks input_mass in some run", data.display())
-            }
-            Some(n) => n,
-            None if Condition::has_input_mass(&runs) => Normalise::Loaded,
-            None => Normalise::Recovered,
-        };
-        conditions.push(Condition {
-            name,
-            data: data.display().to_string(),
-            setup: setup.display().to_string(),
-            runs,
-            base: scenario,
-            design,
-            resolution_g,
-            motion: KnownMotion {
-                delay_s: measurement.and_then(|m| m.motion_delay_s),
-                return_speed_m_s: measurement.and_then(|m| m.motion_return_speed_m_s),
-            },
-            motion_profile: measurement.and_then(|m| m.motion_profile.clone()),
-            normalise,
-        });
+        conditions.push(c);
     }
-    let seed = seed.unwrap_or(0);
+    let seed = conditions[0].base.sim.seed;
     let engine = make_engine(a.engine)?;
     let settings = Settings {
         effects,
-        budget: Budget {
+        effort: Effort {
             particles: a.particles,
             max_particles: a.max_particles,
             pop: a.pop,
             generations: a.generations,
             polish: a.polish,
-            rescore_seeds: a.rescore_streams,
             seed,
         },
+        rescore_streams: a.rescore_streams,
         bootstrap: a.bootstrap,
     };
     let started = std::time::Instant::now();

@@ -1,5 +1,6 @@
 //! `sawtooth fit`: calibrate k_elastic, mu_fric and k_drag against measured tooth masses
-//! (thesis 4.3.4-4.3.5, listing D.4). The work is in [`crate::fit`].
+//! (thesis 4.3.4-4.3.5, listing D.4). The work is in [`crate::fit`], on the calibration
+//! engine `diagnose` uses ([`crate::calibrate`]).
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -9,11 +10,11 @@ use anyhow::{bail, Context as _};
 use clap::Args;
 
 use super::args::EngineArgs;
+use super::measured_condition::{self, stem};
+use crate::calibrate::{shared_params, Effort, Normalise};
 use crate::engine::make_engine;
 use crate::fit::report::{self, Meta};
-use crate::fit::{objective, parse_assignments, parse_params, FitSettings, GaSettings, ObjectiveKind, Problem};
-use crate::io::config::ConfigFile;
-use crate::io::measured;
+use crate::fit::{parse_assignments, parse_params, FitSettings, ObjectiveKind};
 
 #[derive(Debug, Args)]
 pub struct FitArgs {
@@ -24,22 +25,37 @@ pub struct FitArgs {
     #[arg(long)]
     pub setup: PathBuf,
     /// Parameters to fit, a comma list of k_elastic, mu_fric, k_drag; the others keep the
-    /// setup's values.
-    #[arg(long, default_value = "k_elastic,mu_fric,k_drag")]
-    pub params: String,
-    /// What the GA minimises.
+    /// setup's values. Default: k_elastic,mu_fric, and k_drag where the setup has drag.
+    #[arg(long)]
+    pub params: Option<String>,
+    /// What the solver minimises.
     #[arg(long, value_enum, default_value = "sse")]
     pub objective: ObjectiveKind,
-    /// GA population size (>= 4).
-    #[arg(long, default_value_t = 40)]
+    /// Differential-evolution population (>= 5), screening at 1/8 of the particles.
+    #[arg(long, default_value_t = 20)]
     pub pop: usize,
-    /// GA generations after the initial population.
-    #[arg(long, default_value_t = 30)]
-    pub generations: u64,
-    /// Particles per simulation (the same streams for every candidate).
-    #[arg(long, default_value_t = 1000)]
-    pub particles: u32,
-    /// Seed of the particle streams, the GA and the bootstrap (default: the setup's sim.seed).
+    /// Differential-evolution generations.
+    #[arg(long, default_value_t = 20)]
+    pub generations: usize,
+    /// Compass-search iterations polishing the fit (and each bootstrap refit) at the full
+    /// budget.
+    #[arg(long, default_value_t = 12)]
+    pub polish: usize,
+    /// Particles per simulation at the full budget (the same streams for every candidate);
+    /// default: what the data call for (Monte-Carlo variance per tooth at most a quarter of
+    /// the measured mean's), up to --max-particles.
+    #[arg(long)]
+    pub particles: Option<u32>,
+    /// The most particles per simulation the data may call for.
+    #[arg(long, default_value_t = 12_000)]
+    pub max_particles: u32,
+    /// What the compared fractions are fractions of: `loaded` (the input mass: the weighed
+    /// teeth plus a "not recovered" bin; the default when every run records input_mass) or
+    /// `recovered` (listing D.4: the weighed teeth's sum, plus a lost bin).
+    #[arg(long, value_enum)]
+    pub normalise: Option<Normalise>,
+    /// Seed of the particle streams, the solver and the bootstrap (default: the setup's
+    /// sim.seed).
     #[arg(long)]
     pub seed: Option<u64>,
     #[command(flatten)]
@@ -64,64 +80,47 @@ pub struct FitArgs {
 
 pub fn run(a: FitArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     // cheap checks first: nothing is simulated before every input is known to be good
-    let (params, at) = match &a.at {
-        Some(list) => {
+    let (params, at) = match (&a.at, &a.params) {
+        (Some(list), _) => {
             let (p, v) = parse_assignments(list)?;
-            (p, Some(v))
+            (Some(p), Some(v))
         }
-        None => (parse_params(&a.params)?, None),
+        (None, Some(list)) => (Some(parse_params(list)?), None),
+        (None, None) => (None, None),
     };
-    if a.pop < 4 {
-        bail!("--pop must be >= 4, got {}", a.pop);
+    if a.pop < 5 {
+        bail!("--pop must be >= 5, got {}", a.pop);
     }
-    if a.particles == 0 {
+    if a.particles == Some(0) {
         bail!("--particles must be >= 1, got 0");
     }
-    let runs = measured::load(&a.data).context("--data")?;
-    let config = ConfigFile::load(&a.setup).context("--setup")?;
-    let Some(design) = config.design() else {
-        bail!("--setup {}: no [design] table (the rig's sawtooth design is required)", a.setup.display());
-    };
-    let mut scenario = config.scenario().with_context(|| format!("--setup {}", a.setup.display()))?;
-    let n = runs.runs.len();
+    if a.max_particles < 1000 {
+        bail!("--max-particles must be >= 1000, got {}", a.max_particles);
+    }
+    let condition = measured_condition::load(&a.data, &a.setup, stem(&a.data), a.normalise, a.seed)?;
+    let n = condition.runs.runs.len();
     if a.holdout >= n {
         bail!("--holdout must be < the number of runs in {} ({n}), got {}", a.data.display(), a.holdout);
     }
-    if runs.teeth > scenario.sim.teeth as usize {
-        bail!(
-            "--data {} has {} teeth but the setup simulates only {} (sim.teeth): raise sim.teeth in {}",
-            a.data.display(),
-            runs.teeth,
-            scenario.sim.teeth,
-            a.setup.display()
-        );
-    }
-    let seed = a.seed.unwrap_or(scenario.sim.seed);
-    scenario.sim.particles = a.particles;
-    scenario.sim.seed = seed;
-    if let Err(e) = scenario.validate() {
-        bail!("--setup {}: invalid setting: {e}", a.setup.display());
-    }
-    let resolution_g = config
-        .measurement
-        .as_ref()
-        .and_then(|m| m.scale_resolution_g)
-        .unwrap_or_else(|| objective::infer_resolution(runs.runs.iter().flat_map(|r| r.teeth_g.iter().copied())));
-
-    let engine = make_engine(a.engine.engine)?;
-    let problem = Problem::new(engine.as_ref(), scenario, design, params)
-        .with_context(|| format!("--setup {}", a.setup.display()))?;
-    let settings = FitSettings {
-        objective: a.objective,
-        ga: GaSettings { pop: a.pop, generations: a.generations, seed },
-        bootstrap: a.bootstrap,
-        holdout: a.holdout,
+    let params = params.unwrap_or_else(|| shared_params(std::slice::from_ref(&condition)));
+    let seed = condition.base.sim.seed;
+    let effort = Effort {
+        particles: a.particles,
+        max_particles: a.max_particles,
+        pop: a.pop,
+        generations: a.generations,
+        polish: a.polish,
+        seed,
     };
+    let engine = make_engine(a.engine.engine)?;
+    let started = std::time::Instant::now();
     let report = match &at {
-        Some(x) => crate::fit::evaluate_at(&problem, &runs, resolution_g, a.objective, x)?,
+        Some(x) => crate::fit::evaluate_at(engine.as_ref(), &condition, &params, x, a.objective, effort)
+            .map_err(|e| anyhow::anyhow!("--at: {e}"))?,
         None => {
-            let started = std::time::Instant::now();
-            let r = crate::fit::fit(&problem, &runs, resolution_g, settings, &mut |line| eprintln!("{line}"))?;
+            let settings = FitSettings { objective: a.objective, effort, bootstrap: a.bootstrap, holdout: a.holdout };
+            let r = crate::fit::fit(engine.as_ref(), &condition, &params, settings, &mut |line| eprintln!("{line}"))
+                .with_context(|| format!("--data {}", a.data.display()))?;
             eprintln!("fit: done in {:.1} s", started.elapsed().as_secs_f64());
             r
         }
@@ -131,11 +130,11 @@ pub fn run(a: FitArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         data: a.data.display().to_string(),
         setup: a.setup.display().to_string(),
         engine: engine.backend().to_string(),
-        particles: a.particles,
+        particles: report.particles,
         seed,
-        teeth: problem.teeth(),
-        measured_teeth: runs.teeth,
-        run_ids: runs.runs.iter().map(|r| r.id.clone()).collect(),
+        teeth: condition.teeth(),
+        measured_teeth: condition.runs.teeth,
+        run_ids: condition.runs.runs.iter().map(|r| r.id.clone()).collect(),
     };
     let json = report::to_json(&report, &meta);
     if let Some(dir) = &a.out {

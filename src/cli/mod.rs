@@ -6,6 +6,7 @@ pub mod bench;
 pub mod conformance;
 pub mod diagnose;
 pub mod fit;
+pub mod measured_condition;
 pub mod multi;
 pub mod optimize;
 pub mod simulate;

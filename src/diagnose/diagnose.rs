@@ -14,7 +14,7 @@
 //! - **Monte-Carlo budget from the data.** The particle count per simulation is chosen so
 //!   that the simulation's variance p(1−p)/N of every tooth holding ≥ 2 % of the mass is at
 //!   most a quarter of the variance of the measured mean (run-to-run variance / runs, floored
-//!   by the scale's resolution), within [`MIN_PARTICLES`, `--max-particles`]; a note says when
+//!   by the scale's resolution), within [`crate::calibrate::MIN_PARTICLES`, `--max-particles`] ([`crate::calibrate::Effort`]); a note says when
 //!   the cap, not the data, limits the answer.
 //! - **Fits** ([`crate::calibrate`]): all candidate models are fitted in lockstep, each
 //!   stage's points of every model and condition simulated as one engine call: differential
@@ -60,9 +60,11 @@ use rand_chacha::ChaCha8Rng;
 use serde_json::{json, Map, Value};
 
 pub use crate::calibrate::{Condition, KnownMotion};
-use crate::calibrate::{fit_models, Fit, Model, Simulator, SolverBudget, Space};
+use crate::calibrate::stats::{percentile, sample_sd};
+pub use crate::calibrate::space::shared_params;
+use crate::calibrate::{Effort, Fit, Model, Simulator, Space};
 use crate::engine::{evaluate_detailed, particle_engine, BatchEvaluator, EngineKind};
-use crate::fit::{percentile, MeasuredSummary, Param, Target};
+use crate::fit::{MeasuredSummary, ObjectiveKind, Param, Target};
 pub use crate::model::effects::EffectKind;
 use crate::model::effects::known_effects;
 use crate::model::outcome::{centre_and_dispersion, end_tooth, ParticleState};
@@ -98,39 +100,13 @@ pub fn parse_effects(list: &str) -> anyhow::Result<Vec<EffectKind>> {
     Ok(out)
 }
 
-/// The shared parameters the conditions call for: k_elastic, mu_fric, and k_drag when any
-/// setup has drag.
-pub fn shared_params(conditions: &[Condition]) -> Vec<Param> {
-    let mut p = vec![Param::KElastic, Param::MuFric];
-    if conditions.iter().any(Condition::has_drag) {
-        p.push(Param::KDrag);
-    }
-    p
-}
-
-/// How hard a diagnosis works.
-#[derive(Clone, Copy, Debug)]
-pub struct Budget {
-    /// Particles per simulation at the full budget; None: chosen from the data
-    /// ([`particles_from_data`]).
-    pub particles: Option<u32>,
-    /// The most particles the data may call for.
-    pub max_particles: u32,
-    /// Differential-evolution population and generations of the screen.
-    pub pop: usize,
-    pub generations: usize,
-    /// Compass-search iterations of the polish at the full budget.
-    pub polish: usize,
-    /// Fresh particle streams every fitted model is re-scored with.
-    pub rescore_seeds: usize,
-    pub seed: u64,
-}
-
 /// Settings of a diagnosis.
 #[derive(Clone, Debug)]
 pub struct Settings {
     pub effects: Vec<EffectKind>,
-    pub budget: Budget,
+    pub effort: Effort,
+    /// Fresh particle streams every fitted model is re-scored with.
+    pub rescore_streams: usize,
     pub bootstrap: usize,
 }
 
@@ -365,15 +341,6 @@ pub fn num(v: f64) -> Value {
     }
 }
 
-fn sample_sd(v: &[f64]) -> f64 {
-    let v: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-    if v.len() < 2 {
-        return f64::NAN;
-    }
-    let m = v.iter().sum::<f64>() / v.len() as f64;
-    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
-}
-
 fn interval(v: &[f64]) -> [f64; 2] {
     [percentile(v, INTERVAL.0), percentile(v, INTERVAL.1)]
 }
@@ -438,23 +405,6 @@ fn bootstrap_gaps(conds: &[Condition], models: &mut [ModelResult], replicates: u
     }
 }
 
-/// Particles per simulation that the data call for: the Monte-Carlo variance of every
-/// tooth holding ≥ 2 % of a condition's mass at most a quarter of the variance of its
-/// measured mean ([`Condition::particles_for`]), rounded up to a thousand, within
-/// [`MIN_PARTICLES`, `max`]. Returns the count and whether `max` limited it.
-pub fn particles_from_data(conditions: &[Condition], max: u32) -> (u32, bool) {
-    let want = conditions.iter().map(|c| c.particles_for(0.25)).fold(0.0, f64::max);
-    let rounded = ((want / 1000.0).ceil() * 1000.0).max(MIN_PARTICLES as f64);
-    if rounded > max as f64 {
-        (max, true)
-    } else {
-        (rounded as u32, false)
-    }
-}
-
-/// Fewest particles per simulation a diagnosis uses.
-pub const MIN_PARTICLES: u32 = 2000;
-
 /// Where the baseline misses, in one condition.
 fn where_condition(cond: &Condition, scenario: &Scenario, bins: &[f64], particles: u32) -> anyhow::Result<WhereCondition> {
     let teeth = cond.teeth();
@@ -462,7 +412,7 @@ fn where_condition(cond: &Condition, scenario: &Scenario, bins: &[f64], particle
     let n = runs.runs.len() as f64;
     // the measured bins as the fits compare them (fractions of the loaded or recovered mass)
     let measured = cond.target_all().bins;
-    let summary = MeasuredSummary::new(runs, teeth);
+    let summary = cond.summary();
     let mean_recovered = runs.runs.iter().map(|r| r.recovered_g()).sum::<f64>() / n;
     let scale = 100.0 * cond.resolution_g / 12f64.sqrt() / mean_recovered;
     let np = particles.max(1) as f64;
@@ -470,7 +420,7 @@ fn where_condition(cond: &Condition, scenario: &Scenario, bins: &[f64], particle
     let shown = runs.teeth.max(last_sim).clamp(1, teeth);
     let mut teeth_residuals = Vec::with_capacity(shown + 1);
     for j in (0..shown).chain(std::iter::once(teeth)) {
-        let sd = if j < teeth { summary.sd[j] } else { cond.last_bin_sd() };
+        let sd = summary.sd[j];
         let run_part = if sd.is_finite() { 100.0 * sd / n.sqrt() } else { 0.0 };
         let p = bins[j];
         let mc = 100.0 * (p * (1.0 - p) / np).max(0.0).sqrt();
@@ -678,10 +628,11 @@ pub fn diagnose(
     if settings.bootstrap < 2 {
         bail!("--bootstrap must be >= 2, got {}", settings.bootstrap);
     }
-    let budget = settings.budget;
-    if budget.rescore_seeds < 1 {
+    if settings.rescore_streams < 1 {
         bail!("--rescore-streams must be >= 1, got 0");
     }
+    let effort = settings.effort;
+    let seed = effort.seed;
     let mut notes = Vec::new();
     let any_drag = conditions.iter().any(Condition::has_drag);
     let mut effects = Vec::new();
@@ -705,27 +656,9 @@ pub fn diagnose(
                 .to_string(),
         );
     }
-    let (particles, limited) = match budget.particles {
-        Some(n) => (n, false),
-        None => particles_from_data(&conditions, budget.max_particles),
-    };
-    let wanted = conditions.iter().map(|c| c.particles_for(0.25)).fold(0.0, f64::max);
-    if limited || (particles as f64) < wanted {
-        notes.push(format!(
-            "Monte-Carlo budget: {particles} particles per simulation; keeping the simulation's noise per tooth at half the \
-             measured mean's would take {wanted:.0}. The simulation's noise, not the data, limits how small a gap can be \
-             told apart (raise --max-particles, or use a GPU engine)"
-        ));
-    }
-    let screen_particles = (particles / 8).clamp(MIN_PARTICLES.min(particles), particles);
-    let solver = SolverBudget {
-        pop: budget.pop,
-        generations: budget.generations,
-        screen_particles,
-        particles,
-        polish_iterations: budget.polish,
-        seed: budget.seed,
-    };
+    let (solver, budget_note) = effort.solver(ObjectiveKind::Sse, &conditions);
+    notes.extend(budget_note);
+    let (particles, screen_particles) = (solver.particles, solver.screen_particles);
     let shared = shared_params(&conditions);
     let sim = Simulator { engine, conditions: &conditions };
     let targets: Vec<Target> = conditions.iter().map(Condition::target_all).collect();
@@ -737,24 +670,24 @@ pub fn diagnose(
 
     // the baseline first: its optimum starts every nested effect
     let base_space = Space::new(shared.clone(), &[], &conditions);
-    let base_fit = fit_models(&sim, &targets, &[Model { space: &base_space, starts: Vec::new() }], &solver, log)?.remove(0);
+    let base_fit = solver.fit(&sim, &[Model { space: &base_space, targets: &targets, starts: Vec::new() }], log)?.remove(0);
     log(format!("diagnose: baseline: SSE {:.1} %² (fit streams)", base_fit.value));
     let baseline_dim = base_space.dim();
     let spaces: Vec<Space> = effects.iter().map(|e| Space::new(shared.clone(), &[*e], &conditions)).collect();
     let base_names = base_space.names();
     let models: Vec<Model> = spaces
         .iter()
-        .map(|sp| Model { space: sp, starts: effect_starts(sp, &base_names, &base_fit.x, budget.pop / 2) })
+        .map(|sp| Model { space: sp, targets: &targets, starts: effect_starts(sp, &base_names, &base_fit.x, effort.pop / 2) })
         .collect();
-    let fits = fit_models(&sim, &targets, &models, &solver, log)?;
+    let fits = solver.fit(&sim, &models, log)?;
     let mut all: Vec<ModelResult> = vec![new_result(&base_space, base_fit, baseline_dim)];
     for (sp, f) in spaces.iter().zip(fits) {
         log(format!("diagnose: {}: SSE {:.1} %² (fit streams)", model_name(&sp.effects), f.value));
         all.push(new_result(sp, f, baseline_dim));
     }
     let all_spaces: Vec<&Space> = std::iter::once(&base_space).chain(spaces.iter()).collect();
-    rescore(&sim, &all_spaces, &mut all, particles, budget.rescore_seeds, budget.seed);
-    bootstrap_gaps(&conditions, &mut all, settings.bootstrap, budget.seed);
+    rescore(&sim, &all_spaces, &mut all, particles, settings.rescore_streams, seed);
+    bootstrap_gaps(&conditions, &mut all, settings.bootstrap, seed);
     for m in &all {
         log(format!("diagnose: {}: gap {:.1} %² on fresh streams, interval [{:.1}, {:.1}]", m.name(), m.gap, m.interval[0], m.interval[1]));
     }
@@ -790,12 +723,12 @@ pub fn diagnose(
         let space = Space::new(shared.clone(), &pair, &conditions);
         let starts: Vec<Vec<f64>> =
             [beating[0], beating[1], &baseline].iter().filter_map(|m| space.start_from(&m.names, &m.full.x)).collect();
-        let fit = fit_models(&sim, &targets, &[Model { space: &space, starts }], &solver, log)?.remove(0);
+        let fit = solver.fit(&sim, &[Model { space: &space, targets: &targets, starts }], log)?.remove(0);
         let mut m = new_result(&space, fit, baseline_dim);
-        rescore(&sim, &[&space], std::slice::from_mut(&mut m), particles, budget.rescore_seeds, budget.seed);
+        rescore(&sim, &[&space], std::slice::from_mut(&mut m), particles, settings.rescore_streams, seed);
         // the resamples depend only on the seed and the conditions, so bootstrapping the
         // pair alone pairs it with the models bootstrapped above
-        bootstrap_gaps(&conditions, std::slice::from_mut(&mut m), settings.bootstrap, budget.seed);
+        bootstrap_gaps(&conditions, std::slice::from_mut(&mut m), settings.bootstrap, seed);
         m.improvement_interval = paired_interval(&baseline, &m);
         let improvement_over_singles = beating.iter().map(|single| paired_interval(single, &m)).collect();
         Some(Combined { model: m, improvement_over_singles })
@@ -808,9 +741,9 @@ pub fn diagnose(
     for (c, cond) in conditions.iter().enumerate() {
         let mut s = base_space.scenario_at(cond, &baseline.full.x);
         s.sim.particles = particles;
-        s.sim.seed = budget.seed;
+        s.sim.seed = seed;
         where_.push(where_condition(cond, &s, &baseline.full.bins[c], particles)?);
-        gap.push(gap_condition(cond, &baseline.full.bins[c], &top.full.bins[c], settings.bootstrap, budget.seed));
+        gap.push(gap_condition(cond, &baseline.full.bins[c], &top.full.bins[c], settings.bootstrap, seed));
     }
     Ok(Diagnosis {
         shared,
@@ -967,7 +900,7 @@ pub fn to_json(d: &Diagnosis) -> Value {
             "gap": num(b.gap),
             "interval": [num(b.interval[0]), num(b.interval[1])],
             "se": num(b.se),
-            "rescore_streams": d.settings.budget.rescore_seeds,
+            "rescore_streams": d.settings.rescore_streams,
             "bootstrap": d.settings.bootstrap,
             "interval_percentiles": [INTERVAL.0, INTERVAL.1],
             "particles": d.particles,

@@ -76,7 +76,7 @@ pub fn to_markdown(d: &Diagnosis) -> String {
             stated(c.motion.return_speed_m_s)
         );
     }
-    let bu = d.settings.budget;
+    let bu = d.settings.effort;
     let _ = writeln!(
         s,
         "\nShared parameters fitted jointly: {}. Engine `{}`, {} particles (common random numbers, seed {}), \
@@ -89,7 +89,7 @@ pub fn to_markdown(d: &Diagnosis) -> String {
         bu.pop,
         bu.generations,
         bu.polish,
-        bu.rescore_seeds,
+        d.settings.rescore_streams,
         d.settings.bootstrap,
         100.0 * INTERVAL.0,
         100.0 * INTERVAL.1

@@ -1,43 +1,49 @@
 //! Calibration of the collision and drag parameters against measured tooth masses: the
-//! thesis's "fitment optimiser" (4.3.4-4.3.5, listing D.4), with an uncertainty estimate and
-//! a held-out score it did not have.
+//! thesis's "fitment optimiser" (4.3.4-4.3.5, listing D.4), on the calibration engine that
+//! `diagnose` uses ([`crate::calibrate`]), with an uncertainty estimate and a held-out score
+//! it did not have.
 //!
 //! - Parameters ([`Param`]): `k_elastic`, `mu_fric` (collision.mu_friction) and `k_drag`
 //!   (environment.k_drag), within listing D.4's bounds ([0.01, 1], [0.01, 1], [0.1, 15]);
 //!   the ones not fitted keep the setup's values.
-//! - Every candidate is simulated with the setup's scenario and design, the same particle
-//!   count and the same seed: common random numbers, so the objective is a deterministic
-//!   (piecewise-constant) function of the parameters.
-//! - Objectives ([`objective`]): the SSE of Eq. 4.62 over the setup's teeth plus a lost bin
-//!   (D.4), or a Dirichlet-multinomial negative log-likelihood of the individual runs.
-//! - Optimiser: the crate's GA ([`crate::optim::nsga2`] with one objective: elitist
-//!   (μ + λ) survival, SBX and polynomial mutation), uniform initial population, fixed seed;
-//!   every generation is evaluated as one batch (one engine call per candidate, in parallel);
-//!   the GA's best is then polished by a bounded Nelder-Mead ([`polish`]).
-//! - Uncertainty ([`bootstrap`]): runs resampled with replacement; each replicate is refitted
-//!   by a bounded Nelder-Mead ([`nelder_mead`]) started from the GA archive's best point
-//!   under the replicate's objective; standard deviation and the 16-84 % percentile interval.
-//!   It measures how much the run-to-run scatter moves the optimum with the particle streams
+//! - Measured bins ([`crate::calibrate::Normalise`]): fractions of the loaded mass with a
+//!   "not recovered" bin where every run records its input mass, else D.4's fractions of
+//!   the recovered mass with a lost bin.
+//! - Objectives ([`objective`]): the SSE of Eq. 4.62 over those bins, or a
+//!   Dirichlet-multinomial negative log-likelihood of the individual runs.
+//! - Solver ([`crate::calibrate::Solver`]): differential evolution at an eighth of the
+//!   particles screens D.4's box, a compass search polishes at the full budget; every
+//!   generation is one engine call; every candidate sees the same particle streams (common
+//!   random numbers), so the objective is a deterministic (piecewise-constant) function of
+//!   the parameters. The particle count is chosen from the data's run-to-run scatter
+//!   ([`crate::calibrate::Effort`]) unless given.
+//! - Held-out score ([`Heldout`]): the last K runs (file order) are left out and a fit on the
+//!   others, run in lockstep with the main fit (one engine call per generation for both),
+//!   is scored on them.
+//! - Uncertainty ([`Uncertainty`]): runs resampled with replacement; each replicate is
+//!   refitted by the compass search (all replicates in lockstep, one engine call per
+//!   iteration) from the point of the main fit's polish archive that is best under the
+//!   replicate's objective; standard deviation and the 16-84 % percentile interval. It
+//!   measures how much the run-to-run scatter moves the optimum with the particle streams
 //!   held fixed; it does not include the Monte-Carlo noise of a finite particle count (rerun
 //!   with other `--seed`s for that) nor the misfit of a model that cannot reach the data,
 //!   and a parameter pinned at a bound gets a one-sided, possibly degenerate interval.
-//! - Held-out score ([`holdout`]): the last K runs (file order) are left out, a full GA fit
-//!   on the others is scored on them.
 
-pub mod nelder_mead;
 pub mod objective;
 pub mod report;
 
-use anyhow::{bail, Context as _};
+use anyhow::bail;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::calibrate::stats::{percentile, sample_sd};
+use crate::calibrate::solver::MIN_STEP;
+use crate::calibrate::{Condition, Effort, Model, Simulator, Solver, Space};
 use crate::engine::BatchEvaluator;
 use crate::io::measured::MeasuredRuns;
-use crate::model::{Design, Scenario};
-use crate::optim::nsga2::{BatchProblem, Config, Evaluation as GaEvaluation, Mode, Nsga2};
+use crate::model::Scenario;
 
 use objective::Profiled;
 
@@ -152,7 +158,18 @@ impl Target {
             }
         }
         bins[teeth] = (1.0 - bins[..runs.teeth].iter().sum::<f64>()).max(0.0);
-        Some(Target { bins, counts: runs.runs.iter().map(|r| objective::quantised_counts(&r.teeth_g, teeth, resolution_g)).collect() })
+        // the likelihood's counts: scale steps per tooth, and the mass not recovered
+        let counts = runs
+            .runs
+            .iter()
+            .map(|r| {
+                let mut c = objective::quantised_counts(&r.teeth_g, teeth, resolution_g);
+                let missing = r.input_mass_g.unwrap_or(0.0) - r.recovered_g();
+                c[teeth] = (missing / resolution_g).round().max(0.0);
+                c
+            })
+            .collect();
+        Some(Target { bins, counts })
     }
 
     pub fn new(runs: &MeasuredRuns, teeth: usize, resolution_g: f64) -> Self {
@@ -204,234 +221,15 @@ pub fn subset(runs: &MeasuredRuns, indices: &[usize]) -> MeasuredRuns {
     MeasuredRuns { runs: indices.iter().map(|&i| runs.runs[i].clone()).collect(), ..runs.clone() }
 }
 
-/// The simulation side: an engine, the setup's scenario and design, the fitted parameters.
-pub struct Problem<'a> {
-    pub engine: &'a dyn BatchEvaluator,
-    /// The setup's scenario with the fit's particle count and seed.
-    pub base: Scenario,
-    pub design: Design,
-    pub params: Vec<Param>,
-}
-
-impl<'a> Problem<'a> {
-    /// Checks the scenario and that the design can be simulated at all.
-    pub fn new(
-        engine: &'a dyn BatchEvaluator,
-        base: Scenario,
-        design: Design,
-        params: Vec<Param>,
-    ) -> anyhow::Result<Self> {
-        if params.is_empty() {
-            bail!("--params: no parameter to fit (known: {})", known_names());
-        }
-        base.validate().map_err(anyhow::Error::msg).context("invalid setup")?;
-        if let Err(invalid) = crate::model::prepare(&base, &design) {
-            bail!("the setup's design cannot be simulated ({}): {invalid}", invalid.rule());
-        }
-        Ok(Problem { engine, base, design, params })
-    }
-
-    pub fn teeth(&self) -> usize {
-        self.base.sim.teeth as usize
-    }
-
-    /// The probability floor of the likelihood for this particle count.
-    pub fn eps(&self) -> f64 {
-        objective::floor_for(self.base.sim.particles)
-    }
-
-    pub fn bounds(&self) -> (Vec<f64>, Vec<f64>) {
-        self.params.iter().map(|p| p.bounds()).unzip()
-    }
-
-    /// The setup's values of the fitted parameters.
-    pub fn setup_values(&self) -> Vec<f64> {
-        self.params.iter().map(|p| p.get(&self.base)).collect()
-    }
-
-    pub fn scenario_at(&self, x: &[f64]) -> Scenario {
-        let mut s = self.base.clone();
-        for (p, v) in self.params.iter().zip(x) {
-            p.apply(&mut s, *v);
-        }
-        s
-    }
-
-    /// Simulated bins (teeth, then lost) at parameters `x`; None when the engine rejects it.
-    pub fn bins_at(&self, x: &[f64]) -> Option<Vec<f64>> {
-        let s = self.scenario_at(x);
-        self.engine
-            .evaluate(&s, std::slice::from_ref(&self.design))
-            .pop()
-            .and_then(|r| r.ok())
-            .map(|e| objective::simulated_bins(&e.sim))
-    }
-
-    /// [`Self::bins_at`] for a whole generation as one engine call (one one-design group per
-    /// candidate: the engine runs them together, as the calibration engine does).
-    pub fn bins_many(&self, xs: &[Vec<f64>]) -> Vec<Option<Vec<f64>>> {
-        let groups: Vec<(Scenario, Vec<Design>)> = xs.iter().map(|x| (self.scenario_at(x), vec![self.design])).collect();
-        self.engine
-            .evaluate_groups(&groups)
-            .into_iter()
-            .map(|r| r.into_iter().next().and_then(|e| e.ok()).map(|e| objective::simulated_bins(&e.sim)))
-            .collect()
-    }
-
-    /// Parameters from unit-box coordinates.
-    pub fn from_unit(&self, u: &[f64]) -> Vec<f64> {
-        self.params
-            .iter()
-            .zip(u)
-            .map(|(p, u)| {
-                let (lo, hi) = p.bounds();
-                lo + u.clamp(0.0, 1.0) * (hi - lo)
-            })
-            .collect()
-    }
-
-    pub fn to_unit(&self, x: &[f64]) -> Vec<f64> {
-        self.params
-            .iter()
-            .zip(x)
-            .map(|(p, x)| {
-                let (lo, hi) = p.bounds();
-                ((x - lo) / (hi - lo)).clamp(0.0, 1.0)
-            })
-            .collect()
-    }
-}
-
-/// GA settings.
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct GaSettings {
-    pub pop: usize,
-    pub generations: u64,
-    pub seed: u64,
-}
-
-/// One evaluated candidate.
-#[derive(Clone, Debug)]
-pub struct Candidate {
-    pub x: Vec<f64>,
-    /// None when the engine rejected it.
-    pub bins: Option<Vec<f64>>,
-}
-
-/// A GA fit.
-#[derive(Clone, Debug)]
-pub struct GaFit {
-    pub x: Vec<f64>,
-    pub value: f64,
-    pub bins: Vec<f64>,
-    pub evaluations: u64,
-    /// Every candidate evaluated, in order.
-    pub archive: Vec<Candidate>,
-}
-
-struct GaProblem<'p, 'a> {
-    problem: &'p Problem<'a>,
-    target: &'p Target,
-    kind: ObjectiveKind,
-    archive: Vec<Candidate>,
-    progress: &'p mut dyn FnMut(u64, f64),
-}
-
-impl BatchProblem for GaProblem<'_, '_> {
-    fn dim(&self) -> usize {
-        self.problem.params.len()
-    }
-    fn n_objectives(&self) -> usize {
-        1
-    }
-    fn bounds(&self) -> (Vec<f64>, Vec<f64>) {
-        self.problem.bounds()
-    }
-    fn evaluate_batch(&mut self, xs: &[Vec<f64>], generation: u64) -> Vec<GaEvaluation> {
-        let bins = self.problem.bins_many(xs);
-        let eps = self.problem.eps();
-        let values: Vec<f64> = bins.par_iter().map(|b| self.target.value(self.kind, b.as_deref(), eps)).collect();
-        let best = values.iter().copied().fold(f64::INFINITY, f64::min);
-        (self.progress)(generation, best);
-        self.archive.extend(xs.iter().cloned().zip(bins).map(|(x, bins)| Candidate { x, bins }));
-        values.into_iter().map(|v| GaEvaluation { objectives: vec![v], violation: 0.0 }).collect()
-    }
-}
-
-/// Minimise the objective over the parameters' bounds with the GA. `progress` sees each
-/// generation's number and its best objective value.
-pub fn ga_fit(
-    problem: &Problem,
-    target: &Target,
-    kind: ObjectiveKind,
-    settings: GaSettings,
-    progress: &mut dyn FnMut(u64, f64),
-) -> anyhow::Result<GaFit> {
-    if settings.pop < 4 {
-        bail!("--pop must be >= 4, got {}", settings.pop);
-    }
-    let ga = Nsga2::new(Config {
-        pop: settings.pop,
-        seed: settings.seed,
-        max_generations: settings.generations,
-        mode: Mode::Standard,
-        ..Config::default()
-    });
-    let mut gp = GaProblem { problem, target, kind, archive: Vec::new(), progress };
-    let (state, _) = ga.run(&mut gp, |_, _| {});
-    let best = state
-        .population
-        .iter()
-        .min_by(|a, b| a.eval.objectives[0].total_cmp(&b.eval.objectives[0]))
-        .context("empty population")?;
-    let value = best.eval.objectives[0];
-    let bins =
-        gp.archive.iter().find(|c| c.x == best.x).and_then(|c| c.bins.clone()).or_else(|| problem.bins_at(&best.x));
-    let Some(bins) = bins.filter(|_| value.is_finite()) else {
-        bail!("no candidate could be simulated (every evaluation was rejected by the engine)");
-    };
-    Ok(GaFit { x: best.x.clone(), value, bins, evaluations: state.evaluations, archive: gp.archive })
-}
-
-/// Polish a GA result with a bounded Nelder-Mead (the same local search the bootstrap
-/// refits use, so the estimate and its replicates come from one procedure). Keeps the GA's
-/// point unless the polish is strictly better; the archive is left as the GA's.
-pub fn polish(problem: &Problem, target: &Target, kind: ObjectiveKind, fit: GaFit, max_evals: usize) -> GaFit {
-    let eps = problem.eps();
-    let m = nelder_mead::minimise(
-        |u| target.value(kind, problem.bins_at(&problem.from_unit(u)).as_deref(), eps),
-        &problem.to_unit(&fit.x),
-        0.05,
-        max_evals,
-        1e-4,
-    );
-    let x = problem.from_unit(&m.x);
-    let evaluations = fit.evaluations + m.evaluations as u64;
-    match problem.bins_at(&x) {
-        Some(bins) if m.value < fit.value => GaFit { x, value: m.value, bins, evaluations: evaluations + 1, ..fit },
-        _ => GaFit { evaluations, ..fit },
-    }
-}
-
-/// [`ga_fit`], then [`polish`] with the bootstrap's budget.
-pub fn global_fit(
-    problem: &Problem,
-    target: &Target,
-    kind: ObjectiveKind,
-    settings: GaSettings,
-    progress: &mut dyn FnMut(u64, f64),
-) -> anyhow::Result<GaFit> {
-    let fit = ga_fit(problem, target, kind, settings, progress)?;
-    Ok(polish(problem, target, kind, fit, bootstrap_evals(problem.params.len())))
-}
-
-/// Bootstrap settings.
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct BootstrapSettings {
-    pub replicates: usize,
-    pub seed: u64,
-    /// Nelder-Mead evaluations per replicate.
-    pub max_evals: usize,
+/// What `fit` does.
+#[derive(Clone, Copy, Debug)]
+pub struct FitSettings {
+    pub objective: ObjectiveKind,
+    pub effort: Effort,
+    /// Bootstrap replicates (0 = off).
+    pub bootstrap: usize,
+    /// Runs held out at the end of the file (0 = off).
+    pub holdout: usize,
 }
 
 /// Bootstrap uncertainty per parameter.
@@ -444,94 +242,158 @@ pub struct Uncertainty {
     pub interval: Vec<[f64; 2]>,
     /// The refitted parameters of every replicate.
     pub values: Vec<Vec<f64>>,
-    pub evaluations: usize,
+    pub evaluations: u64,
 }
 
-/// Percentile `q` in [0, 1] of `v` (linear interpolation between order statistics).
-pub fn percentile(v: &[f64], q: f64) -> f64 {
-    let mut s: Vec<f64> = v.iter().copied().filter(|x| !x.is_nan()).collect();
-    if s.is_empty() {
-        return f64::NAN;
-    }
-    s.sort_by(f64::total_cmp);
-    let pos = q.clamp(0.0, 1.0) * (s.len() - 1) as f64;
-    let (i, f) = (pos.floor() as usize, pos.fract());
-    if i + 1 < s.len() {
-        s[i] + f * (s[i + 1] - s[i])
-    } else {
-        s[i]
-    }
+/// The setup's values of `params` (the solver's start; the unit box clamps them into bounds).
+fn setup_values(params: &[Param], base: &Scenario) -> Vec<f64> {
+    params.iter().map(|p| p.get(base)).collect()
 }
 
-fn sample_sd(v: &[f64]) -> f64 {
-    if v.len() < 2 {
-        return f64::NAN;
+/// Checks that hold for every fit and scoring of `condition`.
+fn check(condition: &Condition, params: &[Param]) -> anyhow::Result<()> {
+    let teeth = condition.teeth();
+    let runs = &condition.runs;
+    if params.is_empty() {
+        bail!("no parameter to fit (known: {})", known_names());
     }
-    let m = v.iter().sum::<f64>() / v.len() as f64;
-    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
+    if params.contains(&Param::KDrag) && !condition.has_drag() {
+        bail!("k_drag does not apply: the setup {} is in vacuum (no environment.k_drag)", condition.setup);
+    }
+    if runs.teeth > teeth {
+        bail!("the measured data has {} teeth but the setup simulates only {teeth} (sim.teeth): raise sim.teeth", runs.teeth);
+    }
+    if !(condition.resolution_g.is_finite() && condition.resolution_g > 0.0) {
+        bail!("scale resolution must be > 0 g, got {}", condition.resolution_g);
+    }
+    if runs.runs.iter().any(|r| r.recovered_g() <= 0.0) {
+        bail!("every run needs a positive recovered mass");
+    }
+    Ok(())
 }
 
-/// Resample the runs with replacement `replicates` times and refit each resample: start at
-/// the archive point (GA evaluations, best `ARCHIVE_STARTS` under the full data) that is best
-/// under the resample's objective, then a bounded Nelder-Mead with `max_evals` evaluations.
-pub fn bootstrap(
-    problem: &Problem,
-    runs: &MeasuredRuns,
-    resolution_g: f64,
-    kind: ObjectiveKind,
-    full: &GaFit,
-    full_target: &Target,
-    settings: BootstrapSettings,
-) -> Uncertainty {
-    const ARCHIVE_STARTS: usize = 200;
-    let eps = problem.eps();
-    // distinct archive points, best first under the full data
-    let mut starts: Vec<(Vec<f64>, Vec<f64>, f64)> = Vec::new();
-    for c in &full.archive {
-        if let Some(b) = &c.bins {
-            if !starts.iter().any(|(x, _, _)| *x == c.x) {
-                starts.push((c.x.clone(), b.clone(), 0.0));
-            }
+/// The whole fit: the main fit on all runs and the held-out fit in lockstep, then the
+/// bootstrap. `log` receives progress lines.
+pub fn fit(
+    engine: &dyn BatchEvaluator,
+    condition: &Condition,
+    params: &[Param],
+    settings: FitSettings,
+    log: &mut dyn FnMut(String),
+) -> anyhow::Result<FitReport> {
+    check(condition, params)?;
+    let n = condition.runs.runs.len();
+    let k = settings.holdout;
+    if k > 0 && k >= n {
+        bail!("the held-out runs must be fewer than the runs ({n}), got {k}");
+    }
+    let conditions = std::slice::from_ref(condition);
+    let (solver, note) = settings.effort.solver(settings.objective, conditions);
+    let notes: Vec<String> = note.into_iter().collect();
+    for n in &notes {
+        log(format!("fit: note: {n}"));
+    }
+    let space = Space::new(params.to_vec(), &[], conditions);
+    let sim = Simulator { engine, conditions };
+    let start = setup_values(params, &condition.base);
+    let all_targets = [condition.target_all()];
+    let fit_idx: Vec<usize> = (0..n - k).collect();
+    let held_idx: Vec<usize> = (n - k..n).collect();
+    let fit_targets = [condition.target(&fit_idx)];
+    let mut models = vec![Model { space: &space, targets: &all_targets, starts: vec![start.clone()] }];
+    if k > 0 {
+        models.push(Model { space: &space, targets: &fit_targets, starts: vec![start] });
+    }
+    log(format!(
+        "fit: {} particles per simulation (screen {}), DE {} x {} generations + {} compass iterations{}",
+        solver.particles,
+        solver.screen_particles,
+        solver.pop,
+        solver.generations,
+        solver.polish_iterations,
+        if k > 0 { ", the held-out fit alongside" } else { "" }
+    ));
+    let mut fits = solver.fit(&sim, &models, log)?.into_iter();
+    let main = fits.next().expect("the main fit");
+    let heldout = fits.next().map(|h| {
+        let held_target = condition.target(&held_idx);
+        let fit_target = &fit_targets[0];
+        let eps = objective::floor_for(solver.particles);
+        let bins = &h.bins[0];
+        let in_sample = fit_target.likelihood(bins, eps);
+        let nll_heldout = -objective::dm_log_likelihood(
+            &held_target.counts,
+            &objective::model_probabilities(&held_target.counts, bins, eps),
+            in_sample.concentration,
+        );
+        let ids = |idx: &[usize]| idx.iter().map(|&i| condition.runs.runs[i].id.clone()).collect();
+        Heldout {
+            k,
+            heldout_runs: ids(&held_idx),
+            fit_runs: ids(&fit_idx),
+            sse_in_sample_percent2: fit_target.sse(bins),
+            sse_heldout_percent2: held_target.sse(bins),
+            sse_measured_fit_vs_heldout_percent2: objective::sse_percent2(&fit_target.bins, &held_target.bins),
+            nll_heldout,
+            nll_heldout_per_run: nll_heldout / k as f64,
+            nll_in_sample_per_run: in_sample.nll / (n - k) as f64,
+            evaluations: h.evaluations,
+            params: h.x,
         }
-    }
-    starts.par_iter_mut().for_each(|(_, b, v)| *v = full_target.value(kind, Some(b), eps));
-    starts.sort_by(|a, b| a.2.total_cmp(&b.2));
-    starts.truncate(ARCHIVE_STARTS);
+    });
+    let uncertainty = (settings.bootstrap > 0).then(|| {
+        log(format!("fit: bootstrap, {} replicates refitted in lockstep", settings.bootstrap));
+        bootstrap(&sim, &space, &solver, condition, &main, settings.bootstrap)
+    });
+    let uncertainty = uncertainty.transpose()?;
+    Ok(report(condition, params, settings.objective, &solver, main.x, main.bins.into_iter().next().expect("one condition"), main.evaluations, uncertainty, heldout, Some(solver), notes))
+}
 
-    let n = runs.runs.len();
-    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed ^ 0xB007_5742);
-    let draws: Vec<Vec<usize>> =
-        (0..settings.replicates).map(|_| (0..n).map(|_| rng.random_range(0..n)).collect()).collect();
-    let refits: Vec<(Vec<f64>, usize)> = draws
-        .par_iter()
-        .map(|idx| {
-            let target = Target::new(&subset(runs, idx), problem.teeth(), resolution_g);
-            let start = starts
-                .iter()
-                .map(|(x, b, _)| (x, target.value(kind, Some(b), eps)))
-                .min_by(|a, b| a.1.total_cmp(&b.1))
-                .map(|(x, _)| x.clone())
-                .unwrap_or_else(|| full.x.clone());
-            let m = nelder_mead::minimise(
-                |u| target.value(kind, problem.bins_at(&problem.from_unit(u)).as_deref(), eps),
-                &problem.to_unit(&start),
-                0.05,
-                settings.max_evals,
-                1e-4,
-            );
-            (problem.from_unit(&m.x), m.evaluations)
+/// Resample the runs with replacement `replicates` times and refit each resample with the
+/// compass search, all in lockstep; each starts at the main fit's archive point (full
+/// budget) that is best under its own objective.
+fn bootstrap(
+    sim: &Simulator,
+    space: &Space,
+    solver: &Solver,
+    condition: &Condition,
+    full: &crate::calibrate::Fit,
+    replicates: usize,
+) -> anyhow::Result<Uncertainty> {
+    let n = condition.runs.runs.len();
+    let mut rng = ChaCha8Rng::seed_from_u64(solver.seed ^ 0xB007_5742);
+    let targets: Vec<[Target; 1]> = (0..replicates)
+        .map(|_| {
+            let idx: Vec<usize> = (0..n).map(|_| rng.random_range(0..n)).collect();
+            [condition.target(&idx)]
         })
         .collect();
-    let values: Vec<Vec<f64>> = refits.iter().map(|r| r.0.clone()).collect();
-    let d = problem.params.len();
+    let models: Vec<Model> = targets
+        .par_iter()
+        .map(|t| {
+            let start = full
+                .archive
+                .iter()
+                .map(|p| (p, solver.value(&Some(p.bins.clone()), t, solver.particles)))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .map_or_else(|| full.x.clone(), |(p, _)| p.x.clone());
+            Model { space, targets: t, starts: vec![start] }
+        })
+        .collect();
+    // a resample's optimum lies near the full data's: finer steps than the main polish's,
+    // down to 1/4000 of the box
+    let refine = Solver { first_step: MIN_STEP * 4.0, min_step: 2.5e-4, ..*solver };
+    let refits = refine.polish(sim, &models)?;
+    let values: Vec<Vec<f64>> = refits.iter().map(|r| r.x.clone()).collect();
+    let d = space.dim();
     let column = |j: usize| values.iter().map(|v| v[j]).collect::<Vec<f64>>();
-    Uncertainty {
-        replicates: settings.replicates,
+    Ok(Uncertainty {
+        replicates,
         sd: (0..d).map(|j| sample_sd(&column(j))).collect(),
         interval: (0..d).map(|j| [percentile(&column(j), 0.16), percentile(&column(j), 0.84)]).collect(),
-        evaluations: refits.iter().map(|r| r.1).sum(),
+        evaluations: refits.iter().map(|r| r.evaluations).sum(),
         values,
-    }
+    })
 }
 
 /// The held-out score.
@@ -559,76 +421,16 @@ pub struct Heldout {
     pub evaluations: u64,
 }
 
-/// Fit on all runs but the last `k` and score the fit on those `k`.
-pub fn holdout(
-    problem: &Problem,
-    runs: &MeasuredRuns,
-    resolution_g: f64,
-    kind: ObjectiveKind,
-    k: usize,
-    settings: GaSettings,
-    progress: &mut dyn FnMut(u64, f64),
-) -> anyhow::Result<Heldout> {
-    let n = runs.runs.len();
-    if k == 0 || k >= n {
-        bail!("--holdout must be >= 1 and < the number of runs ({n}), got {k}");
-    }
-    let fit_idx: Vec<usize> = (0..n - k).collect();
-    let held_idx: Vec<usize> = (n - k..n).collect();
-    let (fit_runs, held_runs) = (subset(runs, &fit_idx), subset(runs, &held_idx));
-    let teeth = problem.teeth();
-    let fit_target = Target::new(&fit_runs, teeth, resolution_g);
-    let held_target = Target::new(&held_runs, teeth, resolution_g);
-    let fit = global_fit(problem, &fit_target, kind, settings, progress)?;
-    let eps = problem.eps();
-    let in_sample = fit_target.likelihood(&fit.bins, eps);
-    let nll_heldout = -objective::dm_log_likelihood(
-        &held_target.counts,
-        &objective::model_probabilities(&held_target.counts, &fit.bins, eps),
-        in_sample.concentration,
-    );
-    Ok(Heldout {
-        k,
-        heldout_runs: held_runs.runs.iter().map(|r| r.id.clone()).collect(),
-        fit_runs: fit_runs.runs.iter().map(|r| r.id.clone()).collect(),
-        params: fit.x.clone(),
-        sse_in_sample_percent2: fit_target.sse(&fit.bins),
-        sse_heldout_percent2: held_target.sse(&fit.bins),
-        sse_measured_fit_vs_heldout_percent2: objective::sse_percent2(&fit_target.bins, &held_target.bins),
-        nll_heldout,
-        nll_heldout_per_run: nll_heldout / k as f64,
-        nll_in_sample_per_run: in_sample.nll / (n - k) as f64,
-        evaluations: fit.evaluations,
-    })
-}
-
-/// Per-tooth statistics of the runs' fractions (padded to the setup's teeth with zeros).
+/// Per-bin statistics of the runs' fractions as a fit compares them (the setup's teeth,
+/// zeros beyond the weighed ones, then the last bin): [`Condition::summary`].
 #[derive(Clone, Debug, Serialize)]
 pub struct MeasuredSummary {
-    /// Fraction of the mean masses ([`MeasuredRuns::mean_fractions`]).
+    /// The measured mean distribution ([`Target::bins`]).
     pub mean: Vec<f64>,
     /// Sample standard deviation of the run fractions (NaN with one run).
     pub sd: Vec<f64>,
     pub min: Vec<f64>,
     pub max: Vec<f64>,
-}
-
-impl MeasuredSummary {
-    pub fn new(runs: &MeasuredRuns, teeth: usize) -> Self {
-        let pad = |v: Vec<f64>| {
-            let mut p = vec![0.0; teeth];
-            p[..v.len()].copy_from_slice(&v);
-            p
-        };
-        let fr = runs.fractions();
-        let col = |j: usize| fr.iter().map(move |f| f[j]);
-        MeasuredSummary {
-            mean: pad(runs.mean_fractions()),
-            sd: pad(runs.std_fractions()),
-            min: pad((0..runs.teeth).map(|j| col(j).fold(f64::INFINITY, f64::min)).collect()),
-            max: pad((0..runs.teeth).map(|j| col(j).fold(f64::NEG_INFINITY, f64::max)).collect()),
-        }
-    }
 }
 
 /// Everything `fit` settles on.
@@ -643,109 +445,70 @@ pub struct FitReport {
     /// The minimised objective's value (SSE in %² or NLL).
     pub objective_value: f64,
     pub sse_percent2: f64,
+    /// Mean absolute error over the weighed teeth, percentage points.
     pub mae_percent: f64,
     pub likelihood: Profiled,
     /// [`Target::measured_mean_likelihood`] of all runs.
     pub measured_mean_likelihood: Profiled,
     pub runs: usize,
     pub resolution_g: f64,
+    /// The measured bins as compared (teeth, then the last bin), with the runs' spread.
     pub measured: MeasuredSummary,
-    /// Fitted bins: the setup's teeth, then lost.
+    /// What the last bin holds: "lost" or "not recovered" ([`Condition::last_bin_label`]).
+    pub last_bin: &'static str,
+    /// Fitted bins as compared: the setup's teeth, then the last bin.
     pub fitted: Vec<f64>,
     pub uncertainty: Option<Uncertainty>,
     pub heldout: Option<Heldout>,
-    /// Simulations run by the main fit (GA and polish).
+    /// Simulations run by the main fit (screen and polish).
     pub evaluations: u64,
-    /// None when the parameters were given ([`evaluate_at`]), not fitted.
-    pub ga: Option<GaSettings>,
+    /// The solver's settings; None when the parameters were given ([`evaluate_at`]).
+    pub solver: Option<Solver>,
+    /// Particles per simulation of the fitted bins.
+    pub particles: u32,
+    /// What the user should know about the result (e.g. a Monte-Carlo-limited budget).
+    pub notes: Vec<String>,
 }
 
-/// What `fit` does besides the GA.
-#[derive(Clone, Copy, Debug)]
-pub struct FitSettings {
-    pub objective: ObjectiveKind,
-    pub ga: GaSettings,
-    pub bootstrap: usize,
-    pub holdout: usize,
-}
-
-/// Bootstrap Nelder-Mead budget for `d` parameters.
-pub fn bootstrap_evals(d: usize) -> usize {
-    10 + 15 * d
-}
-
-/// The whole fit: the GA on all runs, the bootstrap, the held-out fit. `log` receives
-/// progress lines.
-pub fn fit(
-    problem: &Problem,
-    runs: &MeasuredRuns,
-    resolution_g: f64,
-    settings: FitSettings,
-    log: &mut dyn FnMut(String),
-) -> anyhow::Result<FitReport> {
-    let teeth = problem.teeth();
-    if runs.teeth > teeth {
-        bail!(
-            "the measured data has {} teeth but the setup simulates only {teeth} (sim.teeth): raise sim.teeth",
-            runs.teeth
-        );
-    }
-    let n = runs.runs.len();
-    if settings.holdout >= n {
-        bail!("--holdout must be < the number of runs ({n}), got {}", settings.holdout);
-    }
-    if !(resolution_g.is_finite() && resolution_g > 0.0) {
-        bail!("scale resolution must be > 0 g, got {resolution_g}");
-    }
-    let target = Target::new(runs, teeth, resolution_g);
-    let generations = settings.ga.generations;
-    let fit = global_fit(problem, &target, settings.objective, settings.ga, &mut |g, best| {
-        if g == generations || g % 10 == 0 {
-            log(format!("fit: generation {g}/{generations}, best objective {best:.4}"));
-        }
-    })?;
-    let eps = problem.eps();
-    let uncertainty = (settings.bootstrap > 0).then(|| {
-        log(format!("fit: bootstrap, {} replicates", settings.bootstrap));
-        bootstrap(
-            problem,
-            runs,
-            resolution_g,
-            settings.objective,
-            &fit,
-            &target,
-            BootstrapSettings {
-                replicates: settings.bootstrap,
-                seed: settings.ga.seed,
-                max_evals: bootstrap_evals(problem.params.len()),
-            },
-        )
-    });
-    let heldout = if settings.holdout > 0 {
-        log(format!("fit: held-out fit without the last {} runs", settings.holdout));
-        Some(holdout(problem, runs, resolution_g, settings.objective, settings.holdout, settings.ga, &mut |_, _| {})?)
-    } else {
-        None
-    };
-    Ok(FitReport {
-        params: problem.params.clone(),
-        setup_values: problem.setup_values(),
-        objective: settings.objective,
-        objective_value: fit.value,
-        sse_percent2: target.sse(&fit.bins),
-        mae_percent: objective::mae_percent(&fit.bins, &target.bins),
-        likelihood: target.likelihood(&fit.bins, eps),
+#[allow(clippy::too_many_arguments)]
+fn report(
+    condition: &Condition,
+    params: &[Param],
+    kind: ObjectiveKind,
+    scored_with: &Solver,
+    x: Vec<f64>,
+    bins: Vec<f64>,
+    evaluations: u64,
+    uncertainty: Option<Uncertainty>,
+    heldout: Option<Heldout>,
+    solver: Option<Solver>,
+    notes: Vec<String>,
+) -> FitReport {
+    let target = condition.target_all();
+    let eps = objective::floor_for(scored_with.particles);
+    let weighed = condition.runs.teeth;
+    FitReport {
+        params: params.to_vec(),
+        setup_values: setup_values(params, &condition.base),
+        objective: kind,
+        objective_value: target.value(kind, Some(&bins), eps),
+        sse_percent2: target.sse(&bins),
+        mae_percent: objective::mae_percent(&bins[..weighed], &target.bins[..weighed]),
+        likelihood: target.likelihood(&bins, eps),
         measured_mean_likelihood: target.measured_mean_likelihood(),
-        runs: n,
-        resolution_g,
-        measured: MeasuredSummary::new(runs, teeth),
-        fitted: fit.bins.clone(),
+        runs: condition.runs.runs.len(),
+        resolution_g: condition.resolution_g,
+        measured: condition.summary(),
+        last_bin: condition.last_bin_label(),
+        fitted: bins,
         uncertainty,
         heldout,
-        evaluations: fit.evaluations,
-        ga: Some(settings.ga),
-        x: fit.x,
-    })
+        evaluations,
+        solver,
+        particles: scored_with.particles,
+        notes,
+        x,
+    }
 }
 
 /// `NAME=VALUE,...` (e.g. `k_elastic=0.854,mu_fric=0.133,k_drag=5.347`): the parameters
@@ -773,46 +536,26 @@ pub fn parse_assignments(list: &str) -> anyhow::Result<(Vec<Param>, Vec<f64>)> {
 }
 
 /// Score given parameter values against all runs, without fitting: the same report as
-/// [`fit`] with no uncertainty and no held-out score.
+/// [`fit`] with no uncertainty and no held-out score, at `particles` per simulation (or
+/// what the data call for) and `seed`.
 pub fn evaluate_at(
-    problem: &Problem,
-    runs: &MeasuredRuns,
-    resolution_g: f64,
-    kind: ObjectiveKind,
+    engine: &dyn BatchEvaluator,
+    condition: &Condition,
+    params: &[Param],
     x: &[f64],
+    kind: ObjectiveKind,
+    effort: Effort,
 ) -> anyhow::Result<FitReport> {
-    let teeth = problem.teeth();
-    if runs.teeth > teeth {
-        bail!(
-            "the measured data has {} teeth but the setup simulates only {teeth} (sim.teeth): raise sim.teeth",
-            runs.teeth
-        );
-    }
-    problem.scenario_at(x).validate().map_err(|e| anyhow::anyhow!("--at: {e}"))?;
-    let target = Target::new(runs, teeth, resolution_g);
-    let Some(bins) = problem.bins_at(x) else {
+    check(condition, params)?;
+    let conditions = std::slice::from_ref(condition);
+    let space = Space::new(params.to_vec(), &[], conditions);
+    space.scenario_at(condition, x).validate().map_err(anyhow::Error::msg)?;
+    let (solver, note) = effort.solver(kind, conditions);
+    let sim = Simulator { engine, conditions };
+    let Some(mut bins) = sim.simulate(&[(&space, x.to_vec())], solver.particles, solver.seed).pop().flatten() else {
         bail!("the engine rejected the setup at these parameters");
     };
-    let eps = problem.eps();
-    Ok(FitReport {
-        params: problem.params.clone(),
-        x: x.to_vec(),
-        setup_values: problem.setup_values(),
-        objective: kind,
-        objective_value: target.value(kind, Some(&bins), eps),
-        sse_percent2: target.sse(&bins),
-        mae_percent: objective::mae_percent(&bins, &target.bins),
-        likelihood: target.likelihood(&bins, eps),
-        measured_mean_likelihood: target.measured_mean_likelihood(),
-        runs: runs.runs.len(),
-        resolution_g,
-        measured: MeasuredSummary::new(runs, teeth),
-        fitted: bins,
-        uncertainty: None,
-        heldout: None,
-        evaluations: 1,
-        ga: None,
-    })
+    Ok(report(condition, params, kind, &solver, x.to_vec(), bins.remove(0), 1, None, None, None, note.into_iter().collect()))
 }
 
 #[cfg(test)]
@@ -854,15 +597,6 @@ mod tests {
     }
 
     #[test]
-    fn percentiles_interpolate() {
-        let v = [1.0, 2.0, 3.0, 4.0, 5.0];
-        assert_eq!(percentile(&v, 0.0), 1.0);
-        assert_eq!(percentile(&v, 0.5), 3.0);
-        assert!((percentile(&v, 0.16) - 1.64).abs() < 1e-12);
-        assert!((sample_sd(&[1.0, 3.0]) - 2f64.sqrt()).abs() < 1e-12);
-    }
-
-    #[test]
     fn target_pads_and_objectives_agree_on_a_perfect_fit() {
         let runs = crate::io::measured::parse("run,tooth_1,tooth_2\na,1.0,1.0\nb,1.2,0.8\n", "t.csv").unwrap();
         let t = Target::new(&runs, 5, 0.1);
@@ -871,8 +605,18 @@ mod tests {
         assert_eq!(t.value(ObjectiveKind::Sse, Some(&t.bins.clone()), 1e-3), 0.0);
         assert!(t.value(ObjectiveKind::Likelihood, Some(&t.bins.clone()), 1e-3).is_finite());
         assert_eq!(t.value(ObjectiveKind::Sse, None, 1e-3), f64::INFINITY);
-        let s = MeasuredSummary::new(&runs, 5);
-        assert_eq!(s.min[..3], [0.5, 0.4, 0.0]);
-        assert_eq!(s.max[..2], [0.6, 0.5]);
+    }
+
+    #[test]
+    fn loaded_mass_counts_hold_what_was_not_recovered() {
+        let runs =
+            crate::io::measured::parse("run,tooth_1,tooth_2,input_mass\na,1.0,0.5,2.0\nb,1.2,0.6,2.0\n", "t.csv").unwrap();
+        let t = Target::of_loaded_mass(&runs, 3, 0.1).unwrap();
+        // (1.0 + 1.2) / 4, (0.5 + 0.6) / 4, 0, then the 0.7 g of 4 g not recovered
+        for (g, w) in t.bins.iter().zip([0.55, 0.275, 0.0, 0.175]) {
+            assert!((g - w).abs() < 1e-12, "{:?}", t.bins);
+        }
+        assert_eq!(t.counts[0], vec![10.0, 5.0, 0.0, 5.0]);
+        assert_eq!(t.counts[1], vec![12.0, 6.0, 0.0, 2.0]);
     }
 }

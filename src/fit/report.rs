@@ -98,15 +98,18 @@ pub fn to_json(r: &FitReport, meta: &Meta) -> Value {
         "distribution": {
             "unit": "percent",
             "teeth": teeth,
-            "measured": pct(&r.measured.mean),
-            "measured_sd": nums(&pct(&r.measured.sd)),
-            "measured_min": pct(&r.measured.min),
-            "measured_max": pct(&r.measured.max),
+            "measured": pct(&r.measured.mean[..teeth]),
+            "measured_sd": nums(&pct(&r.measured.sd[..teeth])),
+            "measured_min": pct(&r.measured.min[..teeth]),
+            "measured_max": pct(&r.measured.max[..teeth]),
             "fitted": pct(fitted_teeth),
-            "lost": {"measured": 0.0, "fitted": 100.0 * r.fitted[teeth]},
+            "last_bin": r.last_bin,
+            "last_bin_measured": 100.0 * r.measured.mean[teeth],
+            "last_bin_measured_sd": num(100.0 * r.measured.sd[teeth]),
+            "last_bin_fitted": 100.0 * r.fitted[teeth],
         },
         "metrics": {
-            "measured": centre(&r.measured.mean),
+            "measured": centre(&r.measured.mean[..teeth]),
             "fitted": centre(fitted_teeth),
             "sse_percent2": num(r.sse_percent2),
             "mae_percent": num(r.mae_percent),
@@ -115,7 +118,7 @@ pub fn to_json(r: &FitReport, meta: &Meta) -> Value {
             "concentration": num(r.likelihood.concentration),
             "nll_measured_mean": num(r.measured_mean_likelihood.nll),
             "concentration_measured_mean": num(r.measured_mean_likelihood.concentration),
-            "lost_fraction": r.fitted[teeth],
+            "last_bin_fraction": r.fitted[teeth],
         },
         "setup_values": params_object(r, &r.setup_values),
         "settings": {
@@ -127,9 +130,12 @@ pub fn to_json(r: &FitReport, meta: &Meta) -> Value {
             "engine": meta.engine,
             "particles": meta.particles,
             "seed": meta.seed,
-            "fitted": r.ga.is_some(),
-            "pop": r.ga.map(|g| g.pop),
-            "generations": r.ga.map(|g| g.generations),
+            "fitted": r.solver.is_some(),
+            "pop": r.solver.map(|g| g.pop),
+            "generations": r.solver.map(|g| g.generations),
+            "polish_iterations": r.solver.map(|g| g.polish_iterations),
+            "screen_particles": r.solver.map(|g| g.screen_particles),
+            "notes": r.notes,
             "evaluations": r.evaluations,
             "bootstrap": r.uncertainty.as_ref().map_or(0, |u| u.replicates),
             "bootstrap_evaluations": r.uncertainty.as_ref().map_or(0, |u| u.evaluations),
@@ -157,8 +163,11 @@ pub fn write_table(out: &mut dyn Write, r: &FitReport, meta: &Meta) -> std::io::
         meta.data, r.runs, meta.measured_teeth, r.resolution_g
     )?;
     writeln!(out, "setup      {} ({} teeth simulated)", meta.setup, meta.teeth)?;
-    let how = match r.ga {
-        Some(g) => format!("GA pop {} x {} generations + polish ({} simulations)", g.pop, g.generations, r.evaluations),
+    let how = match r.solver {
+        Some(g) => format!(
+            "differential evolution {} x {} generations at {} particles + {} compass iterations ({} simulations)",
+            g.pop, g.generations, g.screen_particles, g.polish_iterations, r.evaluations
+        ),
         None => "evaluated at the given parameters (no fit)".to_string(),
     };
     writeln!(
@@ -167,7 +176,10 @@ pub fn write_table(out: &mut dyn Write, r: &FitReport, meta: &Meta) -> std::io::
         meta.engine, meta.particles, meta.seed
     )?;
     writeln!(out)?;
-    let head = if r.ga.is_some() { "fitted" } else { " given" };
+    for n in &r.notes {
+        writeln!(out, "note       {n}")?;
+    }
+    let head = if r.solver.is_some() { "fitted" } else { " given" };
     writeln!(out, "parameter        {head}        sd    68 % interval          bounds       setup")?;
     for (j, p) in r.params.iter().enumerate() {
         let (lo, hi) = p.bounds();
@@ -194,13 +206,13 @@ pub fn write_table(out: &mut dyn Write, r: &FitReport, meta: &Meta) -> std::io::
         )?;
     }
     writeln!(out)?;
-    writeln!(out, "tooth   measured %      sd     min     max   fitted %")?;
+    writeln!(out, "tooth           measured %      sd     min     max   fitted %")?;
     let m = &r.measured;
     for j in 0..shown_teeth(r, meta) {
         let sd = if m.sd[j].is_finite() { format!("{:>7.2}", 100.0 * m.sd[j]) } else { format!("{:>7}", "-") };
         writeln!(
             out,
-            "{:>5}   {:>10.2} {} {:>7.2} {:>7.2} {:>10.2}",
+            "{:<13}   {:>10.2} {} {:>7.2} {:>7.2} {:>10.2}",
             j + 1,
             100.0 * m.mean[j],
             sd,
@@ -211,17 +223,31 @@ pub fn write_table(out: &mut dyn Write, r: &FitReport, meta: &Meta) -> std::io::
     }
     let rest: f64 = r.fitted[shown_teeth(r, meta)..meta.teeth].iter().sum();
     if rest > 0.0 {
-        writeln!(out, " rest   {:>10.2} {:>7} {:>7} {:>7} {:>10.2}", 0.0, "", "", "", 100.0 * rest)?;
+        writeln!(out, "{:<13}   {:>10.2} {:>7} {:>7} {:>7} {:>10.2}", "rest", 0.0, "", "", "", 100.0 * rest)?;
     }
-    writeln!(out, " lost   {:>10.2} {:>7} {:>7} {:>7} {:>10.2}", 0.0, "", "", "", 100.0 * r.fitted[meta.teeth])?;
+    let t = meta.teeth;
+    writeln!(
+        out,
+        "{:<13}   {:>10.2} {:>7.2} {:>7.2} {:>7.2} {:>10.2}",
+        r.last_bin,
+        100.0 * m.mean[t],
+        if m.sd[t].is_finite() { 100.0 * m.sd[t] } else { 0.0 },
+        100.0 * m.min[t],
+        100.0 * m.max[t],
+        100.0 * r.fitted[t]
+    )?;
     writeln!(out)?;
-    let (em, sm) = centre_and_dispersion(&m.mean);
+    let (em, sm) = centre_and_dispersion(&m.mean[..meta.teeth]);
     let (ef, sf) = centre_and_dispersion(&r.fitted[..meta.teeth]);
     writeln!(out, "                        measured    fitted")?;
     writeln!(out, "centre of mass (teeth) {:>9.3} {:>9.3}", em, ef)?;
     writeln!(out, "dispersion (teeth)     {:>9.3} {:>9.3}", sm, sf)?;
     writeln!(out)?;
-    writeln!(out, "SSE (in-sample)        {:>9.1} %²   (MAE {:.2} %)", r.sse_percent2, r.mae_percent)?;
+    writeln!(
+        out,
+        "SSE (in-sample)        {:>9.1} %²   (MAE {:.2} % over the {} weighed teeth)",
+        r.sse_percent2, r.mae_percent, meta.measured_teeth
+    )?;
     writeln!(
         out,
         "neg. log-likelihood    {:>9.1}      ({:.2} per run, concentration {:.3e})",
@@ -264,7 +290,8 @@ pub fn write_table(out: &mut dyn Write, r: &FitReport, meta: &Meta) -> std::io::
     Ok(())
 }
 
-/// fit.csv: one row per simulated tooth and one `lost` row, percentages.
+/// fit.csv: one row per simulated tooth (numeric), percentages; the last bin (lost or not
+/// recovered) is in fit.json.
 pub fn to_csv(r: &FitReport, meta: &Meta) -> String {
     let mut s = String::from(
         "tooth,measured_mean_percent,measured_sd_percent,measured_min_percent,measured_max_percent,fitted_percent\n",
@@ -283,7 +310,6 @@ pub fn to_csv(r: &FitReport, meta: &Meta) -> String {
             f(100.0 * r.fitted[j])
         );
     }
-    let _ = writeln!(s, "lost,0,,,,{}", f(100.0 * r.fitted[meta.teeth]));
     s
 }
 
@@ -292,19 +318,16 @@ fn esc(s: &str) -> String {
 }
 
 /// fit.svg: measured mean per tooth as bars, ±1 sd as a light band, min/max as error bars,
-/// the fitted distribution as red diamonds (like Figure 4.14), plus a `lost` category when
-/// the fit loses particles.
+/// the fitted distribution as red diamonds (like Figure 4.14), plus the last bin (lost or
+/// not recovered) when either side holds anything there.
 pub fn to_svg(r: &FitReport, meta: &Meta) -> String {
     let shown = shown_teeth(r, meta);
-    let lost = r.fitted[meta.teeth];
-    let mut cats: Vec<(String, f64, f64, f64, f64, f64)> = (0..shown)
-        .map(|j| {
-            let m = &r.measured;
-            (format!("{}", j + 1), m.mean[j], m.sd[j], m.min[j], m.max[j], r.fitted[j])
-        })
-        .collect();
-    if lost > 0.0 {
-        cats.push(("lost".into(), 0.0, 0.0, 0.0, 0.0, lost));
+    let m = &r.measured;
+    let cat = |label: String, j: usize| (label, m.mean[j], m.sd[j], m.min[j], m.max[j], r.fitted[j]);
+    let mut cats: Vec<(String, f64, f64, f64, f64, f64)> = (0..shown).map(|j| cat(format!("{}", j + 1), j)).collect();
+    let t = meta.teeth;
+    if r.fitted[t] > 0.0 || m.max[t] > 0.0 {
+        cats.push(cat(r.last_bin.to_string(), t));
     }
     let (w, h) = (880.0, 440.0);
     // the legend sits in the right margin, clear of the data

@@ -1,0 +1,74 @@
+//! A measured condition from a `--data` CSV and its `--setup` TOML: what `fit` and
+//! `diagnose` both read, checked before anything is simulated.
+
+use std::path::Path;
+
+use anyhow::{bail, Context as _};
+
+use crate::calibrate::{Condition, KnownMotion, Normalise};
+use crate::fit::objective;
+use crate::io::config::ConfigFile;
+use crate::io::measured;
+
+/// The file's stem, the condition's short name in reports.
+pub fn stem(p: &Path) -> String {
+    p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| p.display().to_string())
+}
+
+/// Load `data` measured with `setup`. The seed of the setup (`sim.seed`) is used where
+/// `seed` is None. `normalise` None chooses fractions of the loaded mass where every run
+/// records input_mass, else of the recovered mass (D.4).
+pub fn load(data: &Path, setup: &Path, name: String, normalise: Option<Normalise>, seed: Option<u64>) -> anyhow::Result<Condition> {
+    let runs = measured::load(data).with_context(|| format!("--data {}", data.display()))?;
+    let config = ConfigFile::load(setup).with_context(|| format!("--setup {}", setup.display()))?;
+    let Some(design) = config.design() else {
+        bail!("--setup {}: no [design] table (the rig's sawtooth design is required)", setup.display());
+    };
+    let mut scenario = config.scenario().with_context(|| format!("--setup {}", setup.display()))?;
+    scenario.sim.seed = seed.unwrap_or(scenario.sim.seed);
+    if let Err(e) = scenario.validate() {
+        bail!("--setup {}: invalid setting: {e}", setup.display());
+    }
+    if runs.teeth > scenario.sim.teeth as usize {
+        bail!(
+            "--data {} has {} teeth but the setup simulates only {} (sim.teeth): raise sim.teeth in {}",
+            data.display(),
+            runs.teeth,
+            scenario.sim.teeth,
+            setup.display()
+        );
+    }
+    if runs.runs.iter().any(|r| r.recovered_g() <= 0.0) {
+        bail!("--data {}: every run needs a positive recovered mass", data.display());
+    }
+    if let Err(invalid) = crate::model::prepare(&scenario, &design) {
+        bail!("--setup {}: the design cannot be simulated ({}): {invalid}", setup.display(), invalid.rule());
+    }
+    let measurement = config.measurement.as_ref();
+    let resolution_g = measurement
+        .and_then(|m| m.scale_resolution_g)
+        .unwrap_or_else(|| objective::infer_resolution(runs.runs.iter().flat_map(|r| r.teeth_g.iter().copied())));
+    let normalise = match normalise {
+        Some(Normalise::Loaded) if !Condition::has_input_mass(&runs) => {
+            bail!("--normalise loaded: --data {} lacks input_mass in some run", data.display())
+        }
+        Some(n) => n,
+        None if Condition::has_input_mass(&runs) => Normalise::Loaded,
+        None => Normalise::Recovered,
+    };
+    Ok(Condition {
+        name,
+        data: data.display().to_string(),
+        setup: setup.display().to_string(),
+        runs,
+        base: scenario,
+        design,
+        resolution_g,
+        motion: KnownMotion {
+            delay_s: measurement.and_then(|m| m.motion_delay_s),
+            return_speed_m_s: measurement.and_then(|m| m.motion_return_speed_m_s),
+        },
+        motion_profile: measurement.and_then(|m| m.motion_profile.clone()),
+        normalise,
+    })
+}
