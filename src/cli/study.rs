@@ -13,7 +13,7 @@ use super::multi::{execute, panels_svg, Planned};
 use super::optimize::GaArgs;
 use crate::model::Scenario;
 use crate::optim::front::{closest_to_mass_flow, FrontPoint};
-use crate::optim::runner::write_atomic;
+use crate::io::atomic::write_atomic;
 
 #[derive(Debug, Subcommand)]
 pub enum StudyCommand {

@@ -13,7 +13,7 @@ use super::args::{EngineArgs, ScenarioArgs};
 use super::multi::{execute, panels_svg, Planned};
 use super::optimize::GaArgs;
 use crate::optim::front::{closest_to_mass_flow, picks, TARGET_MASS_FLOW_KG_S};
-use crate::optim::runner::write_atomic;
+use crate::io::atomic::write_atomic;
 
 #[derive(Debug, Args)]
 pub struct SweepArgs {

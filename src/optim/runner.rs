@@ -20,6 +20,8 @@ use super::hypervolume::hypervolume_2d;
 use super::nsga2::{load_checkpoint, save_checkpoint, Config, Nsga2, State};
 use super::sawtooth::{Logged, SawtoothProblem};
 use crate::engine::{BatchEvaluator, EngineKind};
+use crate::io::atomic::write_atomic;
+use crate::io::run_dir::{Access, RunDir};
 use crate::model::Scenario;
 
 /// Hypervolume reference point (f_stroke Hz, W_spec J/kg): the 2 Hz limit and a specific
@@ -128,17 +130,6 @@ fn truncate_csv(path: &Path, last: u64) -> anyhow::Result<()> {
     write_atomic(path, out.as_bytes())
 }
 
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let tmp = path.with_extension("tmp");
-    {
-        let mut f = std::fs::File::create(&tmp).with_context(|| format!("writing {}", tmp.display()))?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-    }
-    std::fs::rename(&tmp, path).with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
-    Ok(())
-}
-
 fn append(path: &Path, lines: &str) -> anyhow::Result<()> {
     let mut f = OpenOptions::new().append(true).create(true).open(path).with_context(|| format!("appending to {}", path.display()))?;
     f.write_all(lines.as_bytes())?;
@@ -175,6 +166,9 @@ impl Paths {
     }
 }
 
+/// The `io::run_dir` kind of an optimisation run's folder.
+pub const RUN_KIND: &str = "optimize";
+
 /// Read a run's manifest (for --resume).
 pub fn read_manifest(dir: &Path) -> anyhow::Result<Manifest> {
     let path = dir.join("run.toml");
@@ -191,11 +185,17 @@ pub fn is_finished(dir: &Path) -> bool {
 /// run; with `resume` it is read from the directory instead.
 pub fn run(dir: &Path, manifest: Option<Manifest>, resume: bool, engine: &dyn BatchEvaluator, opts: &RunOptions) -> anyhow::Result<RunOutcome> {
     let paths = Paths::new(dir);
+    if resume && !paths.manifest.exists() {
+        bail!("--resume: no run manifest at {}", paths.manifest.display());
+    }
+    // Owned for the whole run: a second process started into `dir` is refused, not interleaved.
+    let _owned = RunDir::acquire(dir, RUN_KIND, Access::Exclusive, |d| d.join("run.toml").exists())?;
     let (mut manifest, state) = if resume {
         let m = read_manifest(dir)?;
         let state = load_checkpoint(&paths.checkpoint).with_context(|| format!("--resume: reading {}", paths.checkpoint.display()))?;
         truncate_csv(&paths.evaluations, state.generation)?;
         truncate_csv(&paths.generations, state.generation)?;
+        eprintln!("{}resuming from the checkpoint at generation {}", opts.label, state.generation);
         (m, Some(state))
     } else {
         if paths.checkpoint.exists() {
