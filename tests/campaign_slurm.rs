@@ -95,7 +95,8 @@ fn wait_for(what: &str, secs: u64, mut done: impl FnMut() -> bool) {
 
 /// Job ids from `campaign slurm --submit`: "submitted array job A (tasks …) and gather job G …".
 fn submitted(out: &str) -> (String, String) {
-    let words: Vec<&str> = out.split_whitespace().collect();
+    let line = out.lines().find(|l| l.starts_with("submitted array job ")).unwrap_or_else(|| panic!("no `submitted array job` line in {out}"));
+    let words: Vec<&str> = line.split_whitespace().collect();
     let id = |w: &str| {
         let i = words.iter().position(|x| *x == w).unwrap_or_else(|| panic!("no `{w} job ID` in {out}"));
         words.get(i + 2).map(|s| s.to_string()).unwrap_or_else(|| panic!("no `{w} job ID` in {out}"))
@@ -178,6 +179,7 @@ fn a_sweep_and_a_study_run_as_slurm_arrays_and_a_cancelled_task_resumes() {
     let (code, out, err) = sawtooth(&["campaign", "slurm", d, "--time", "10", "--unfinished", "--submit"]);
     assert_eq!(code, 0, "{err}");
     assert!(out.contains(&format!("(tasks {k})")), "{out}");
+    assert!(out.contains(&format!("scancel {gid}")), "the stale gather job is named: {out}");
     let (jid2, gid2) = submitted(&out);
     wait_for("the resubmitted task and the gather job", 180, || !in_queue(&jid2) && !in_queue(&gid2));
     assert_eq!(job_state(&gid2), "COMPLETED", "gather job {gid2}: {}", std::fs::read_to_string(arr.join(format!("logs/gather_{gid2}.out"))).unwrap_or_default());

@@ -234,6 +234,9 @@ fn scripts(a: &SlurmArgs, plan: &Plan, root: &str, exe: &str, tasks: &[usize]) -
     Ok((array, gather))
 }
 
+/// The job ids of the last `--submit`, in DIR/slurm.
+const LAST_SUBMIT: &str = "last-submit";
+
 /// Run sbatch; the job id it prints with --parsable (`ID` or `ID;CLUSTER`).
 fn sbatch(args: &[&str]) -> anyhow::Result<String> {
     let o = std::process::Command::new("sbatch")
@@ -285,6 +288,12 @@ fn slurm(a: SlurmArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     write_atomic(&gather_path, gather.as_bytes())?;
     let (ap, gp) = (array_path.to_string_lossy().into_owned(), gather_path.to_string_lossy().into_owned());
     writeln!(out, "wrote {ap} ({} tasks: {}) and {gp}", tasks.len(), array_spec(&tasks))?;
+    let last = sdir.join(LAST_SUBMIT);
+    if a.unfinished {
+        if let Some(g) = std::fs::read_to_string(&last).ok().and_then(|t| t.split_whitespace().find_map(|w| w.strip_prefix("gather=").map(String::from))) {
+            writeln!(out, "note: the gather job of the last submission ({g}) can never start once a task of its array failed or was cancelled; if squeue still shows it: scancel {g}")?;
+        }
+    }
     if !a.submit {
         writeln!(out, "submit with:")?;
         writeln!(out, "  jid=$(sbatch --parsable {}) && sbatch --dependency=afterok:${{jid%%;*}} {}", shell_quote("path", &ap)?, shell_quote("path", &gp)?)?;
@@ -293,6 +302,7 @@ fn slurm(a: SlurmArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let jid = sbatch(&[&ap])?;
     let dependency = format!("--dependency=afterok:{jid}");
     let gid = sbatch(&[&dependency, &gp])?;
+    write_atomic(&last, format!("array={jid} gather={gid}\n").as_bytes())?;
     writeln!(out, "submitted array job {jid} (tasks {}) and gather job {gid} ({dependency})", array_spec(&tasks))?;
     writeln!(out, "logs in {}/logs; follow with `sawtooth campaign status {}`", root_s, root_s)?;
     Ok(ExitCode::SUCCESS)
