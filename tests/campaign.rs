@@ -231,3 +231,21 @@ fn sigterm_saves_a_checkpoint_and_the_next_task_resumes_to_the_same_bytes() {
     let _ = std::fs::remove_dir_all(&whole);
     let _ = std::fs::remove_dir_all(&cut);
 }
+
+#[test]
+fn a_sensitivity_plan_holds_the_grid_and_the_repeatability_interval() {
+    let (rep, sens) = (tmp("rep-summary"), tmp("sens-plan"));
+    std::fs::create_dir_all(&rep).unwrap();
+    // the w_spec row of a gathered repeatability study: mean 400, half width 12.5
+    std::fs::write(rep.join("summary.csv"), "metric,mean,sd,cv,ci95_half_width,n\nw_spec_j_kg,4.0e2,1.0e1,2.5e-2,1.25e1,3\n").unwrap();
+    let (code, out, err) = run(&with_ga(&["study", "sensitivity", "--env", "lunar", "--repeatability", rep.to_str().unwrap(), "--out", sens.to_str().unwrap(), "--plan"]));
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("(25 members)"), "{out}");
+    let plan: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(sens.join("plan.json")).unwrap()).unwrap();
+    assert_eq!(plan["study"]["kind"], "sensitivity");
+    assert_eq!(plan["study"]["repeatability_ci"], serde_json::json!([400.0, 12.5]));
+    assert_eq!(plan["members"].as_array().unwrap().len(), 25);
+    assert_eq!(plan["members"][24]["dir"], "grid_24");
+    let _ = std::fs::remove_dir_all(&rep);
+    let _ = std::fs::remove_dir_all(&sens);
+}
