@@ -116,11 +116,17 @@ fn evaluation_row(l: &Logged) -> String {
 }
 
 /// Keep the header and the rows of generations <= `last` (a crash may have logged a
-/// generation that the checkpoint does not hold yet).
+/// generation that the checkpoint does not hold yet). Rows are appended, not written
+/// atomically: a row torn by a kill mid-append has no newline yet and is dropped even
+/// where what is left of its generation field reads as an old generation.
 fn truncate_csv(path: &Path, last: u64) -> anyhow::Result<()> {
     let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let complete = match text.rfind('\n') {
+        Some(i) => &text[..=i],
+        None => text.as_str(),
+    };
     let mut out = String::with_capacity(text.len());
-    for (i, line) in text.lines().enumerate() {
+    for (i, line) in complete.lines().enumerate() {
         let keep = i == 0 || line.split(',').next().and_then(|g| g.parse::<u64>().ok()).is_some_and(|g| g <= last);
         if keep {
             out.push_str(line);
@@ -285,4 +291,19 @@ pub fn run(dir: &Path, manifest: Option<Manifest>, resume: bool, engine: &dyn Ba
     manifest.termination = Some(termination.clone());
     write_atomic(&paths.manifest, toml::to_string_pretty(&manifest)?.as_bytes())?;
     Ok(RunOutcome { dir: dir.to_path_buf(), manifest, front, termination, generations: state.generation, interrupted: false })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::truncate_csv;
+
+    #[test]
+    fn resuming_drops_rows_past_the_checkpoint_and_a_torn_last_row() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("generations.csv");
+        // generation 12's row was torn after its first character by a kill mid-append
+        std::fs::write(&p, "generation,x\n1,a\n2,b\n3,c\n1").unwrap();
+        truncate_csv(&p, 2).unwrap();
+        assert_eq!(std::fs::read_to_string(&p).unwrap(), "generation,x\n1,a\n2,b\n");
+    }
 }
