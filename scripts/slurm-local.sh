@@ -114,7 +114,7 @@ stop_daemons() {
 stop() {
     if [ -f "$CONF" ] && alive "$DIR/slurmctld.pid"; then
         # every job of this private cluster is a test's: cancel them so no task outlives slurmd
-        scancel --full --cluster=sawtooth-test --user="$(id -un)" 2>/dev/null || scancel --user="$(id -un)" 2>/dev/null || true
+        scancel --user="$(id -un)" 2>/dev/null || true
         for _ in $(seq 1 40); do
             [ -z "$(squeue -h -o %i 2>/dev/null)" ] && break
             sleep 0.25
