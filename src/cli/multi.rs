@@ -90,9 +90,15 @@ pub fn read_plan(root: &Path) -> anyhow::Result<Plan> {
     Ok(plan)
 }
 
-/// A campaign folder written by sawtooth before plans existed: it holds member runs.
+/// A campaign folder written by sawtooth before plans existed: it holds member runs
+/// (`alpha_*`, `run_*`, `grid_*` folders with a run.toml).
 fn legacy_campaign(dir: &Path) -> bool {
-    std::fs::read_dir(dir).is_ok_and(|es| es.filter_map(|e| e.ok()).any(|e| e.path().join("run.toml").exists()))
+    std::fs::read_dir(dir).is_ok_and(|es| {
+        es.filter_map(|e| e.ok()).any(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            ["alpha_", "run_", "grid_"].iter().any(|p| name.starts_with(p)) && e.path().join("run.toml").exists()
+        })
+    })
 }
 
 /// Own `root` and write `plan` there; a folder holding a different plan is refused (a
