@@ -2,6 +2,9 @@
 # The test command of the README: installs what the tests need, then runs them all.
 # The GPU tests need a Vulkan adapter; without a GPU driver, Mesa's software Vulkan
 # (lavapipe) is installed from Debian's packages. Usage: bash scripts/test.sh
+# Campaigns (issue 15): tests/campaign_slurm.rs itself runs scripts/slurm-local.sh, which
+# installs slurm-wlm and munge when missing and starts/stops a private single-node Slurm
+# (needs root or sudo; with CI=true a Slurm that cannot start fails that test).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export CARGO_TERM_COLOR=never

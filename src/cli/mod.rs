@@ -3,6 +3,7 @@
 
 pub mod args;
 pub mod bench;
+pub mod campaign;
 pub mod conformance;
 pub mod diagnose;
 pub mod fit;
@@ -44,6 +45,10 @@ pub enum Command {
     /// Repeatability and sensitivity studies of the optimiser (5.4.1-5.4.2).
     #[command(subcommand)]
     Study(study::StudyCommand),
+    /// Run, gather, inspect a campaign planned with `gpu-sweep --plan` / `study … --plan`,
+    /// or turn it into a Slurm job array.
+    #[command(subcommand)]
+    Campaign(campaign::CampaignCommand),
     /// Measurement-like tooth masses from the model, optionally with effects switched on.
     Synth(synth::SynthArgs),
     /// Locate the sim-to-real gap and rank candidate effects by held-out error.
@@ -60,6 +65,7 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         Command::Fit(a) => fit::run(a, out),
         Command::GpuSweep(a) => sweep::run(a, out),
         Command::Study(c) => study::run(c, out),
+        Command::Campaign(c) => campaign::run(c, out),
         Command::Synth(a) => synth::run(a, out),
         Command::Diagnose(a) => diagnose::run(a, out),
     }

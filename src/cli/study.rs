@@ -1,5 +1,6 @@
 //! `sawtooth study repeatability|sensitivity` (5.4.1-5.4.2, Tables C.1-C.3, Figure 5.3):
-//! many optimisation runs in lockstep, each compared at the target mass flow.
+//! many optimisation runs in lockstep, each compared at the target mass flow. With `--plan`
+//! the runs become a campaign (`cli::campaign`) run elsewhere, e.g. as a Slurm job array.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -9,11 +10,12 @@ use anyhow::{bail, Context as _};
 use clap::{Args, Subcommand};
 
 use super::args::{EngineArgs, ScenarioArgs};
-use super::multi::{execute, panels_svg, Planned};
+use super::multi::{panels_svg, plan_or_run, Member, Plan, Study};
 use super::optimize::GaArgs;
 use crate::model::Scenario;
 use crate::optim::front::{closest_to_mass_flow, FrontPoint};
-use crate::optim::runner::write_atomic;
+use crate::engine::EngineKind;
+use crate::io::atomic::write_atomic;
 
 #[derive(Debug, Subcommand)]
 pub enum StudyCommand {
@@ -37,6 +39,16 @@ pub struct Common {
     pub target_mass_flow: Option<f64>,
     #[arg(long)]
     pub out: PathBuf,
+    /// Only write the campaign's plan into --out (run it with `sawtooth campaign`).
+    #[arg(long)]
+    pub plan: bool,
+}
+
+impl Common {
+    fn plan(&self, command: &str, study: Study, members: Vec<Member>) -> Plan {
+        let engine: EngineKind = self.engine.engine;
+        Plan::new(command, study, engine, self.ga.checkpoint_every, members)
+    }
 }
 
 #[derive(Debug, Args)]
@@ -103,28 +115,31 @@ fn repeatability(a: RepeatabilityArgs, out: &mut dyn Write) -> anyhow::Result<Ex
     if a.runs < 2 {
         bail!("--runs must be at least 2, got {}", a.runs);
     }
-    let plans: Vec<Planned> = (0..a.runs)
+    let members: Vec<Member> = (0..a.runs)
         .map(|i| {
             let mut s = base.clone();
             s.sim.seed = base.sim.seed.wrapping_add(i as u64);
-            Ok(Planned { label: format!("run {i:>3}"), dir: c.out.join(format!("run_{i:03}")), manifest: c.ga.manifest(s, c.engine.engine)? })
+            Ok(Member { label: format!("run {i:>3}"), dir: format!("run_{i:03}"), manifest: c.ga.manifest(s, c.engine.engine)? })
         })
         .collect::<anyhow::Result<_>>()?;
-    let Some(fronts) = execute(&c.out, c.engine.engine, &c.ga, &plans)? else {
-        return Ok(ExitCode::from(130));
-    };
+    let plan = c.plan("study repeatability", Study::Repeatability { target_mass_flow: t }, members);
+    plan_or_run(&c.out, &plan, c.plan, out)
+}
+
+/// runs.csv, summary.csv, repeatability.svg and the table of a finished repeatability study.
+pub fn summarise_repeatability(root: &Path, plan: &Plan, t: f64, fronts: &[Vec<FrontPoint>], out: &mut dyn Write) -> anyhow::Result<()> {
     let mut csv = format!("run,seed,{POINT_HEADER}\n");
     let (mut f, mut w, mut m) = (Vec::new(), Vec::new(), Vec::new());
-    for (i, front) in fronts.iter().enumerate() {
+    for (i, (member, front)) in plan.members.iter().zip(fronts).enumerate() {
         let p = closest_to_mass_flow(front, t);
-        csv.push_str(&format!("{i},{},{}\n", base.sim.seed.wrapping_add(i as u64), point_row(p)));
+        csv.push_str(&format!("{i},{},{}\n", member.manifest.scenario.sim.seed, point_row(p)));
         if let Some(p) = p {
             f.push(p.f_stroke_hz);
             w.push(p.w_spec_j_kg);
             m.push(p.m_dot_kg_s);
         }
     }
-    write_atomic(&c.out.join("runs.csv"), csv.as_bytes())?;
+    write_atomic(&root.join("runs.csv"), csv.as_bytes())?;
     let mut summary = String::from("metric,mean,sd,cv,ci95_half_width,n\n");
     writeln!(out, "{} runs compared at {t} kg/s:", f.len())?;
     for (name, v) in [("f_stroke_hz", &f), ("w_spec_j_kg", &w), ("m_dot_kg_s", &m)] {
@@ -132,7 +147,7 @@ fn repeatability(a: RepeatabilityArgs, out: &mut dyn Write) -> anyhow::Result<Ex
         summary.push_str(&format!("{name},{mean:.6e},{sd:.6e},{cv:.6e},{ci:.6e},{}\n", v.len()));
         writeln!(out, "  {name:<12} mean {mean:.5e}  sd {sd:.3e}  CV {:.3} %  95% CI ± {ci:.3e}", cv * 100.0)?;
     }
-    write_atomic(&c.out.join("summary.csv"), summary.as_bytes())?;
+    write_atomic(&root.join("summary.csv"), summary.as_bytes())?;
     let idx: Vec<f64> = (0..f.len()).map(|i| i as f64).collect();
     let svg = panels_svg(
         &format!("repeatability: {} runs at {t} kg/s", f.len()),
@@ -140,8 +155,8 @@ fn repeatability(a: RepeatabilityArgs, out: &mut dyn Write) -> anyhow::Result<Ex
         &idx,
         &[("f_stroke [Hz]", vec![("run", f)]), ("W_spec [J/kg]", vec![("run", w)]), ("mass flow [kg/s]", vec![("run", m)])],
     );
-    write_atomic(&c.out.join("repeatability.svg"), svg.as_bytes())?;
-    Ok(ExitCode::SUCCESS)
+    write_atomic(&root.join("repeatability.svg"), svg.as_bytes())?;
+    Ok(())
 }
 
 /// Mean and CI half-width of W_spec from a repeatability study's summary.csv.
@@ -182,7 +197,7 @@ fn sensitivity(a: SensitivityArgs, out: &mut dyn Write) -> anyhow::Result<ExitCo
             g
         }
     };
-    let plans: Vec<Planned> = grid
+    let members: Vec<Member> = grid
         .iter()
         .enumerate()
         .map(|(i, g)| {
@@ -191,17 +206,20 @@ fn sensitivity(a: SensitivityArgs, out: &mut dyn Write) -> anyhow::Result<ExitCo
             s.collision.mu_friction *= g[1];
             s.environment.k_drag = s.environment.k_drag.map(|k| k * g[2]);
             s.validate().map_err(|e| anyhow::anyhow!("grid point {i}: {e}"))?;
-            Ok(Planned { label: format!("grid {i:>2}"), dir: c.out.join(format!("grid_{i:02}")), manifest: c.ga.manifest(s, c.engine.engine)? })
+            Ok(Member { label: format!("grid {i:>2}"), dir: format!("grid_{i:02}"), manifest: c.ga.manifest(s, c.engine.engine)? })
         })
         .collect::<anyhow::Result<_>>()?;
-    let Some(fronts) = execute(&c.out, c.engine.engine, &c.ga, &plans)? else {
-        return Ok(ExitCode::from(130));
-    };
+    let plan = c.plan("study sensitivity", Study::Sensitivity { target_mass_flow: t, repeatability_ci: ci }, members);
+    plan_or_run(&c.out, &plan, c.plan, out)
+}
+
+/// grid.csv, sensitivity.svg and the table of a finished sensitivity study.
+pub fn summarise_sensitivity(root: &Path, plan: &Plan, t: f64, ci: Option<(f64, f64)>, fronts: &[Vec<FrontPoint>], out: &mut dyn Write) -> anyhow::Result<()> {
     let mut csv = format!("point,k_elastic,mu_friction,k_drag,{POINT_HEADER},w_spec_within_repeatability_ci\n");
     let mut w = Vec::new();
     writeln!(out, "{:>5} {:>9} {:>9} {:>9} {:>14} {:>12}", "point", "k_elastic", "mu", "k_drag", "W_spec [J/kg]", "in CI")?;
-    for (i, (plan, front)) in plans.iter().zip(&fronts).enumerate() {
-        let s = &plan.manifest.scenario;
+    for (i, (member, front)) in plan.members.iter().zip(fronts).enumerate() {
+        let s = &member.manifest.scenario;
         let p = closest_to_mass_flow(front, t);
         let within = match (ci, p) {
             (Some((mean, half)), Some(p)) => ((p.w_spec_j_kg - mean).abs() <= half).to_string(),
@@ -212,9 +230,9 @@ fn sensitivity(a: SensitivityArgs, out: &mut dyn Write) -> anyhow::Result<ExitCo
         w.push(wv);
         writeln!(out, "{i:>5} {:>9.4} {:>9.4} {:>9.3} {:>14.1} {:>12}", s.collision.k_elastic, s.collision.mu_friction, s.environment.k_drag.unwrap_or(0.0), wv, within)?;
     }
-    write_atomic(&c.out.join("grid.csv"), csv.as_bytes())?;
+    write_atomic(&root.join("grid.csv"), csv.as_bytes())?;
     let idx: Vec<f64> = (0..w.len()).map(|i| i as f64).collect();
     let svg = panels_svg(&format!("sensitivity at {t} kg/s"), "grid point (see grid.csv)", &idx, &[("W_spec [J/kg]", vec![("grid", w)])]);
-    write_atomic(&c.out.join("sensitivity.svg"), svg.as_bytes())?;
-    Ok(ExitCode::SUCCESS)
+    write_atomic(&root.join("sensitivity.svg"), svg.as_bytes())?;
+    Ok(())
 }

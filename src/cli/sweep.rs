@@ -1,19 +1,21 @@
 //! `sawtooth gpu-sweep --alpha 1..40`: one optimisation per conveyor angle (5.4.3, Figure
 //! 5.5, Tables C.4-C.5), the angles' populations evaluated together each generation (one GPU
-//! job: the angle lives in each design's geometry). Resumable per angle.
+//! job: the angle lives in each design's geometry). Resumable per angle. With `--plan` the
+//! angles become a campaign (`cli::campaign`) run elsewhere, e.g. as a Slurm job array.
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::bail;
 use clap::Args;
 
 use super::args::{EngineArgs, ScenarioArgs};
-use super::multi::{execute, panels_svg, Planned};
+use super::multi::{panels_svg, plan_or_run, Member, Plan, Study};
 use super::optimize::GaArgs;
 use crate::optim::front::{closest_to_mass_flow, picks, TARGET_MASS_FLOW_KG_S};
-use crate::optim::runner::write_atomic;
+use crate::io::atomic::write_atomic;
+use crate::optim::front::FrontPoint;
 
 #[derive(Debug, Args)]
 pub struct SweepArgs {
@@ -28,6 +30,9 @@ pub struct SweepArgs {
     pub step: f64,
     #[arg(long)]
     pub out: PathBuf,
+    /// Only write the campaign's plan into --out (run it with `sawtooth campaign`).
+    #[arg(long)]
+    pub plan: bool,
 }
 
 pub fn run(a: SweepArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
@@ -43,20 +48,25 @@ pub fn run(a: SweepArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         bail!("--alpha {from}..{to} with --step {}: {n} angles; at most 400 (each angle is one optimisation run)", a.step);
     }
     let angles: Vec<f64> = (0..n).map(|i| from + i as f64 * a.step).collect();
-    let mut plans = Vec::new();
+    let mut members = Vec::new();
     for &alpha in &angles {
         let mut s = base.clone();
         s.environment.alpha_deg = alpha;
         s.validate().map_err(|e| anyhow::anyhow!("--alpha {alpha}: {e}"))?;
-        plans.push(Planned { label: format!("alpha {alpha:>5.1}"), dir: a.out.join(format!("alpha_{alpha:06.2}")), manifest: a.ga.manifest(s, a.engine.engine)? });
+        members.push(Member { label: format!("alpha {alpha:>5.1}"), dir: format!("alpha_{alpha:06.2}"), manifest: a.ga.manifest(s, a.engine.engine)? });
     }
-    let Some(fronts) = execute(&a.out, a.engine.engine, &a.ga, &plans)? else {
-        return Ok(ExitCode::from(130));
-    };
+    let plan = Plan::new("gpu-sweep", Study::Sweep, a.engine.engine, a.ga.checkpoint_every, members);
+    plan_or_run(&a.out, &plan, a.plan, out)
+}
+
+/// summary.csv, sweep.svg and the table of a finished sweep.
+pub fn summarise(root: &Path, plan: &Plan, fronts: &[Vec<FrontPoint>], out: &mut dyn Write) -> anyhow::Result<()> {
+    let angles: Vec<f64> = plan.members.iter().map(|m| m.manifest.scenario.environment.alpha_deg).collect();
+    let mode = plan.members.first().map(|m| m.manifest.scenario.mode);
     let mut csv = String::from("alpha_deg,pick,f_stroke_hz,w_spec_j_kg,w_spec_se_j_kg,m_dot_kg_s,m_dot_se_kg_s,d_avg_m,n_wire,l_c_mm,l_a_mm,l_b_mm,r_mm,omega_deg,delta_deg,v0_m_s,a_m_s2\n");
     let mut series: [Vec<f64>; 6] = Default::default();
     writeln!(out, "{:>6} {:>4} {:>12} {:>14} {:>12}", "alpha", "pick", "f [Hz e-2]", "W_spec [J/kg]", "m_dot [kg/h]")?;
-    for (alpha, front) in angles.iter().zip(&fronts) {
+    for (alpha, front) in angles.iter().zip(fronts) {
         let ps = picks(front);
         for (name, p) in &ps {
             let x = p.design.to_cli_units();
@@ -74,10 +84,10 @@ pub fn run(a: SweepArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
             series[3 * k + 2].push(p.map_or(f64::NAN, |p| p.m_dot_kg_s * 3600.0));
         }
     }
-    write_atomic(&a.out.join("summary.csv"), csv.as_bytes())?;
+    write_atomic(&root.join("summary.csv"), csv.as_bytes())?;
     let [f_c, w_c, m_c, f_a, w_a, m_a] = series;
     let svg = panels_svg(
-        &format!("conveyor-angle sweep ({:?} mode)", base.mode),
+        &format!("conveyor-angle sweep ({:?} mode)", mode.unwrap_or_default()),
         "conveyor angle alpha [deg]",
         &angles,
         &[
@@ -86,7 +96,7 @@ pub fn run(a: SweepArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
             ("mass flow [kg/h]", vec![("lowest W_spec (C)", m_c), ("closest to 48 kg/h (A)", m_a)]),
         ],
     );
-    write_atomic(&a.out.join("sweep.svg"), svg.as_bytes())?;
-    writeln!(out, "wrote {} and {}", a.out.join("summary.csv").display(), a.out.join("sweep.svg").display())?;
-    Ok(ExitCode::SUCCESS)
+    write_atomic(&root.join("sweep.svg"), svg.as_bytes())?;
+    writeln!(out, "wrote {} and {}", root.join("summary.csv").display(), root.join("sweep.svg").display())?;
+    Ok(())
 }

@@ -11,7 +11,7 @@ use clap::Args;
 use crate::diagnose::synth::{synthesise, to_csv, SynthSettings};
 use crate::engine::{make_engine_for, EngineKind};
 use crate::io::config::ConfigFile;
-use crate::optim::runner::write_atomic;
+use crate::io::atomic::write_atomic;
 
 #[derive(Debug, Args)]
 pub struct SynthArgs {

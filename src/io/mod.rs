@@ -1,6 +1,8 @@
 //! Files in and out: configuration, trajectories, plots.
 
+pub mod atomic;
 pub mod config;
 pub mod plot;
+pub mod run_dir;
 pub mod trajectories;
 pub mod measured;

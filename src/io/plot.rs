@@ -6,7 +6,8 @@ use std::path::Path;
 
 use anyhow::{Context as _, Result};
 
-use super::trajectories::{trajectory_points, write_atomic};
+use super::atomic::write_atomic;
+use super::trajectories::trajectory_points;
 use crate::engine::{Detailed, FlightRecord};
 use crate::model::flight::Flight;
 use crate::model::geometry::{Profile, V2};

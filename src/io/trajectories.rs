@@ -48,18 +48,6 @@ pub fn trajectory_points(det: &Detailed, g: f64, k_drag: f64) -> Vec<TrajPoint> 
     out
 }
 
-/// Write `bytes` to `path` through a temporary file beside it and a rename.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let name = path.file_name().with_context(|| format!("{} has no file name", path.display()))?;
-    let tmp = path.with_file_name(format!(".{}.{}.tmp", name.to_string_lossy(), std::process::id()));
-    std::fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
-    if let Err(e) = std::fs::rename(&tmp, path) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e).with_context(|| format!("renaming {} to {}", tmp.display(), path.display()));
-    }
-    Ok(())
-}
-
 /// Write the trajectory CSV `particle,bounce,x_m,y_m,state` atomically.
 pub fn write_trajectories(path: &Path, det: &Detailed, g: f64, k_drag: f64) -> Result<()> {
     let ctx = || format!("writing trajectories to {}", path.display());
@@ -71,7 +59,7 @@ pub fn write_trajectories(path: &Path, det: &Detailed, g: f64, k_drag: f64) -> R
         w.write_record(&row).with_context(ctx)?;
     }
     let bytes = w.into_inner().map_err(|e| anyhow::anyhow!("{}", e.error())).with_context(ctx)?;
-    write_atomic(path, &bytes).with_context(ctx)
+    super::atomic::write_atomic(path, &bytes).with_context(ctx)
 }
 
 #[cfg(test)]

@@ -7,7 +7,8 @@ use std::path::Path;
 
 use anyhow::Context as _;
 
-use super::runner::{write_atomic, Manifest};
+use super::runner::Manifest;
+use crate::io::atomic::write_atomic;
 use crate::engine::BatchEvaluator;
 use crate::model::Design;
 use super::nsga2::{Nsga2, State};

@@ -15,8 +15,7 @@
 //! uninterrupted run bit for bit.
 
 use std::cmp::Ordering;
-use std::fs::{self, File};
-use std::io::{BufWriter, Write};
+use std::fs;
 use std::path::Path;
 
 use anyhow::Context as _;
@@ -580,41 +579,12 @@ fn spread_not_rising(history: &[f64], stall: u64) -> bool {
     tail.last().is_some_and(|&last| last <= mean)
 }
 
-/// Write `state` as JSON atomically: a temporary file in the same directory, fsync, rename
-/// over `path`, so a crash leaves either the old or the new checkpoint, never a torn one.
+/// Write `state` as JSON atomically (`io::atomic`): a crash leaves either the old or the
+/// new checkpoint, never a torn one.
 pub fn save_checkpoint(path: impl AsRef<Path>, state: &State) -> anyhow::Result<()> {
     let path = path.as_ref();
-    let name = path
-        .file_name()
-        .with_context(|| format!("checkpoint path {} has no file name", path.display()))?;
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let tmp = dir.join(format!(
-        ".{}.tmp{}",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
-    let write = || -> anyhow::Result<()> {
-        let mut w = BufWriter::new(File::create(&tmp)?);
-        serde_json::to_writer(&mut w, state)?;
-        w.flush()?;
-        w.get_ref().sync_all()?;
-        Ok(())
-    };
-    if let Err(e) = write() {
-        let _ = fs::remove_file(&tmp);
-        return Err(e.context(format!("writing checkpoint {}", tmp.display())));
-    }
-    fs::rename(&tmp, path)
-        .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
-    // Make the rename itself durable; directories cannot be opened for this on Windows.
-    #[cfg(unix)]
-    if let Ok(d) = File::open(dir) {
-        let _ = d.sync_all();
-    }
-    Ok(())
+    crate::io::atomic::write_atomic_with(path, |w| Ok(serde_json::to_writer(w, state)?))
+        .with_context(|| format!("writing checkpoint {}", path.display()))
 }
 
 /// Read a checkpoint written by [`save_checkpoint`]. The state does not carry the

@@ -20,6 +20,8 @@ use super::hypervolume::hypervolume_2d;
 use super::nsga2::{load_checkpoint, save_checkpoint, Config, Nsga2, State};
 use super::sawtooth::{Logged, SawtoothProblem};
 use crate::engine::{BatchEvaluator, EngineKind};
+use crate::io::atomic::write_atomic;
+use crate::io::run_dir::{Access, RunDir};
 use crate::model::Scenario;
 
 /// Hypervolume reference point (f_stroke Hz, W_spec J/kg): the 2 Hz limit and a specific
@@ -114,11 +116,17 @@ fn evaluation_row(l: &Logged) -> String {
 }
 
 /// Keep the header and the rows of generations <= `last` (a crash may have logged a
-/// generation that the checkpoint does not hold yet).
+/// generation that the checkpoint does not hold yet). Rows are appended, not written
+/// atomically: a row torn by a kill mid-append has no newline yet and is dropped even
+/// where what is left of its generation field reads as an old generation.
 fn truncate_csv(path: &Path, last: u64) -> anyhow::Result<()> {
     let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let complete = match text.rfind('\n') {
+        Some(i) => &text[..=i],
+        None => text.as_str(),
+    };
     let mut out = String::with_capacity(text.len());
-    for (i, line) in text.lines().enumerate() {
+    for (i, line) in complete.lines().enumerate() {
         let keep = i == 0 || line.split(',').next().and_then(|g| g.parse::<u64>().ok()).is_some_and(|g| g <= last);
         if keep {
             out.push_str(line);
@@ -126,17 +134,6 @@ fn truncate_csv(path: &Path, last: u64) -> anyhow::Result<()> {
         }
     }
     write_atomic(path, out.as_bytes())
-}
-
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let tmp = path.with_extension("tmp");
-    {
-        let mut f = std::fs::File::create(&tmp).with_context(|| format!("writing {}", tmp.display()))?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-    }
-    std::fs::rename(&tmp, path).with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
-    Ok(())
 }
 
 fn append(path: &Path, lines: &str) -> anyhow::Result<()> {
@@ -175,6 +172,9 @@ impl Paths {
     }
 }
 
+/// The `io::run_dir` kind of an optimisation run's folder.
+pub const RUN_KIND: &str = "optimize";
+
 /// Read a run's manifest (for --resume).
 pub fn read_manifest(dir: &Path) -> anyhow::Result<Manifest> {
     let path = dir.join("run.toml");
@@ -191,11 +191,17 @@ pub fn is_finished(dir: &Path) -> bool {
 /// run; with `resume` it is read from the directory instead.
 pub fn run(dir: &Path, manifest: Option<Manifest>, resume: bool, engine: &dyn BatchEvaluator, opts: &RunOptions) -> anyhow::Result<RunOutcome> {
     let paths = Paths::new(dir);
+    if resume && !paths.manifest.exists() {
+        bail!("--resume: no run manifest at {}", paths.manifest.display());
+    }
+    // Owned for the whole run: a second process started into `dir` is refused, not interleaved.
+    let _owned = RunDir::acquire(dir, RUN_KIND, Access::Exclusive, |d| d.join("run.toml").exists())?;
     let (mut manifest, state) = if resume {
         let m = read_manifest(dir)?;
         let state = load_checkpoint(&paths.checkpoint).with_context(|| format!("--resume: reading {}", paths.checkpoint.display()))?;
         truncate_csv(&paths.evaluations, state.generation)?;
         truncate_csv(&paths.generations, state.generation)?;
+        eprintln!("{}resuming from the checkpoint at generation {}", opts.label, state.generation);
         (m, Some(state))
     } else {
         if paths.checkpoint.exists() {
@@ -285,4 +291,19 @@ pub fn run(dir: &Path, manifest: Option<Manifest>, resume: bool, engine: &dyn Ba
     manifest.termination = Some(termination.clone());
     write_atomic(&paths.manifest, toml::to_string_pretty(&manifest)?.as_bytes())?;
     Ok(RunOutcome { dir: dir.to_path_buf(), manifest, front, termination, generations: state.generation, interrupted: false })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::truncate_csv;
+
+    #[test]
+    fn resuming_drops_rows_past_the_checkpoint_and_a_torn_last_row() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("generations.csv");
+        // generation 12's row was torn after its first character by a kill mid-append
+        std::fs::write(&p, "generation,x\n1,a\n2,b\n3,c\n1").unwrap();
+        truncate_csv(&p, 2).unwrap();
+        assert_eq!(std::fs::read_to_string(&p).unwrap(), "generation,x\n1,a\n2,b\n");
+    }
 }

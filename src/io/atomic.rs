@@ -1,0 +1,139 @@
+//! The one atomic-write helper: the bytes go to a temporary file with a unique name in the
+//! target's own directory (so the rename never crosses a filesystem), are fsynced, and the
+//! file is renamed over the target; the directory is fsynced so the rename itself is
+//! durable. A reader (or a crash, a SIGKILL, a pre-empted Slurm task) sees the old file or
+//! the new one, never a torn one. Temporary files left by a killed writer are named
+//! `.NAME.XXXXXX.sawtooth-tmp` and removed by [`clean_stale_temps`] once the folder is owned
+//! (see `io::run_dir`).
+
+use std::io::{BufWriter, Write};
+use std::path::Path;
+
+use anyhow::Context as _;
+
+/// Suffix of every temporary file this helper creates.
+pub const TMP_SUFFIX: &str = ".sawtooth-tmp";
+
+/// Write `bytes` to `path` atomically.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    write_atomic_with(path, |w| Ok(w.write_all(bytes)?))
+}
+
+/// Write `path` atomically from a writer callback (e.g. a serde serialiser).
+pub fn write_atomic_with(path: &Path, write: impl FnOnce(&mut dyn Write) -> anyhow::Result<()>) -> anyhow::Result<()> {
+    let name = path.file_name().with_context(|| format!("{} has no file name", path.display()))?.to_string_lossy().into_owned();
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let mut builder = tempfile::Builder::new();
+    // tempfile's default is 0600; results are read by others (a cluster group): 0666 less umask.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt as _;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder
+        .prefix(&format!(".{name}."))
+        .suffix(TMP_SUFFIX)
+        .tempfile_in(dir)
+        .with_context(|| format!("writing {}: creating a temporary file in {}", path.display(), dir.display()))?;
+    {
+        let mut w = BufWriter::new(tmp.as_file_mut());
+        write(&mut w).with_context(|| format!("writing {}", path.display()))?;
+        w.flush().with_context(|| format!("writing {}", path.display()))?;
+    }
+    tmp.as_file().sync_all().with_context(|| format!("writing {}: fsync", path.display()))?;
+    // On failure the temporary file is removed when `e.file` drops.
+    tmp.persist(path).map_err(|e| e.error).with_context(|| format!("writing {}: renaming the temporary file over it", path.display()))?;
+    // Make the rename durable; directories cannot be opened for this on Windows.
+    #[cfg(unix)]
+    if let Ok(d) = std::fs::File::open(dir) {
+        let _ = d.sync_all();
+    }
+    Ok(())
+}
+
+/// True for the names of temporary files a killed atomic write can leave behind: this
+/// helper's, and those of the helpers it replaced (`.NAME.tmpPID`, `.NAME.PID.tmp`, `NAME.tmp`).
+pub fn is_temp_name(name: &str) -> bool {
+    if name.starts_with('.') && name.ends_with(TMP_SUFFIX) {
+        return true;
+    }
+    if let Some(i) = name.rfind(".tmp") {
+        let tail = &name[i + 4..];
+        return tail.chars().all(|c| c.is_ascii_digit()) && (name.starts_with('.') || tail.is_empty());
+    }
+    false
+}
+
+/// Remove stale temporary files from `dir` (not recursive). Only call this while owning
+/// `dir` (holding its `run_dir` lock): another writer's temporary file is not stale.
+/// Returns how many were removed.
+pub fn clean_stale_temps(dir: &Path) -> anyhow::Result<usize> {
+    let mut n = 0;
+    let entries = match std::fs::read_dir(dir) {
+        Ok(e) => e,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(0),
+        Err(e) => return Err(e).with_context(|| format!("listing {}", dir.display())),
+    };
+    for e in entries {
+        let e = e.with_context(|| format!("listing {}", dir.display()))?;
+        let name = e.file_name().to_string_lossy().into_owned();
+        if is_temp_name(&name) && e.file_type().is_ok_and(|t| t.is_file()) {
+            std::fs::remove_file(e.path()).with_context(|| format!("removing stale temporary file {}", e.path().display()))?;
+            n += 1;
+        }
+    }
+    Ok(n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_replaces_and_leaves_no_temporary_file() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("a.csv");
+        write_atomic(&p, b"one\n").unwrap();
+        write_atomic(&p, b"two\n").unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"two\n");
+        assert_eq!(std::fs::read_dir(d.path()).unwrap().count(), 1);
+        #[cfg(unix)]
+        {
+            // the same permissions as File::create (0666 less the umask), not tempfile's 0600
+            use std::os::unix::fs::PermissionsExt as _;
+            let probe = d.path().join("probe");
+            std::fs::File::create(&probe).unwrap();
+            let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode(&p), mode(&probe));
+        }
+    }
+
+    #[test]
+    fn a_failed_write_keeps_the_old_file_and_no_temporary() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("a.csv");
+        write_atomic(&p, b"old\n").unwrap();
+        let r = write_atomic_with(&p, |w| {
+            w.write_all(b"half")?;
+            anyhow::bail!("serialiser failed")
+        });
+        assert!(r.is_err());
+        assert_eq!(std::fs::read(&p).unwrap(), b"old\n");
+        assert_eq!(std::fs::read_dir(d.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn stale_temporaries_are_recognised_and_removed() {
+        let d = tempfile::tempdir().unwrap();
+        for n in [".a.csv.x1y2z3.sawtooth-tmp", ".checkpoint.json.tmp123", ".plot.svg.77.tmp", "run.tmp", "keep.csv", "tmpfile", ".hidden"] {
+            std::fs::write(d.path().join(n), b"x").unwrap();
+        }
+        assert_eq!(clean_stale_temps(d.path()).unwrap(), 4);
+        let mut left: Vec<String> = std::fs::read_dir(d.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        left.sort();
+        assert_eq!(left, [".hidden", "keep.csv", "tmpfile"]);
+    }
+}
