@@ -7,7 +7,9 @@
 //! (`data/campaign_rig`: glass beads, v0 1.1 and 1.4 m/s on 30°, 1.1 m/s on 15°), made by
 //! `synth` and diagnosed with every candidate at a CI-sized budget. Moderate strengths, and
 //! forms that differ from the candidates' where the model allows: sizes uniform in number
-//! against the log-normal candidate; a sled motion that only one condition has.
+//! against the log-normal candidate; a uniform impact tilt on random launch points against
+//! the normal tilt on Halton points; a sled returning along the launch direction against
+//! one returning down the slope; a sled motion that only one condition has.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -205,6 +207,50 @@ fn impact_scatter_is_found() {
     let d = tmp("is");
     let v = rig_campaign(&d, Some("impact-scatter=10"), 60);
     check_found(&v, "impact-scatter");
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn uniform_tilt_on_random_launch_points_is_found_as_impact_scatter() {
+    // two forms differ from the model's at once: the data's impact tilt is uniform (the
+    // candidate's is normal, same sd) and its launch points are independent uniform draws
+    // (the model's are Halton points)
+    let d = tmp("isu");
+    let makers: Vec<String> = RIG
+        .iter()
+        .map(|n| {
+            rig_variant(&d, n, |t| {
+                t.replace("[sim]\n", "[sim]\nlaunch_points = \"random\"\n")
+                    + "\n[effects.impact_scatter]\nsigma_deg = 10.0\nform = \"uniform\"\n"
+            })
+        })
+        .collect();
+    let conditions: Vec<(&str, Option<&str>, u64)> = makers.iter().enumerate().map(|(i, s)| (s.as_str(), None, 100 + i as u64)).collect();
+    let plain: Vec<String> = RIG.iter().map(|n| rig_setup(n)).collect();
+    let v = campaign_with(&d, &conditions, &plain.iter().map(String::as_str).collect::<Vec<_>>());
+    check_found(&v, "impact-scatter");
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn sled_returning_along_the_launch_direction_is_found_as_sled_motion() {
+    // as below, but the data's sled returns along the launch direction, the candidate's
+    // down the slope; the setup states the delay and speed, not the direction
+    let d = tmp("sml");
+    let stated = |t: String| {
+        t.replace("motion_delay_s = 5.0", "motion_delay_s = 0.0").replace("motion_return_speed_m_s = 0.05", "motion_return_speed_m_s = 0.3")
+    };
+    let maker = rig_variant(&d, "slow", |t| {
+        stated(t) + "\n[effects.sled_motion]\ndelay_s = 0.0\nreturn_speed_m_s = 0.3\ndirection = \"launch\"\n"
+    });
+    let told = {
+        let p = d.join("slow-told.toml");
+        std::fs::write(&p, stated(std::fs::read_to_string(rig_setup("slow")).unwrap())).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let (fast, shallow) = (rig_setup("fast"), rig_setup("shallow"));
+    let v = campaign_with(&d, &[(&maker, None, 110), (&fast, None, 111), (&shallow, None, 112)], &[&told, &fast, &shallow]);
+    check_found(&v, "sled-motion");
     std::fs::remove_dir_all(&d).ok();
 }
 

@@ -29,7 +29,7 @@ fn effects_are_off_by_default_and_each_one_moves_the_distribution() {
     assert!(!s.effects.any());
     let base = sim(&s, &d);
     let cases = [
-        Effects { impact_scatter: Some(ImpactScatter { sigma_deg: 25.0 }), ..Default::default() },
+        Effects { impact_scatter: Some(ImpactScatter { sigma_deg: 25.0, form: Default::default() }), ..Default::default() },
         Effects { launch_spread: Some(LaunchSpread { speed_spread: 0.4, angle_sigma_deg: 5.0 }), ..Default::default() },
         Effects { polydisperse: Some(Polydisperse { sigma_ln: 0.5, form: Default::default() }), ..Default::default() },
     ];
@@ -86,13 +86,13 @@ fn sled_motion_after_every_flight_changes_nothing_and_a_returning_sled_carries_g
     let (s, d) = rig();
     let base = sim(&s, &d);
     let mut late = s.clone();
-    late.effects.sled_motion = Some(SledMotion { delay_s: 90.0, return_speed_m_s: 0.05 });
+    late.effects.sled_motion = Some(SledMotion { delay_s: 90.0, return_speed_m_s: 0.05, direction: Default::default() });
     assert_eq!(sim(&late, &d).distribution, base.distribution, "a sled that moves after everything has settled");
     // A slow return (the POC's downstroke speed v_d = 0.05 m/s, 5.3.1) slides the profile
     // down under the flying grains, so they land further up it. (A fast immediate return can
     // do the opposite: it sweeps the next tooth's ramp into the rising grains.)
     let mut moving = s.clone();
-    moving.effects.sled_motion = Some(SledMotion { delay_s: 0.0, return_speed_m_s: 0.05 });
+    moving.effects.sled_motion = Some(SledMotion { delay_s: 0.0, return_speed_m_s: 0.05, direction: Default::default() });
     let m = sim(&moving, &d);
     let total: f64 = m.distribution.iter().sum::<f64>() + m.lost_fraction;
     assert!((total - 1.0).abs() < 1e-12);
@@ -101,7 +101,7 @@ fn sled_motion_after_every_flight_changes_nothing_and_a_returning_sled_carries_g
     let mut lunar = Scenario::lunar();
     lunar.sim.particles = 200;
     let l0 = sim(&lunar, &Design::lunar_solution_c());
-    lunar.effects.sled_motion = Some(SledMotion { delay_s: 0.0, return_speed_m_s: 0.05 });
+    lunar.effects.sled_motion = Some(SledMotion { delay_s: 0.0, return_speed_m_s: 0.05, direction: Default::default() });
     assert!(sim(&lunar, &Design::lunar_solution_c()).advance_m > l0.advance_m);
 }
 
@@ -181,4 +181,69 @@ fn quadratic_drag_flights_beyond_the_conveyor_end_are_lost_not_followed_forever(
     assert!(out.lost_fraction > 0.05, "expected grains thrown past tooth 3, lost {}", out.lost_fraction);
     let total: f64 = out.distribution.iter().sum::<f64>() + out.lost_fraction;
     assert!((total - 1.0).abs() < 1e-9, "{total}");
+}
+
+/// The forms that differ from the diagnosis's candidates (issue 11: synthetic data whose
+/// effect has another form than the model fitted to it): a uniform impact tilt, a sled that
+/// returns along the launch direction, random instead of Halton launch points. Each is read
+/// from a config, changes the outcome, stays deterministic per seed, and only the forms the
+/// GPU kernel lacks are refused there.
+#[test]
+fn form_variants_parse_change_the_outcome_and_stay_deterministic() {
+    use sawtooth::model::effects::{MotionDirection, SledMotion, TiltForm};
+    use sawtooth::model::scenario::LaunchPoints;
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/data/validation/test3.toml")).unwrap()
+        + "\n[effects.impact_scatter]\nsigma_deg = 10.0\nform = \"uniform\"\n[effects.sled_motion]\ndelay_s = 0.0\nreturn_speed_m_s = 0.3\ndirection = \"launch\"\n";
+    let text = text.replace("[sim]\n", "[sim]\nlaunch_points = \"random\"\n");
+    let c = ConfigFile::parse(&text).unwrap();
+    let s = c.scenario().unwrap();
+    assert_eq!(s.effects.impact_scatter.unwrap().form, TiltForm::Uniform);
+    assert_eq!(s.effects.sled_motion.unwrap().direction, MotionDirection::Launch);
+    assert_eq!(s.sim.launch_points, LaunchPoints::Random);
+
+    let (base_s, d) = rig();
+    let base = sim(&base_s, &d);
+    // each variant against its candidate form, all else equal
+    let mut normal = base_s.clone();
+    normal.effects.impact_scatter = Some(ImpactScatter { sigma_deg: 10.0, form: TiltForm::Normal });
+    let mut uniform = normal.clone();
+    uniform.effects.impact_scatter = Some(ImpactScatter { sigma_deg: 10.0, form: TiltForm::Uniform });
+    let mut slope = base_s.clone();
+    slope.effects.sled_motion = Some(SledMotion { delay_s: 0.0, return_speed_m_s: 0.3, direction: MotionDirection::Slope });
+    let mut launch = slope.clone();
+    launch.effects.sled_motion = Some(SledMotion { delay_s: 0.0, return_speed_m_s: 0.3, direction: MotionDirection::Launch });
+    let mut random = base_s.clone();
+    random.sim.launch_points = LaunchPoints::Random;
+    for (what, candidate, variant) in [("tilt", &normal, &uniform), ("sled", &slope, &launch), ("launch points", &base_s, &random)] {
+        let (a, b) = (sim(candidate, &d), sim(variant, &d));
+        assert!(l1(&a, &b) > 0.0, "{what}: the variant changed nothing");
+        assert_eq!(sim(variant, &d).distribution, b.distribution, "{what}: not deterministic");
+        let total: f64 = b.distribution.iter().sum::<f64>() + b.lost_fraction;
+        assert!((total - 1.0).abs() < 1e-12, "{what}");
+    }
+    // random launch points: another seed, other points; a moving sled that starts after
+    // everything has settled changes nothing, whatever its direction
+    let mut other = random.clone();
+    other.sim.seed = 7;
+    let mut other_halton = base_s.clone();
+    other_halton.sim.seed = 7;
+    assert_ne!(
+        l1(&sim(&other, &d), &sim(&random, &d)),
+        l1(&sim(&other_halton, &d), &base),
+        "random launch points do not depend on the seed"
+    );
+    let mut late = base_s.clone();
+    late.effects.sled_motion = Some(SledMotion { delay_s: 90.0, return_speed_m_s: 0.3, direction: MotionDirection::Launch });
+    assert_eq!(sim(&late, &d).distribution, base.distribution);
+    // the uniform tilt has no GPU twin: refused there by name
+    let bin = env!("CARGO_BIN_EXE_sawtooth");
+    let setup = concat!(env!("CARGO_MANIFEST_DIR"), "/data/validation/test2.toml");
+    let dir = std::env::temp_dir().join(format!("sawtooth-forms-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cfg = dir.join("tilt.toml");
+    std::fs::write(&cfg, std::fs::read_to_string(setup).unwrap() + "\n[effects.impact_scatter]\nsigma_deg = 8.0\nform = \"uniform\"\n").unwrap();
+    let o = Command::new(bin).args(["simulate", "--config", cfg.to_str().unwrap(), "--engine", "gpu"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("uniform tilt"));
+    std::fs::remove_dir_all(&dir).ok();
 }

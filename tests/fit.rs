@@ -339,6 +339,12 @@ fn bad_input_exits_2_naming_the_field() {
         &["fit", "--data", &data("test2.csv"), "--setup", &data("test2.toml"), "--normalise", "loaded"],
         &["--normalise loaded", "test2.csv", "input_mass"],
     );
+    // an output folder holding someone else's files is refused before any work
+    let foreign = dir.join("foreign");
+    std::fs::create_dir_all(&foreign).unwrap();
+    std::fs::write(foreign.join("my-notes.txt"), "mine").unwrap();
+    run(&["--out", foreign.to_str().unwrap()], &["--out", "holds files"]);
+    assert_eq!(std::fs::read_to_string(foreign.join("my-notes.txt")).unwrap(), "mine");
     // k_drag has no meaning in vacuum
     let vacuum = dir.join("vacuum.toml");
     let text = std::fs::read_to_string(&toml3).unwrap();

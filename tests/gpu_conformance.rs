@@ -68,7 +68,7 @@ fn gpu_conforms_with_each_effect_switched_on() {
     let Some(g) = gpu() else { return };
     let mut cases = Vec::new();
     for (name, e) in [
-        ("impact-scatter", sawtooth::model::effects::Effects { impact_scatter: Some(ImpactScatter { sigma_deg: 8.0 }), ..Default::default() }),
+        ("impact-scatter", sawtooth::model::effects::Effects { impact_scatter: Some(ImpactScatter { sigma_deg: 8.0, form: Default::default() }), ..Default::default() }),
         ("launch-spread", sawtooth::model::effects::Effects { launch_spread: Some(LaunchSpread { speed_spread: 0.4, angle_sigma_deg: 5.0 }), ..Default::default() }),
         ("polydisperse", sawtooth::model::effects::Effects { polydisperse: Some(Polydisperse { sigma_ln: 0.5, form: Default::default() }), ..Default::default() }),
     ] {
@@ -93,7 +93,7 @@ fn gpu_conforms_with_each_effect_switched_on() {
 /// the kernel and its f32 twin, whether run alone or merged (tooth and state still agree).
 fn calibration_variants(base: &Scenario) -> Vec<(String, Scenario)> {
     use sawtooth::model::effects::{Effects, ImpactScatter, LaunchSpread, Polydisperse, SizeForm};
-    let scatter = |sigma_deg| Some(ImpactScatter { sigma_deg });
+    let scatter = |sigma_deg| Some(ImpactScatter { sigma_deg, form: Default::default() });
     let spread = |speed_spread, angle_sigma_deg| Some(LaunchSpread { speed_spread, angle_sigma_deg });
     let poly = |sigma_ln| Some(Polydisperse { sigma_ln, form: SizeForm::Lognormal });
     let variants: [(f64, f64, Option<f64>, Effects); 7] = [
@@ -186,7 +186,7 @@ fn batch_wide_physics_splits_and_cpu_only_effects_leave_the_gpu() {
     let mut earth = Scenario::earth();
     earth.sim.particles = 40;
     let mut sled = lunar.clone();
-    sled.effects.sled_motion = Some(SledMotion { delay_s: 0.01, return_speed_m_s: 0.2 });
+    sled.effects.sled_motion = Some(SledMotion { delay_s: 0.01, return_speed_m_s: 0.2, direction: Default::default() });
     let d = Design::lunar_solution_c();
     let groups = vec![(lunar.clone(), vec![d.clone()]), (earth, vec![Design::earth_solution_c()]), (sled.clone(), vec![d.clone()]), (lunar, vec![d.clone()])];
     let (before, cpu_before) = (g.dispatches(), g.cpu_only_designs());

@@ -15,6 +15,7 @@ use super::measured_condition::{self, stem};
 use crate::diagnose::diagnose::{diagnose, parse_effects, to_json, Condition, Settings};
 use crate::diagnose::render;
 use crate::engine::{make_engine, EngineKind};
+use crate::io::run_dir::{Access, RunDir};
 
 #[derive(Debug, Args)]
 pub struct DiagnoseArgs {
@@ -127,6 +128,9 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         conditions.push(c);
     }
     let seed = conditions[0].base.sim.seed;
+    // the output folder is owned before the work, so a busy or foreign folder costs nothing
+    let _owned =
+        RunDir::acquire(&a.out, "diagnose", Access::Exclusive, |d| d.join("diagnosis.json").exists()).context("--out")?;
     let engine = make_engine(a.engine)?;
     let settings = Settings {
         effects,

@@ -15,6 +15,7 @@ use crate::calibrate::{shared_params, Effort, Normalise};
 use crate::engine::make_engine;
 use crate::fit::report::{self, Meta};
 use crate::fit::{parse_assignments, parse_params, FitSettings, ObjectiveKind};
+use crate::io::run_dir::{Access, RunDir};
 
 #[derive(Debug, Args)]
 pub struct FitArgs {
@@ -102,6 +103,11 @@ pub fn run(a: FitArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     if a.holdout >= n {
         bail!("--holdout must be < the number of runs in {} ({n}), got {}", a.data.display(), a.holdout);
     }
+    // the output folder is owned before the work, so a busy or foreign folder costs nothing
+    let _owned = match &a.out {
+        Some(dir) => Some(RunDir::acquire(dir, "fit", Access::Exclusive, |d| d.join("fit.json").exists()).context("--out")?),
+        None => None,
+    };
     let params = params.unwrap_or_else(|| shared_params(std::slice::from_ref(&condition)));
     let seed = condition.base.sim.seed;
     let effort = Effort {

@@ -9,7 +9,7 @@ use anyhow::Context as _;
 use serde_json::Value;
 
 use super::diagnose::{Diagnosis, ModelResult, Residual, INTERVAL, Z_FLAG};
-use crate::fit::report::write_atomic;
+use crate::io::atomic::write_atomic;
 
 fn f(v: f64, d: usize) -> String {
     if v.is_finite() {

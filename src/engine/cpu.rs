@@ -72,6 +72,8 @@ pub fn kernel_physics<T: Real>(ctx: &Context) -> KPhysics<T> {
         size_uniform: ctx.effects.polydisperse.is_some_and(|e| e.form == crate::model::effects::SizeForm::Uniform),
         sled_delay: T::c(ctx.effects.sled_motion.map_or(0.0, |e| e.delay_s)),
         sled_speed: T::c(ctx.effects.sled_motion.map_or(0.0, |e| e.return_speed_m_s)),
+        sled_along_launch: ctx.effects.sled_motion.is_some_and(|e| e.direction == crate::model::effects::MotionDirection::Launch),
+        scatter_uniform: ctx.effects.impact_scatter.is_some_and(|e| e.form == crate::model::effects::TiltForm::Uniform),
         // quadratic drag needs air: it replaces the linear drag where there is some
         qd_k0: T::c(ctx.effects.quadratic_drag.filter(|_| ctx.k_drag > 0.0).map_or(0.0, |e| e.coefficients().0)),
         qd_re_per_speed: T::c(ctx.effects.quadratic_drag.map_or(0.0, |e| e.coefficients().1)),

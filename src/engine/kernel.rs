@@ -87,6 +87,11 @@ pub struct KPhysics<T> {
     /// return at `sled_speed` m/s over the design's stroke.
     pub sled_delay: T,
     pub sled_speed: T,
+    /// The sled returns along the launch direction, not the slope (`MotionDirection`; cpu
+    /// only).
+    pub sled_along_launch: bool,
+    /// Impact tilt uniform with sd `scatter_sigma` (`TiltForm::Uniform`; cpu only).
+    pub scatter_uniform: bool,
     /// Quadratic drag (cpu only; step 0 = off): Stokes part 18μ/(ρ_p d²) (1/s), Reynolds
     /// number per unit speed (s/m), refresh step (s).
     pub qd_k0: T,
@@ -415,7 +420,13 @@ fn sled_phase<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, clock: T) -> ([T; 2], T
     if clock < ph.sled_delay {
         ([T::zero(); 2], ph.sled_delay)
     } else if clock < back_end {
-        ([ph.sled_speed * d.t_base[0], ph.sled_speed * d.t_base[1]], back_end)
+        let dir = if ph.sled_along_launch {
+            let (s, c) = d.launch_angle.ksin_cos();
+            [c, s]
+        } else {
+            d.t_base
+        };
+        ([ph.sled_speed * dir[0], ph.sled_speed * dir[1]], back_end)
     } else {
         ([T::zero(); 2], T::infinity())
     }
@@ -500,7 +511,13 @@ pub fn step_particle<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KParticl
         // second test a grazing grain's rebound points into the surface, the next flight
         // touches it at t = 0 (`contact`) and the grain stops dead, so even a 1° tilt froze
         // ~1 % of the grains where they first landed.
-        let (s, c) = (ph.scatter_sigma * T::c(normal(ph.seed, index, bounce, DRAW_SCATTER))).ksin_cos();
+        let z = if ph.scatter_uniform {
+            // uniform on [-√3, √3]: unit variance, like the normal draw
+            T::c(3f64.sqrt() * (2.0 * uniform(ph.seed, index, bounce, DRAW_SCATTER) - 1.0))
+        } else {
+            T::c(normal(ph.seed, index, bounce, DRAW_SCATTER))
+        };
+        let (s, c) = (ph.scatter_sigma * z).ksin_cos();
         let tilted = [c * n_true[0] - s * n_true[1], s * n_true[0] + c * n_true[1]];
         if dot(v_in, tilted) < T::zero() {
             let out = ph.restitution.bounce(v_in, tilted);

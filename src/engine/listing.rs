@@ -170,6 +170,8 @@ impl ParticleEngine for ListingEngine {
             size_uniform: false,
             sled_delay: 0.0,
             sled_speed: 0.0,
+            sled_along_launch: false,
+            scatter_uniform: false,
             qd_k0: 0.0,
             qd_re_per_speed: 0.0,
             qd_step: 0.0,

@@ -227,11 +227,14 @@ pub fn particle_engine(kind: EngineKind) -> Box<dyn Engine> {
 /// Effects only the `cpu` kernel follows: its piecewise flights (sled motion, quadratic drag)
 /// and the uniform size law.
 pub fn cpu_only_effects(e: &crate::model::effects::Effects) -> Vec<&'static str> {
-    use crate::model::effects::{EffectKind, SizeForm};
+    use crate::model::effects::{EffectKind, SizeForm, TiltForm};
     let mut v: Vec<&'static str> =
         [EffectKind::SledMotion, EffectKind::QuadraticDrag].into_iter().filter(|k| e.is_on(*k)).map(EffectKind::name).collect();
     if e.polydisperse.is_some_and(|p| p.form == SizeForm::Uniform) {
         v.push("polydisperse (uniform sizes)");
+    }
+    if e.impact_scatter.is_some_and(|p| p.form == TiltForm::Uniform) {
+        v.push("impact-scatter (uniform tilt)");
     }
     v
 }

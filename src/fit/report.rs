@@ -9,6 +9,7 @@ use anyhow::Context as _;
 use serde_json::{json, Map, Value};
 
 use super::{FitReport, ObjectiveKind};
+use crate::io::atomic::write_atomic;
 use crate::model::outcome::centre_and_dispersion;
 
 /// Where the numbers came from.
@@ -494,22 +495,6 @@ pub fn to_svg(r: &FitReport, meta: &Meta) -> String {
     );
     s.push_str("</svg>\n");
     s
-}
-
-/// Write `bytes` to a temporary file next to `path`, then rename it over `path`.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
-    let tmp = path.with_file_name(format!(".{name}.tmp{}", std::process::id()));
-    let result = (|| -> std::io::Result<()> {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.with_context(|| format!("writing {}", path.display()))
 }
 
 /// fit.json, fit.csv and fit.svg into `dir` (created if missing).

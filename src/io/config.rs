@@ -81,6 +81,8 @@ pub struct SimTable {
     pub seed: Option<u64>,
     pub rest_threshold_m: Option<f64>,
     pub launch_offset_deg: Option<f64>,
+    /// `halton` (default, Eq. 4.37) or `random`.
+    pub launch_points: Option<crate::model::scenario::LaunchPoints>,
 }
 
 #[derive(Clone, Debug, Default, Deserialize)]
@@ -198,6 +200,7 @@ impl ConfigFile {
             set(&mut s.sim.seed, t.seed);
             set(&mut s.sim.rest_threshold, t.rest_threshold_m);
             set(&mut s.sim.launch_offset_deg, t.launch_offset_deg);
+            set(&mut s.sim.launch_points, t.launch_points);
         }
         if let Some(e) = &self.effects {
             s.effects = *e;

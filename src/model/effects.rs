@@ -5,11 +5,30 @@
 use serde::{Deserialize, Serialize};
 
 /// The surface normal is tilted by a random angle at each impact (rough printed surfaces,
-/// non-spherical grains): tilt ~ N(0, sigma).
+/// non-spherical grains): tilt ~ N(0, sigma) (`form = "normal"`, the default), or uniform
+/// on [−√3 sigma, √3 sigma], the same standard deviation (`form = "uniform"`; cpu only: a
+/// form for synthetic data that differs from the diagnosis's candidate).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ImpactScatter {
     pub sigma_deg: f64,
+    #[serde(default, skip_serializing_if = "TiltForm::is_normal")]
+    pub form: TiltForm,
+}
+
+/// The tilt law of [`ImpactScatter`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TiltForm {
+    #[default]
+    Normal,
+    Uniform,
+}
+
+impl TiltForm {
+    fn is_normal(&self) -> bool {
+        *self == TiltForm::Normal
+    }
 }
 
 /// Grains leave at different times of the acceleration phase: a grain that leaves early is
@@ -62,11 +81,32 @@ impl SizeForm {
 /// `delay_s`, then returns down the slope at `return_speed_m_s` until it has travelled back
 /// the stroke v0²/(2a) (the POC profile vs the delayed profile of Tests 1 and 2). Impacts are
 /// computed against the moving profile, restitution on the velocity relative to it.
+/// `direction = "launch"` moves it back along the launch direction instead of the slope
+/// (cpu only: a form for synthetic data that differs from the diagnosis's candidate).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SledMotion {
     pub delay_s: f64,
     pub return_speed_m_s: f64,
+    #[serde(default, skip_serializing_if = "MotionDirection::is_slope")]
+    pub direction: MotionDirection,
+}
+
+/// Along what the sled of [`SledMotion`] returns.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MotionDirection {
+    /// Down the slope (the rig's guide).
+    #[default]
+    Slope,
+    /// Back along the launch direction.
+    Launch,
+}
+
+impl MotionDirection {
+    fn is_slope(&self) -> bool {
+        *self == MotionDirection::Slope
+    }
 }
 
 /// Non-linear air drag with the Schiller-Naumann coefficient (Eq. 4.15, 4.17, 4.18) instead
@@ -210,14 +250,21 @@ impl EffectKind {
     /// Switch the effect on in `e` with parameters `v` (one per `param_names`).
     pub fn apply(self, e: &mut Effects, v: &[f64]) {
         match self {
-            EffectKind::ImpactScatter => e.impact_scatter = Some(ImpactScatter { sigma_deg: v[0] }),
+            EffectKind::ImpactScatter => {
+                // keep a form set by a config (the calibration fits only sigma_deg)
+                let form = e.impact_scatter.map(|x| x.form).unwrap_or_default();
+                e.impact_scatter = Some(ImpactScatter { sigma_deg: v[0], form })
+            }
             EffectKind::LaunchSpread => e.launch_spread = Some(LaunchSpread { speed_spread: v[0], angle_sigma_deg: v[1] }),
             EffectKind::Polydisperse => {
                 // keep a size law set by a config (the calibration fits only sigma_ln)
                 let form = e.polydisperse.map(|p| p.form).unwrap_or_default();
                 e.polydisperse = Some(Polydisperse { sigma_ln: v[0], form })
             }
-            EffectKind::SledMotion => e.sled_motion = Some(SledMotion { delay_s: v[0], return_speed_m_s: v[1] }),
+            EffectKind::SledMotion => {
+                let direction = e.sled_motion.map(|x| x.direction).unwrap_or_default();
+                e.sled_motion = Some(SledMotion { delay_s: v[0], return_speed_m_s: v[1], direction })
+            }
             EffectKind::QuadraticDrag => e.quadratic_drag = Some(QuadraticDrag { diameter_m: v[0], density_kg_m3: v[1] }),
         }
     }

@@ -3,7 +3,8 @@
 
 use super::design::Design;
 use super::geometry::{Profile, V2};
-use super::scenario::PhysicsMode;
+use super::rng::{seed_word, uniform, DRAW_LAUNCH_POINT, PER_PARTICLE};
+use super::scenario::{LaunchPoints, PhysicsMode};
 use super::validity::Invalid;
 
 /// Halton points the listing samples (D.5 line 31-32: haltonset(2,'Skip',1), net(p, 2000)).
@@ -290,8 +291,9 @@ pub fn radical_inverse(mut i: u64, base: u64) -> f64 {
 /// Launch points (Eq. 4.37, listing lines 185-209): Halton bases 2 and 3 with the first
 /// point skipped, scaled to the polygon's bounding box, the first `n` inside it. The
 /// listing stops after 2000 candidates; the physical mode keeps drawing (deviation: the
-/// thesis's 2000 cannot seat 10 000 particles).
-pub fn launch_points(fill: &Fill, n: usize, mode: PhysicsMode) -> Result<Vec<V2>, Invalid> {
+/// thesis's 2000 cannot seat 10 000 particles). `LaunchPoints::Random` replaces the Halton
+/// candidates by independent uniform ones keyed by (seed, candidate).
+pub fn launch_points(fill: &Fill, n: usize, mode: PhysicsMode, sampling: LaunchPoints, seed: u64) -> Result<Vec<V2>, Invalid> {
     let (mut xmin, mut xmax, mut ymin, mut ymax) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
     for p in &fill.polygon {
         xmin = xmin.min(p[0]);
@@ -306,7 +308,14 @@ pub fn launch_points(fill: &Fill, n: usize, mode: PhysicsMode) -> Result<Vec<V2>
     let mut out = Vec::with_capacity(n);
     let mut i = 1u64;
     while out.len() < n && i <= limit {
-        let p = [xmin + (xmax - xmin) * radical_inverse(i, 2), ymin + (ymax - ymin) * radical_inverse(i, 3)];
+        let (u, v) = match sampling {
+            LaunchPoints::Halton => (radical_inverse(i, 2), radical_inverse(i, 3)),
+            LaunchPoints::Random => {
+                let w = seed_word(seed);
+                (uniform(w, i as u32, PER_PARTICLE, DRAW_LAUNCH_POINT), uniform(w, i as u32, PER_PARTICLE, DRAW_LAUNCH_POINT + 1))
+            }
+        };
+        let p = [xmin + (xmax - xmin) * u, ymin + (ymax - ymin) * v];
         let inside = match &fill.exact {
             Some(b) => b.contains(p),
             None => in_polygon(p, &fill.polygon),
@@ -392,7 +401,7 @@ mod tests {
         assert!(lo > -1e-12 || hi < 1e-12, "vertices on both sides: [{lo}, {hi}]");
         let deepest = lo.abs().max(hi.abs());
         assert!(deepest > 1e-3, "{deepest}");
-        for l in launch_points(&f, 200, PhysicsMode::Physical).unwrap() {
+        for l in launch_points(&f, 200, PhysicsMode::Physical, LaunchPoints::Halton, 0).unwrap() {
             let dd = f.depth(l);
             assert!(dd <= deepest + 1e-12, "{dd} > {deepest}");
         }

@@ -44,7 +44,7 @@ pub fn prepare(s: &Scenario, d: &Design) -> Result<Prepared, Invalid> {
     let profile = Profile::new(d, local, alpha_deg, s.sim.teeth);
     let launch_angle = (alpha_deg + offset_deg).to_radians();
     let fill = build_fill(&profile, s.environment.g, d, launch_angle, s.material.aor_deg, s.mode)?;
-    let launches = launch_points(&fill, s.sim.particles as usize, s.mode)?;
+    let launches = launch_points(&fill, s.sim.particles as usize, s.mode, s.sim.launch_points, s.sim.seed)?;
     let last = (s.sim.teeth - 1) as f64 * d.l_c;
     let base_length = match s.mode {
         PhysicsMode::Listing => last,

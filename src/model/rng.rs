@@ -52,6 +52,8 @@ pub const DRAW_SCATTER: u32 = 2; // and 3
 pub const DRAW_LAUNCH_SPEED: u32 = 4;
 pub const DRAW_LAUNCH_ANGLE: u32 = 5; // and 6
 pub const DRAW_SIZE: u32 = 7; // and 8
+/// Random launch points (`LaunchPoints::Random`): x and y of candidate i, keyed (i, PER_PARTICLE).
+pub const DRAW_LAUNCH_POINT: u32 = 9; // and 10
 pub const PER_PARTICLE: u32 = u32::MAX;
 
 /// Standard normal deviate from two keyed uniforms (Box-Muller).

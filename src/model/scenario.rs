@@ -84,6 +84,27 @@ pub struct SimSettings {
     pub rest_threshold: f64,
     /// Launch-angle offset added to α and the design's δ, degrees (erratum 10: 18.434°).
     pub launch_offset_deg: f64,
+    /// How the launch points fill the fill area (Eq. 4.37: Halton).
+    #[serde(default, skip_serializing_if = "LaunchPoints::is_halton")]
+    pub launch_points: LaunchPoints,
+}
+
+/// The launch points' sampling of the fill area.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LaunchPoints {
+    /// Halton bases 2 and 3 (Eq. 4.37, listing lines 185-209).
+    #[default]
+    Halton,
+    /// Independent uniform points from the counter-based generator (seeded by `sim.seed`):
+    /// a form for synthetic data that differs from the model's Halton points.
+    Random,
+}
+
+impl LaunchPoints {
+    fn is_halton(&self) -> bool {
+        *self == LaunchPoints::Halton
+    }
 }
 
 /// Constants of the performance model (3.4.3, 5.3.1, listing D.5/D.7/D.8).
@@ -196,6 +217,7 @@ impl Default for SimSettings {
             seed: 0,
             rest_threshold: 1e-4,
             launch_offset_deg: 18.434,
+            launch_points: LaunchPoints::Halton,
         }
     }
 }
