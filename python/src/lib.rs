@@ -22,7 +22,7 @@ use sawtooth::optim::sawtooth::{nonlinear_constraints, objectives, violation, CO
 
 fn value_error(e: anyhow::Error) -> PyErr {
     // the CLI prints `error: {e:#}`: the whole context chain on one line
-    PyValueError::new_err(format!("{e:#}"))
+    PyValueError::new_err(format!("{e:#}").trim_end().to_string())
 }
 
 fn json_to_py<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
