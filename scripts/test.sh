@@ -55,7 +55,9 @@ if ! .venv/bin/python -m pip --version >/dev/null 2>&1; then
 fi
 {
     .venv/bin/python -m pip install -q maturin pytest numpy pymoo pandas matplotlib &&
-        cargo build --release --locked --bin sawtooth &&
+        # the CLI the tests compare with: built by `cargo test --all-targets` above; a separate
+        # `cargo build` would resolve without the dev-dependencies' features and recompile wgpu
+        { [ -x target/release/sawtooth ] || cargo build --release --locked --bin sawtooth; } &&
         MATURIN_PEP517_ARGS="--locked" .venv/bin/python -m pip install -q ./python &&
         .venv/bin/python -m pytest -q -p no:cacheprovider python/tests
 } 2>&1 | tee "$pylog" || py_status=$?
