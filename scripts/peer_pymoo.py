@@ -63,10 +63,46 @@ def builtin(algorithm: str, a, seed: int, out: Path):
     return X, wall, int(c["evaluations"])
 
 
-def pymoo_run(name: str, a, seed: int, repair: bool = True, crn: bool = True):
+class WithReplacementTournament:
+    """The built-in optimiser's binary tournament: both contestants drawn with replacement;
+    constraint violation, then rank, then crowding decide (pymoo draws from permutations and
+    compares feasible pairs by dominance)."""
+
+    @staticmethod
+    def make():
+        from pymoo.core.selection import Selection
+
+        class _Sel(Selection):
+            def _do(self, problem, pop, n_select, n_parents, random_state=None, **kwargs):
+                rs = random_state if random_state is not None else np.random.default_rng()
+                n = n_select * n_parents
+                a = rs.integers(0, len(pop), n)
+                b = rs.integers(0, len(pop), n)
+                cv = pop.get("CV")[:, 0]
+                # infeasible individuals carry no rank/crowding in pymoo: CV decides for them
+                rank = np.array([np.inf if v is None else v for v in pop.get("rank")], dtype=float)
+                cd = np.array([0.0 if v is None else v for v in pop.get("crowding")], dtype=float)
+                win = np.where(cv[a] < cv[b], a, np.where(cv[b] < cv[a], b, -1))
+                tie = win < 0
+                key_a = np.stack([rank[a], -cd[a]], axis=1)
+                key_b = np.stack([rank[b], -cd[b]], axis=1)
+                a_better = (key_a[:, 0] < key_b[:, 0]) | ((key_a[:, 0] == key_b[:, 0]) & (key_a[:, 1] < key_b[:, 1]))
+                b_better = (key_b[:, 0] < key_a[:, 0]) | ((key_a[:, 0] == key_b[:, 0]) & (key_b[:, 1] < key_a[:, 1]))
+                coin = rs.random(n) < 0.5
+                win = np.where(tie, np.where(a_better, a, np.where(b_better, b, np.where(coin, a, b))), win)
+                return win.reshape(n_select, n_parents)
+
+        return _Sel()
+
+
+def pymoo_run(name: str, a, seed: int, repair: bool = True, crn: bool = True, dedup: bool = True, builtin_ops: bool = False):
     problem = SawtoothProblem(env="lunar", particles=a.particles, seed=seed, engine=a.engine, common_random_numbers=crn)
     repair = ChainRepair() if repair else None
-    kw = dict(pop_size=a.pop, n_offsprings=a.pop)
+    kw = dict(pop_size=a.pop, n_offsprings=a.pop, eliminate_duplicates=dedup)
+    if builtin_ops:
+        from pymoo.operators.mutation.pm import PM
+
+        kw.update(selection=WithReplacementTournament.make(), mutation=PM(prob=1.0, eta=20), eliminate_duplicates=False)
     if repair is not None:
         kw["repair"] = repair
     algo = NSGA2(**kw) if name == "nsga2" else SMSEMOA(**kw)
@@ -107,6 +143,7 @@ def main():
     p.add_argument("--engine", default="cpu")
     p.add_argument("--extras", action="store_true",
                    help="also pymoo NSGA2 without the chain repair, and with one frozen stream (no refresh per generation)")
+    p.add_argument("--only", default="", help="run only these optimisers (names as in the table, ';'-separated)")
     p.add_argument("--bin", type=Path, default=ROOT / "target" / "release" / "sawtooth")
     p.add_argument("--out", type=Path, default=ROOT / "runs" / "peer")
     a = p.parse_args()
@@ -121,6 +158,10 @@ def main():
     if a.extras:
         runners["pymoo NSGA2, no repair"] = lambda s: pymoo_run("nsga2", a, s, repair=False)
         runners["pymoo NSGA2, frozen streams"] = lambda s: pymoo_run("nsga2", a, s, crn=False)
+        runners["pymoo NSGA2, duplicates kept"] = lambda s: pymoo_run("nsga2", a, s, dedup=False)
+        runners["pymoo NSGA2, built-in's tournament and mutation"] = lambda s: pymoo_run("nsga2", a, s, builtin_ops=True)
+    if a.only:
+        runners = {k: v for k, v in runners.items() if k in a.only.split(";")}
     hv = HV(ref_point=REF)
     hv_zoom = HV(ref_point=REF_ZOOM)
     results = []
