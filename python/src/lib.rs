@@ -31,7 +31,20 @@ fn json_to_py<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound<'py
 }
 
 /// A complete problem statement apart from the design: the CLI's preset, config file and
-/// overrides, validated exactly as `sawtooth simulate` validates them.
+/// overrides, validated exactly as `sawtooth simulate` validates them (ValueError with the
+/// CLI's message).
+///
+/// Scenario(env=None, config=None, *, compat=None, alpha_deg=None, k_elastic=None,
+/// mu_fric=None, k_drag_per_s=None, aor_deg=None, material=None, particles=None, teeth=None,
+/// max_bounces=None, seed=None, launch_offset_deg=None, randomise=True, effects=None)
+///
+/// env: "lunar" (g 1.625 m/s^2, vacuum, lunar regolith) or "earth" (g 9.81 m/s^2, Stokes drag
+/// 5.439 1/s, quartz sand); config: TOML path (flags override it); compat: "listing";
+/// alpha_deg: conveyor angle, degrees; k_elastic: elastic normal COR (-); mu_fric: friction
+/// coefficient (-); k_drag_per_s: Stokes drag, 1/s (0 = vacuum); aor_deg: angle of repose,
+/// degrees; material: "lunar-regolith" | "quartz-sand" | "glass-beads"; particles per design;
+/// teeth; max_bounces; seed of the particle streams; launch_offset_deg: degrees; randomise:
+/// launch randomisation; effects: CLI specs such as ["impact-scatter=8"].
 #[pyclass(module = "sawtooth._sawtooth", name = "Scenario", frozen, from_py_object)]
 #[derive(Clone)]
 pub struct PyScenario {
@@ -205,7 +218,19 @@ fn designs_from(x: &PyReadonlyArray2<f64>) -> PyResult<Vec<[f64; 8]>> {
     Ok(out)
 }
 
-/// Evaluate designs as one engine batch (the GIL is released while it runs).
+/// evaluate(scenario, x, *, engine="cpu", seed=None, particles=None, feasible_only=False) -> dict
+///
+/// Evaluate the rows of x (float64, shape (n, 8): l_c_mm, l_a_mm, l_b_mm, r_mm, omega_deg,
+/// delta_deg, v0_m_s, a_m_s2) as one engine batch, the GIL released; every design sees the same
+/// particle streams (common random numbers). engine: "cpu" | "gpu" | "auto" | "listing".
+///
+/// Returns numpy arrays of length n (NaN where not simulated or invalid): f_stroke_hz,
+/// f_dynamic_hz (Hz), w_spec_j_kg (J/kg), m_dot_kg_s (kg/s), p_avg_w (W), stroke_m, d_avg_m,
+/// advance_m (m), n_wire, lost_fraction, unsettled_fraction, distribution (n, teeth: fraction
+/// of launched particles per tooth), valid, simulated, invalid_rule, invalid_message,
+/// constraints_mm (n, 7: CONSTRAINT_NAMES, met when <= CONSTRAINT_TOLERANCE mm), violation
+/// (mm, 0 = feasible), objectives (n, 2: the built-in optimiser's penalised f_stroke, W_spec);
+/// and engine, seed, particles. feasible_only: do not simulate designs with violation > 0.
 #[pyfunction]
 #[pyo3(signature = (scenario, x, *, engine="cpu", seed=None, particles=None, feasible_only=false))]
 fn evaluate<'py>(
@@ -308,8 +333,13 @@ fn evaluate<'py>(
     Ok(d)
 }
 
-/// One design with its particles (and optionally every flight): `simulate --json`'s object
-/// plus per-particle arrays.
+/// simulate(scenario, design=None, *, engine="cpu", trajectories=False) -> dict
+///
+/// One design (8 values in VARIABLES' units; default: the config's [design]): `sawtooth
+/// simulate --json`'s object (distribution, d_avg_m, lost_fraction, fill_area_mm2, performance
+/// {f_stroke_hz, m_dot_kg_s, w_spec_j_kg, p_avg_w, stroke_m, ...}) plus "particles" {state,
+/// x_m, y_m, bounces} and, with trajectories=True, "flights" {particle, bounce, x_m, y_m,
+/// vx_m_s, vy_m_s, t_s, state}: each flight's start (global m) and velocity (m/s).
 #[pyfunction]
 #[pyo3(signature = (scenario, design=None, *, engine="cpu", trajectories=false))]
 fn simulate<'py>(py: Python<'py>, scenario: &PyScenario, design: Option<Vec<f64>>, engine: &str, trajectories: bool) -> PyResult<Bound<'py, PyAny>> {
@@ -368,7 +398,12 @@ fn simulate<'py>(py: Python<'py>, scenario: &PyScenario, design: Option<Vec<f64>
     Ok(out)
 }
 
-/// Measured tooth masses (`data/validation/testN.csv` format), checked by `io::measured`.
+/// load_measured(path) -> dict
+///
+/// Measured tooth masses (data/validation/testN.csv format), checked by the library: path,
+/// provenance, teeth, run (ids), masses_g (runs, teeth; grams), input_mass_g (grams, NaN if not
+/// recorded), fractions (runs, teeth), mean_fractions, std_fractions, centre_of_mass_teeth,
+/// dispersion_teeth, recovery.
 #[pyfunction]
 fn load_measured<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
     let m = sawtooth::io::measured::load(&path).map_err(value_error)?;
