@@ -45,8 +45,8 @@ REF = np.array([2.0, 20000.0])  # (f_stroke Hz, W_spec J/kg), as generations.csv
 REF_ZOOM = np.array([0.04, 2000.0])
 
 
-def builtin(algorithm: str, a, seed: int, out: Path):
-    d = out / f"builtin-{algorithm}-s{seed}"
+def builtin(algorithm: str, a, seed: int, out: Path, selection: str = "deb"):
+    d = out / f"builtin-{algorithm}-{selection}-s{seed}"
     if d.exists():
         for f in d.iterdir():
             f.unlink()
@@ -55,6 +55,8 @@ def builtin(algorithm: str, a, seed: int, out: Path):
         "--generations", str(a.generations), "--particles", str(a.particles), "--seed", str(seed),
         "--final-particles", "100", "--replicates", "1", "--quiet", "--engine", a.engine, "--out", str(d),
     ]
+    if selection != "deb":
+        cmd += ["--selection", selection]
     t0 = time.perf_counter()
     subprocess.run(cmd, check=True, capture_output=True, text=True)
     wall = time.perf_counter() - t0
@@ -95,7 +97,8 @@ class WithReplacementTournament:
         return _Sel()
 
 
-def pymoo_run(name: str, a, seed: int, repair: bool = True, crn: bool = True, dedup: bool = True, builtin_ops: bool = False):
+def pymoo_run(name: str, a, seed: int, repair: bool = True, crn: bool = True, dedup: bool = True,
+              builtin_ops: bool = False, builtin_tournament: bool = False, builtin_mutation: bool = False):
     problem = SawtoothProblem(env="lunar", particles=a.particles, seed=seed, engine=a.engine, common_random_numbers=crn)
     repair = ChainRepair() if repair else None
     kw = dict(pop_size=a.pop, n_offsprings=a.pop, eliminate_duplicates=dedup)
@@ -103,6 +106,12 @@ def pymoo_run(name: str, a, seed: int, repair: bool = True, crn: bool = True, de
         from pymoo.operators.mutation.pm import PM
 
         kw.update(selection=WithReplacementTournament.make(), mutation=PM(prob=1.0, eta=20), eliminate_duplicates=False)
+    if builtin_tournament:
+        kw.update(selection=WithReplacementTournament.make())
+    if builtin_mutation:
+        from pymoo.operators.mutation.pm import PM
+
+        kw.update(mutation=PM(prob=1.0, eta=20))
     if repair is not None:
         kw["repair"] = repair
     algo = NSGA2(**kw) if name == "nsga2" else SMSEMOA(**kw)
@@ -152,6 +161,7 @@ def main():
     runners = {
         "built-in nsga2": lambda s: builtin("nsga2", a, s, a.out),
         "built-in matlab-like": lambda s: builtin("matlab-like", a, s, a.out),
+        "built-in nsga2, permutation selection": lambda s: builtin("nsga2", a, s, a.out, "permutation"),
         "pymoo NSGA2": lambda s: pymoo_run("nsga2", a, s),
         "pymoo SMS-EMOA": lambda s: pymoo_run("smsemoa", a, s),
     }
@@ -160,6 +170,8 @@ def main():
         runners["pymoo NSGA2, frozen streams"] = lambda s: pymoo_run("nsga2", a, s, crn=False)
         runners["pymoo NSGA2, duplicates kept"] = lambda s: pymoo_run("nsga2", a, s, dedup=False)
         runners["pymoo NSGA2, built-in's tournament and mutation"] = lambda s: pymoo_run("nsga2", a, s, builtin_ops=True)
+        runners["pymoo NSGA2, built-in's tournament"] = lambda s: pymoo_run("nsga2", a, s, builtin_tournament=True)
+        runners["pymoo NSGA2, built-in's mutation"] = lambda s: pymoo_run("nsga2", a, s, builtin_mutation=True)
     if a.only:
         runners = {k: v for k, v in runners.items() if k in a.only.split(";")}
     hv = HV(ref_point=REF)
