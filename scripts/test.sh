@@ -34,4 +34,38 @@ cargo test --release --locked --all-targets 2>&1 | tee "$log" || status=$?
 # target ran last, possibly one without tests).
 awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^failed/) f += $i } }
      END { printf "tests: %d passed, %d failed\n", p, f }' "$log"
+
+# --- Python package (issue 14) ---------------------------------------------------------
+# A virtual environment in .venv (git-ignored), the package installed from the repository
+# exactly as the README says (`pip install ./python`, maturin builds the abi3 wheel against
+# the locked Cargo.lock and the shared target/), then pytest. PYTHON picks the interpreter.
+PYTHON="${PYTHON:-python3}"
+py_status=0
+pylog=$(mktemp)
+trap 'rm -f "$log" "$pylog"' EXIT
+if ! .venv/bin/python -m pip --version >/dev/null 2>&1; then
+    rm -rf .venv
+    if ! "$PYTHON" -m venv .venv >/dev/null 2>&1; then
+        # Debian's system python needs python3-venv (ensurepip) for `-m venv`
+        echo "test.sh: $PYTHON -m venv failed; installing python3-venv"
+        rm -rf .venv
+        SUDO=""
+        if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+        $SUDO apt-get update -qq
+        DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq python3-venv python3-pip >/dev/null
+        "$PYTHON" -m venv .venv
+    fi
+fi
+{
+    .venv/bin/python -m pip install -q maturin pytest numpy pymoo pandas matplotlib &&
+        # the CLI the tests compare with: built by `cargo test --all-targets` above; a separate
+        # `cargo build` would resolve without the dev-dependencies' features and recompile wgpu
+        { [ -x target/release/sawtooth ] || cargo build --release --locked --bin sawtooth; } &&
+        MATURIN_PEP517_ARGS="--locked" .venv/bin/python -m pip install -q ./python &&
+        .venv/bin/python -m pytest -q -p no:cacheprovider python/tests
+} 2>&1 | tee "$pylog" || py_status=$?
+# pytest's last line, e.g. "23 passed in 9.1s" or "1 failed, 22 passed in 9.3s"
+awk '/ (passed|failed|error)/ && / in [0-9.]+s/ { p = 0; f = 0; for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p = $i; if ($(i+1) ~ /^(failed|errors?)/) f += $i } }
+     END { printf "python tests: %d passed, %d failed\n", p, f }' "$pylog"
+if [ "$py_status" -ne 0 ] && [ "$status" -eq 0 ]; then status=$py_status; fi
 exit $status

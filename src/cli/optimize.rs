@@ -11,7 +11,7 @@ use clap::Args;
 use super::args::{EngineArgs, ScenarioArgs};
 use crate::engine::make_engine_for;
 use crate::optim::front::print_picks;
-use crate::optim::nsga2::{Config, Mode};
+use crate::optim::nsga2::{Config, Mode, Selection};
 use crate::optim::runner::{read_manifest, run as run_optimisation, Algorithm, Manifest, RunOptions};
 
 /// GA settings shared by every command that optimises.
@@ -40,6 +40,10 @@ pub struct GaArgs {
     /// Save a checkpoint every N generations (always on Ctrl-C and at the end).
     #[arg(long, default_value_t = 1)]
     pub checkpoint_every: u64,
+    /// Mating selection: `deb` (Deb et al. 2002, the default) or `permutation` (pymoo's
+    /// NSGA-II tournaments; ahead of `deb` on the lunar problem, BENCHMARKS.md issue 14).
+    #[arg(long, value_enum, default_value = "deb")]
+    pub selection: Selection,
     /// No progress bar (logs one line per 10 generations instead).
     #[arg(long)]
     pub quiet: bool,
@@ -61,7 +65,7 @@ impl GaArgs {
             Algorithm::Nsga2 => Mode::Standard,
             Algorithm::MatlabLike => Mode::MatlabLike { pareto_fraction: 0.35, tol: self.tol, stall_generations: self.stall_generations },
         };
-        let config = Config { pop: self.pop, seed: scenario.sim.seed, max_generations: self.generations, mode, ..Config::default() };
+        let config = Config { pop: self.pop, seed: scenario.sim.seed, max_generations: self.generations, mode, selection: self.selection, ..Config::default() };
         Ok(Manifest {
             version: env!("CARGO_PKG_VERSION").to_string(),
             engine,

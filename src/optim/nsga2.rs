@@ -111,6 +111,30 @@ pub struct Config {
     pub mutation_eta: f64,
     /// Probability that a pair of parents is crossed at all.
     pub crossover_prob: f64,
+    /// How the binary tournaments draw and compare their contestants (issue 14's peer
+    /// comparison: `permutation` closes the gap to pymoo's NSGA-II on the lunar problem).
+    #[serde(default, skip_serializing_if = "Selection::is_deb")]
+    pub selection: Selection,
+}
+
+/// Mating selection of [`Config`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Selection {
+    /// Deb et al. (2002): both contestants drawn with replacement; constraint-domination,
+    /// then rank, then crowding.
+    #[default]
+    Deb,
+    /// pymoo's NSGA-II: contestants taken pairwise from random permutations of the
+    /// population (everyone competes equally often); constraint-domination (Pareto dominance
+    /// between feasible ones), then crowding.
+    Permutation,
+}
+
+impl Selection {
+    fn is_deb(&self) -> bool {
+        *self == Selection::Deb
+    }
 }
 
 impl Default for Config {
@@ -124,6 +148,7 @@ impl Default for Config {
             crossover_eta: 15.0,
             mutation_eta: 20.0,
             crossover_prob: 0.9,
+            selection: Selection::Deb,
         }
     }
 }
@@ -292,9 +317,33 @@ impl Nsga2 {
         let pop = &state.population;
         let rng = &mut state.rng;
         let mut kids = Vec::with_capacity(n);
+        // permutation selection: the contestants of every tournament this generation, drawn
+        // up front (two per parent, a parent per child)
+        let mut contestants: Vec<usize> = Vec::new();
+        if self.config.selection == Selection::Permutation {
+            let needed = 2 * (n + n % 2);
+            while contestants.len() < needed {
+                let mut perm: Vec<usize> = (0..pop.len()).collect();
+                // Fisher-Yates with the state's generator (fixed order: resumable)
+                for i in (1..perm.len()).rev() {
+                    let j = rng.random_range(0..=i);
+                    perm.swap(i, j);
+                }
+                contestants.extend(perm);
+            }
+        }
+        let mut next = 0usize;
+        let mut pick = |rng: &mut ChaCha8Rng| match self.config.selection {
+            Selection::Deb => tournament(pop, rng),
+            Selection::Permutation => {
+                let (a, b) = (contestants[next], contestants[next + 1]);
+                next += 2;
+                dominance_tournament(pop, a, b, rng)
+            }
+        };
         while kids.len() < n {
-            let a = tournament(pop, rng);
-            let b = tournament(pop, rng);
+            let a = pick(rng);
+            let b = pick(rng);
             let (mut c1, mut c2) = sbx(
                 &pop[a].x,
                 &pop[b].x,
@@ -702,6 +751,30 @@ fn tournament(pop: &[Individual], rng: &mut ChaCha8Rng) -> usize {
         .cmp(&ib.rank)
         .then_with(|| ib.crowding.total_cmp(&ia.crowding))
     {
+        Ordering::Less => a,
+        Ordering::Greater => b,
+        Ordering::Equal => {
+            if rng.random::<f64>() <= 0.5 {
+                a
+            } else {
+                b
+            }
+        }
+    }
+}
+
+/// pymoo's NSGA-II comparison (`comp_by_dom_and_crowding`): constraint-domination (the
+/// smaller violation between infeasible ones, Pareto dominance between feasible ones), then
+/// the larger crowding distance, then a coin.
+fn dominance_tournament(pop: &[Individual], a: usize, b: usize, rng: &mut ChaCha8Rng) -> usize {
+    let (ia, ib) = (&pop[a], &pop[b]);
+    if constrained_dominates(&ia.eval, &ib.eval) {
+        return a;
+    }
+    if constrained_dominates(&ib.eval, &ia.eval) {
+        return b;
+    }
+    match ib.crowding.total_cmp(&ia.crowding) {
         Ordering::Less => a,
         Ordering::Greater => b,
         Ordering::Equal => {

@@ -1,0 +1,116 @@
+"""sawtooth: the sawtooth-conveyor engine from Python.
+
+Units: SI everywhere except where a name says otherwise. A design is the thesis's eight
+variables in Table 5.3 units, in this order (see ``VARIABLES``)::
+
+    l_c_mm, l_a_mm, l_b_mm, r_mm, omega_deg, delta_deg, v0_m_s, a_m_s2
+
+Every function raises ``ValueError`` with the CLI's message for bad input (the field and the
+rule it breaks). The same scenario and seed give the same numbers as ``sawtooth simulate``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from typing import Any, Dict, Optional, Sequence, Union
+
+from ._sawtooth import (  # noqa: F401
+    CONSTRAINT_NAMES,
+    CONSTRAINT_TOLERANCE,
+    LOWER_BOUNDS,
+    UPPER_BOUNDS,
+    VARIABLES,
+    Scenario,
+    __version__,
+    _cli,
+    evaluate,
+    load_measured,
+    simulate,
+)
+
+__all__ = [
+    "Scenario",
+    "evaluate",
+    "simulate",
+    "load_measured",
+    "fit",
+    "diagnose",
+    "VARIABLES",
+    "LOWER_BOUNDS",
+    "UPPER_BOUNDS",
+    "CONSTRAINT_NAMES",
+    "CONSTRAINT_TOLERANCE",
+]
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+def _flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def _flags(options: Dict[str, Any]) -> list:
+    out = []
+    for key, value in options.items():
+        if value is None or value is False:
+            continue
+        if value is True:
+            out.append(_flag(key))
+        elif isinstance(value, (list, tuple)):
+            out += [_flag(key), ",".join(str(v) for v in value)]
+        elif isinstance(value, dict):
+            out += [_flag(key), ",".join(f"{k}={v}" for k, v in value.items())]
+        else:
+            out += [_flag(key), str(value)]
+    return out
+
+
+def fit(data: PathLike, setup: PathLike, **options: Any) -> Dict[str, Any]:
+    """Calibrate k_elastic, mu_fric (and k_drag, 1/s) against measured tooth masses.
+
+    Runs ``sawtooth fit --data DATA --setup SETUP --json`` in-process (the GIL released) and
+    returns its JSON object as a dict: ``params``, ``objective``, ``sse_percent2`` (%^2),
+    ``heldout``, ``uncertainty``, ``distribution``, ``metrics``. Keyword options are the
+    command's flags with underscores: ``params=["k_elastic", "mu_fric"]``, ``objective="sse"``,
+    ``pop``, ``generations``, ``particles``, ``seed``, ``engine``, ``holdout``, ``bootstrap``,
+    ``at={"k_elastic": 0.854, "mu_fric": 0.133}`` (score without fitting), ``out=DIR``.
+    """
+    args = ["fit", "--data", os.fspath(data), "--setup", os.fspath(setup), "--json"] + _flags(options)
+    return json.loads(_cli(args))
+
+
+def diagnose(
+    data: Union[PathLike, Sequence[PathLike]],
+    setup: Union[PathLike, Sequence[PathLike]],
+    out: Optional[PathLike] = None,
+    **options: Any,
+) -> Dict[str, Any]:
+    """Locate the sim-to-real gap and rank candidate effects (``sawtooth diagnose``).
+
+    ``data`` and ``setup`` are one path each or equal-length lists (one pair per condition).
+    Returns ``diagnosis.json``'s object as a dict (gaps in %^2). ``out`` receives report.md
+    and the SVG plots; without it they go to a temporary directory that is removed.
+    Keyword options are the command's flags with underscores (``effects``, ``seed``,
+    ``engine``, ``particles``, ``max_particles``, ``pop``, ``generations``, ``polish``,
+    ``normalise``, ``rescore_streams``, ``bootstrap``).
+    """
+    datas = [data] if isinstance(data, (str, os.PathLike)) else list(data)
+    setups = [setup] if isinstance(setup, (str, os.PathLike)) else list(setup)
+    args = ["diagnose"]
+    for d in datas:
+        args += ["--data", os.fspath(d)]
+    for s in setups:
+        args += ["--setup", os.fspath(s)]
+    tmp = None
+    if out is None:
+        tmp = tempfile.mkdtemp(prefix="sawtooth-diagnose-")
+        out = tmp
+    try:
+        text = _cli(args + ["--out", os.fspath(out), "--json"] + _flags(options))
+    finally:
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
+    return json.loads(text)

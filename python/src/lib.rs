@@ -1,0 +1,463 @@
+//! Python bindings of the sawtooth engine (module `sawtooth._sawtooth`, re-exported by the
+//! pure-Python package `sawtooth`). Thin by design: every setting goes through the CLI's own
+//! resolution (`cli::args::ScenarioArgs::resolve`), every design through the library's
+//! engines, `fit` and `diagnose` through the CLI commands themselves, so the numbers and the
+//! error messages are the CLI's. Errors become `ValueError` with the CLI's message.
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex, OnceLock};
+
+use clap::{Parser, ValueEnum};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use sawtooth::cli::args::{Compat, ScenarioArgs};
+use sawtooth::engine::{cpu_only_effects, evaluate_detailed, make_engine, make_engine_for, Engine, EngineKind};
+use sawtooth::model::design::{LOWER_BOUND_CLI, UPPER_BOUND_CLI, VARIABLES};
+use sawtooth::model::scenario::EnvPreset;
+use sawtooth::model::Design;
+use sawtooth::optim::sawtooth::{nonlinear_constraints, objectives, violation, CONSTRAINT_TOLERANCE};
+
+fn value_error(e: anyhow::Error) -> PyErr {
+    // the CLI prints `error: {e:#}`: the whole context chain on one line
+    PyValueError::new_err(format!("{e:#}").trim_end().to_string())
+}
+
+fn json_to_py<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
+    let text = serde_json::to_string(v).map_err(|e| value_error(e.into()))?;
+    py.import("json")?.call_method1("loads", (text,))
+}
+
+/// A complete problem statement apart from the design: the CLI's preset, config file and
+/// overrides, validated exactly as `sawtooth simulate` validates them (ValueError with the
+/// CLI's message).
+///
+/// Scenario(env=None, config=None, *, compat=None, alpha_deg=None, k_elastic=None,
+/// mu_fric=None, k_drag_per_s=None, aor_deg=None, material=None, particles=None, teeth=None,
+/// max_bounces=None, seed=None, launch_offset_deg=None, randomise=True, effects=None)
+///
+/// env: "lunar" (g 1.625 m/s^2, vacuum, lunar regolith) or "earth" (g 9.81 m/s^2, Stokes drag
+/// 5.439 1/s, quartz sand); config: TOML path (flags override it); compat: "listing";
+/// alpha_deg: conveyor angle, degrees; k_elastic: elastic normal COR (-); mu_fric: friction
+/// coefficient (-); k_drag_per_s: Stokes drag, 1/s (0 = vacuum); aor_deg: angle of repose,
+/// degrees; material: "lunar-regolith" | "quartz-sand" | "glass-beads"; particles per design;
+/// teeth; max_bounces; seed of the particle streams; launch_offset_deg: degrees; randomise:
+/// launch randomisation; effects: CLI specs such as ["impact-scatter=8"].
+#[pyclass(module = "sawtooth._sawtooth", name = "Scenario", frozen, from_py_object)]
+#[derive(Clone)]
+pub struct PyScenario {
+    inner: sawtooth::model::Scenario,
+    design: Option<Design>,
+}
+
+#[pymethods]
+impl PyScenario {
+    #[new]
+    #[pyo3(signature = (env=None, config=None, *, compat=None, alpha_deg=None, k_elastic=None, mu_fric=None,
+        k_drag_per_s=None, aor_deg=None, material=None, particles=None, teeth=None, max_bounces=None, seed=None,
+        launch_offset_deg=None, randomise=true, effects=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        env: Option<&str>,
+        config: Option<PathBuf>,
+        compat: Option<&str>,
+        alpha_deg: Option<f64>,
+        k_elastic: Option<f64>,
+        mu_fric: Option<f64>,
+        k_drag_per_s: Option<f64>,
+        aor_deg: Option<f64>,
+        material: Option<String>,
+        particles: Option<i64>,
+        teeth: Option<i64>,
+        max_bounces: Option<i64>,
+        seed: Option<i64>,
+        launch_offset_deg: Option<f64>,
+        randomise: bool,
+        effects: Option<Vec<String>>,
+    ) -> PyResult<Self> {
+        let env = match env {
+            None => None,
+            Some(e) => Some(EnvPreset::from_str(e, true).map_err(|_| PyValueError::new_err(format!("env: unknown environment `{e}` (known: lunar, earth)")))?),
+        };
+        let compat = match compat {
+            None | Some("physical") => None,
+            Some("listing") => Some(Compat::Listing),
+            Some(c) => return Err(PyValueError::new_err(format!("compat: unknown mode `{c}` (known: listing)"))),
+        };
+        let count = |name: &str, v: Option<i64>| -> PyResult<Option<u32>> {
+            match v {
+                None => Ok(None),
+                Some(n) if (0..=u32::MAX as i64).contains(&n) => Ok(Some(n as u32)),
+                Some(n) => Err(PyValueError::new_err(format!("{name} must be a whole number in [0, {}], got {n}", u32::MAX))),
+            }
+        };
+        let seed = match seed {
+            None => None,
+            Some(s) if s >= 0 => Some(s as u64),
+            Some(s) => return Err(PyValueError::new_err(format!("seed must be >= 0, got {s}"))),
+        };
+        let args = ScenarioArgs {
+            config,
+            env,
+            alpha: alpha_deg.map(|a| (a, a)),
+            k_elastic,
+            mu_fric,
+            k_drag: k_drag_per_s,
+            aor: aor_deg,
+            material,
+            particles: count("particles", particles)?,
+            teeth: count("teeth", teeth)?,
+            bounces: count("max_bounces", max_bounces)?,
+            seed,
+            launch_offset: launch_offset_deg,
+            no_randomise: !randomise,
+            compat,
+            effects: effects.unwrap_or_default(),
+        };
+        let (inner, design) = args.resolve().map_err(value_error)?;
+        Ok(PyScenario { inner, design })
+    }
+
+    /// Particles per design.
+    #[getter]
+    fn particles(&self) -> u32 {
+        self.inner.sim.particles
+    }
+    /// Seed of the counter-based particle streams.
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.inner.sim.seed
+    }
+    /// Simulated teeth.
+    #[getter]
+    fn teeth(&self) -> u32 {
+        self.inner.sim.teeth
+    }
+    /// The config file's [design] as the 8 variables (mm, mm, mm, mm, deg, deg, m/s, m/s^2), or None.
+    #[getter]
+    fn design<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.design.map(|d| d.to_cli_units().to_vec().into_pyarray(py))
+    }
+    /// Every setting as a dict (the library's field names; lengths in m, angles in degrees).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let v = serde_json::to_value(&self.inner).map_err(|e| value_error(e.into()))?;
+        json_to_py(py, &v)
+    }
+    /// A copy with other particle count and/or seed (validated like the constructor).
+    #[pyo3(signature = (*, particles=None, seed=None))]
+    fn replace(&self, particles: Option<u32>, seed: Option<u64>) -> PyResult<Self> {
+        let mut s = self.clone();
+        if let Some(p) = particles {
+            s.inner.sim.particles = p;
+        }
+        if let Some(v) = seed {
+            s.inner.sim.seed = v;
+        }
+        s.inner.validate().map_err(|e| PyValueError::new_err(format!("invalid setting: {e}")))?;
+        Ok(s)
+    }
+    fn __repr__(&self) -> String {
+        let s = &self.inner;
+        format!(
+            "Scenario(mode={:?}, g_m_s2={}, alpha_deg={}, k_drag_per_s={}, material={:?}, particles={}, teeth={}, seed={}, effects=[{}])",
+            s.mode,
+            s.environment.g,
+            s.environment.alpha_deg,
+            s.environment.k_drag.unwrap_or(0.0),
+            s.material.name,
+            s.sim.particles,
+            s.sim.teeth,
+            s.sim.seed,
+            s.effects.active().join(", ")
+        )
+    }
+}
+
+fn engine_kind(name: &str) -> PyResult<EngineKind> {
+    EngineKind::from_str(name, true).map_err(|_| PyValueError::new_err(format!("engine: unknown engine `{name}` (known: listing, cpu, gpu, auto)")))
+}
+
+/// GPU adapters take a while to open: one engine per kind per process. The CPU engines and
+/// the effect checks go through `make_engine_for` every call, as in the CLI.
+fn engine_for(kind: EngineKind, scenario: &sawtooth::model::Scenario) -> anyhow::Result<Arc<dyn Engine>> {
+    static CACHE: OnceLock<Mutex<Vec<(EngineKind, Arc<dyn Engine>)>>> = OnceLock::new();
+    if matches!(kind, EngineKind::Cpu | EngineKind::Listing) || !cpu_only_effects(&scenario.effects).is_empty() {
+        return Ok(Arc::from(make_engine_for(kind, scenario)?));
+    }
+    let mut cache = CACHE.get_or_init(Default::default).lock().unwrap_or_else(|p| p.into_inner());
+    if let Some((_, e)) = cache.iter().find(|(k, _)| *k == kind) {
+        return Ok(e.clone());
+    }
+    let e: Arc<dyn Engine> = Arc::from(make_engine(kind)?);
+    cache.push((kind, e.clone()));
+    Ok(e)
+}
+
+fn designs_from(x: &PyReadonlyArray2<f64>) -> PyResult<Vec<[f64; 8]>> {
+    let a = x.as_array();
+    if a.ncols() != 8 {
+        return Err(PyValueError::new_err(format!(
+            "X must have shape (n, 8): columns l_c_mm, l_a_mm, l_b_mm, r_mm, omega_deg, delta_deg, v0_m_s, a_m_s2; got {} columns",
+            a.ncols()
+        )));
+    }
+    let mut out = Vec::with_capacity(a.nrows());
+    for (i, row) in a.rows().into_iter().enumerate() {
+        let mut v = [0.0; 8];
+        for (j, x) in row.iter().enumerate() {
+            if !x.is_finite() {
+                let (name, unit) = VARIABLES[j];
+                return Err(PyValueError::new_err(format!("X[{i}, {j}]: design field `{name}` ({unit}) must be a finite number, got {x}")));
+            }
+            v[j] = *x;
+        }
+        out.push(v);
+    }
+    Ok(out)
+}
+
+/// evaluate(scenario, x, *, engine="cpu", seed=None, particles=None, feasible_only=False) -> dict
+///
+/// Evaluate the rows of x (float64, shape (n, 8): l_c_mm, l_a_mm, l_b_mm, r_mm, omega_deg,
+/// delta_deg, v0_m_s, a_m_s2) as one engine batch, the GIL released; every design sees the same
+/// particle streams (common random numbers). engine: "cpu" | "gpu" | "auto" | "listing".
+///
+/// Returns numpy arrays of length n (NaN where not simulated or invalid): f_stroke_hz,
+/// f_dynamic_hz (Hz), w_spec_j_kg (J/kg), m_dot_kg_s (kg/s), p_avg_w (W), stroke_m, d_avg_m,
+/// advance_m (m), n_wire, lost_fraction, unsettled_fraction, distribution (n, teeth: fraction
+/// of launched particles per tooth), valid, simulated, invalid_rule, invalid_message,
+/// constraints_mm (n, 7: CONSTRAINT_NAMES, met when <= CONSTRAINT_TOLERANCE mm), violation
+/// (mm, 0 = feasible), objectives (n, 2: the built-in optimiser's penalised f_stroke, W_spec);
+/// and engine, seed, particles. feasible_only: do not simulate designs with violation > 0.
+#[pyfunction]
+#[pyo3(signature = (scenario, x, *, engine="cpu", seed=None, particles=None, feasible_only=false))]
+fn evaluate<'py>(
+    py: Python<'py>,
+    scenario: &PyScenario,
+    x: PyReadonlyArray2<'py, f64>,
+    engine: &str,
+    seed: Option<u64>,
+    particles: Option<u32>,
+    feasible_only: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let kind = engine_kind(engine)?;
+    let xs = designs_from(&x)?;
+    let scenario = scenario.replace(particles, seed)?.inner;
+    let n = xs.len();
+    let teeth = scenario.sim.teeth as usize;
+    let violations: Vec<f64> = xs.iter().map(|v| violation(v)).collect();
+    let constraints: Vec<[f64; 7]> = xs
+        .iter()
+        .map(|v| {
+            let c = nonlinear_constraints(v);
+            [v[2] - v[3], v[3] - v[1], v[1] - v[0], c[0], c[1], c[2], c[3]]
+        })
+        .collect();
+    let simulate: Vec<usize> = (0..n).filter(|&i| !feasible_only || violations[i] == 0.0).collect();
+    let designs: Vec<Design> = simulate.iter().map(|&i| Design::from_cli_units(xs[i])).collect();
+    let eng = engine_for(kind, &scenario).map_err(value_error)?;
+    let results = py.detach(|| eng.evaluate(&scenario, &designs));
+
+    let nan = f64::NAN;
+    let (mut f_stroke, mut f_dyn, mut w_spec, mut m_dot, mut p_avg) = (vec![nan; n], vec![nan; n], vec![nan; n], vec![nan; n], vec![nan; n]);
+    let (mut d_avg, mut lost, mut advance, mut stroke, mut n_wire) = (vec![nan; n], vec![nan; n], vec![nan; n], vec![nan; n], vec![-1i64; n]);
+    let mut unsettled = vec![nan; n];
+    let mut dist = vec![nan; n * teeth];
+    let mut valid = vec![false; n];
+    let mut simulated = vec![false; n];
+    let mut objs = vec![nan; n * 2];
+    let mut rule = vec![String::new(); n];
+    let mut message = vec![String::new(); n];
+    for (k, r) in simulate.iter().zip(results) {
+        let i = *k;
+        simulated[i] = true;
+        let o = objectives(&r);
+        objs[2 * i] = o[0];
+        objs[2 * i + 1] = o[1];
+        match r {
+            Ok(e) => {
+                valid[i] = true;
+                let p = &e.performance;
+                f_stroke[i] = p.f_stroke_hz;
+                f_dyn[i] = p.f_dynamic_hz;
+                w_spec[i] = p.w_spec_j_kg.unwrap_or(nan);
+                m_dot[i] = p.m_dot_kg_s;
+                p_avg[i] = p.p_avg_w;
+                stroke[i] = p.stroke_m;
+                n_wire[i] = p.n_wire as i64;
+                d_avg[i] = e.sim.d_avg_m;
+                lost[i] = e.sim.lost_fraction;
+                advance[i] = e.sim.advance_m;
+                unsettled[i] = e.sim.unsettled_fraction;
+                dist[i * teeth..(i + 1) * teeth].copy_from_slice(&e.sim.distribution);
+            }
+            Err(invalid) => {
+                rule[i] = invalid.rule().to_string();
+                message[i] = invalid.to_string();
+            }
+        }
+    }
+    for i in 0..n {
+        if !simulated[i] {
+            rule[i] = "infeasible_not_simulated".to_string();
+            message[i] = format!("constraint violation {:.6} (sum of excesses beyond the tolerance {CONSTRAINT_TOLERANCE}); not simulated", violations[i]);
+        }
+    }
+    let arr2 = |v: Vec<f64>, cols: usize| PyArray2::from_owned_array(py, numpy::ndarray::Array2::from_shape_vec((n, cols), v).expect("shape"));
+    let d = PyDict::new(py);
+    d.set_item("f_stroke_hz", f_stroke.into_pyarray(py))?;
+    d.set_item("f_dynamic_hz", f_dyn.into_pyarray(py))?;
+    d.set_item("w_spec_j_kg", w_spec.into_pyarray(py))?;
+    d.set_item("m_dot_kg_s", m_dot.into_pyarray(py))?;
+    d.set_item("p_avg_w", p_avg.into_pyarray(py))?;
+    d.set_item("stroke_m", stroke.into_pyarray(py))?;
+    d.set_item("n_wire", n_wire.into_pyarray(py))?;
+    d.set_item("d_avg_m", d_avg.into_pyarray(py))?;
+    d.set_item("advance_m", advance.into_pyarray(py))?;
+    d.set_item("lost_fraction", lost.into_pyarray(py))?;
+    d.set_item("unsettled_fraction", unsettled.into_pyarray(py))?;
+    d.set_item("distribution", arr2(dist, teeth))?;
+    d.set_item("valid", valid.into_pyarray(py))?;
+    d.set_item("simulated", simulated.into_pyarray(py))?;
+    d.set_item("invalid_rule", PyList::new(py, rule)?)?;
+    d.set_item("invalid_message", PyList::new(py, message)?)?;
+    let flat: Vec<f64> = constraints.iter().flatten().copied().collect();
+    d.set_item("constraints_mm", arr2(flat, 7))?;
+    d.set_item("violation", violations.into_pyarray(py))?;
+    d.set_item("objectives", arr2(objs, 2))?;
+    d.set_item("engine", eng.backend())?;
+    d.set_item("seed", scenario.sim.seed)?;
+    d.set_item("particles", scenario.sim.particles)?;
+    Ok(d)
+}
+
+/// simulate(scenario, design=None, *, engine="cpu", trajectories=False) -> dict
+///
+/// One design (8 values in VARIABLES' units; default: the config's [design]): `sawtooth
+/// simulate --json`'s object (distribution, d_avg_m, lost_fraction, fill_area_mm2, performance
+/// {f_stroke_hz, m_dot_kg_s, w_spec_j_kg, p_avg_w, stroke_m, ...}) plus "particles" {state,
+/// x_m, y_m, bounces} and, with trajectories=True, "flights" {particle, bounce, x_m, y_m,
+/// vx_m_s, vy_m_s, t_s, state}: each flight's start (global m) and velocity (m/s).
+#[pyfunction]
+#[pyo3(signature = (scenario, design=None, *, engine="cpu", trajectories=false))]
+fn simulate<'py>(py: Python<'py>, scenario: &PyScenario, design: Option<Vec<f64>>, engine: &str, trajectories: bool) -> PyResult<Bound<'py, PyAny>> {
+    let kind = engine_kind(engine)?;
+    let design = match (design, scenario.design) {
+        (Some(v), _) => {
+            let text = v.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(",");
+            Design::parse_cli(&text).map_err(PyValueError::new_err)?
+        }
+        (None, Some(d)) => d,
+        (None, None) => {
+            return Err(PyValueError::new_err(
+                "no design: pass design=[l_c_mm, l_a_mm, l_b_mm, r_mm, omega_deg, delta_deg, v0_m_s, a_m_s2] or a config file with [design]",
+            ))
+        }
+    };
+    let s = scenario.inner.clone();
+    if trajectories && (s.effects.sled_motion.is_some() || s.effects.quadratic_drag.is_some()) {
+        return Err(PyValueError::new_err("trajectories redraw each flight as one closed-form arc; with the sled-motion or quadratic-drag effects that would be wrong, so they are not offered"));
+    }
+    if trajectories && matches!(kind, EngineKind::Gpu | EngineKind::Auto) {
+        return Err(PyValueError::new_err("trajectories record every flight, which only the CPU engines do: use engine=\"cpu\" or \"listing\""));
+    }
+    let eng = engine_for(kind, &s).map_err(value_error)?;
+    let det = py
+        .detach(|| evaluate_detailed(eng.as_ref(), &s, &design, trajectories))
+        .map_err(|invalid| PyValueError::new_err(format!("invalid design ({}): {invalid}", invalid.rule())))?;
+    let v = sawtooth::cli::simulate::to_json(&s, &design, eng.name(), &det);
+    let out = json_to_py(py, &v)?;
+    let d = out.cast::<PyDict>()?;
+    let ps = &det.particles;
+    let state = |st: sawtooth::model::ParticleState| match st {
+        sawtooth::model::ParticleState::Flying => "flying",
+        sawtooth::model::ParticleState::Resting => "resting",
+        sawtooth::model::ParticleState::Lost => "lost",
+    };
+    let pd = PyDict::new(py);
+    pd.set_item("state", PyList::new(py, ps.iter().map(|p| state(p.state)))?)?;
+    pd.set_item("x_m", ps.iter().map(|p| p.end[0]).collect::<Vec<_>>().into_pyarray(py))?;
+    pd.set_item("y_m", ps.iter().map(|p| p.end[1]).collect::<Vec<_>>().into_pyarray(py))?;
+    pd.set_item("bounces", ps.iter().map(|p| p.bounces as i64).collect::<Vec<_>>().into_pyarray(py))?;
+    d.set_item("particles", pd)?;
+    if trajectories {
+        let f = &det.flights;
+        let fd = PyDict::new(py);
+        fd.set_item("particle", f.iter().map(|r| r.particle as i64).collect::<Vec<_>>().into_pyarray(py))?;
+        fd.set_item("bounce", f.iter().map(|r| r.bounce as i64).collect::<Vec<_>>().into_pyarray(py))?;
+        fd.set_item("x_m", f.iter().map(|r| r.from[0]).collect::<Vec<_>>().into_pyarray(py))?;
+        fd.set_item("y_m", f.iter().map(|r| r.from[1]).collect::<Vec<_>>().into_pyarray(py))?;
+        fd.set_item("vx_m_s", f.iter().map(|r| r.vel[0]).collect::<Vec<_>>().into_pyarray(py))?;
+        fd.set_item("vy_m_s", f.iter().map(|r| r.vel[1]).collect::<Vec<_>>().into_pyarray(py))?;
+        fd.set_item("t_s", f.iter().map(|r| r.t).collect::<Vec<_>>().into_pyarray(py))?;
+        fd.set_item("state", PyList::new(py, f.iter().map(|r| state(r.state)))?)?;
+        d.set_item("flights", fd)?;
+    }
+    Ok(out)
+}
+
+/// load_measured(path) -> dict
+///
+/// Measured tooth masses (data/validation/testN.csv format), checked by the library: path,
+/// provenance, teeth, run (ids), masses_g (runs, teeth; grams), input_mass_g (grams, NaN if not
+/// recorded), fractions (runs, teeth), mean_fractions, std_fractions, centre_of_mass_teeth,
+/// dispersion_teeth, recovery.
+#[pyfunction]
+fn load_measured<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
+    let m = sawtooth::io::measured::load(&path).map_err(value_error)?;
+    let d = PyDict::new(py);
+    let n = m.runs.len();
+    let masses: Vec<f64> = m.runs.iter().flat_map(|r| r.teeth_g.iter().copied()).collect();
+    d.set_item("path", &m.path)?;
+    d.set_item("provenance", PyList::new(py, &m.provenance)?)?;
+    d.set_item("teeth", m.teeth)?;
+    d.set_item("run", PyList::new(py, m.runs.iter().map(|r| r.id.clone()))?)?;
+    d.set_item("masses_g", PyArray2::from_owned_array(py, numpy::ndarray::Array2::from_shape_vec((n, m.teeth), masses).expect("shape")))?;
+    d.set_item("input_mass_g", m.runs.iter().map(|r| r.input_mass_g.unwrap_or(f64::NAN)).collect::<Vec<_>>().into_pyarray(py))?;
+    let fr: Vec<f64> = m.fractions().into_iter().flatten().collect();
+    d.set_item("fractions", PyArray2::from_owned_array(py, numpy::ndarray::Array2::from_shape_vec((n, m.teeth), fr).expect("shape")))?;
+    d.set_item("mean_fractions", m.mean_fractions().into_pyarray(py))?;
+    d.set_item("std_fractions", m.std_fractions().into_pyarray(py))?;
+    let (ex, sx) = m.centre_and_dispersion();
+    d.set_item("centre_of_mass_teeth", ex)?;
+    d.set_item("dispersion_teeth", sx)?;
+    d.set_item("recovery", m.recovery())?;
+    Ok(d)
+}
+
+/// Run a CLI command in-process (`["fit", "--data", ...]`), GIL released; returns its stdout.
+/// `fit` and `diagnose` go through here so they stay exactly the CLI's commands while their
+/// internals change.
+#[pyfunction]
+fn _cli(py: Python<'_>, args: Vec<String>) -> PyResult<String> {
+    let argv = std::iter::once("sawtooth".to_string()).chain(args);
+    let cli = sawtooth::cli::Cli::try_parse_from(argv).map_err(|e| PyValueError::new_err(e.render().to_string().trim().to_string()))?;
+    let (result, out) = py.detach(move || {
+        let mut out: Vec<u8> = Vec::new();
+        let r = sawtooth::cli::run(cli, &mut out);
+        (r, out)
+    });
+    let code = result.map_err(value_error)?;
+    if code != std::process::ExitCode::SUCCESS {
+        return Err(PyValueError::new_err(format!("the command ended with {code:?}: {}", String::from_utf8_lossy(&out))));
+    }
+    String::from_utf8(out).map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+#[pymodule]
+fn _sawtooth(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyScenario>()?;
+    m.add_function(wrap_pyfunction!(evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(load_measured, m)?)?;
+    m.add_function(wrap_pyfunction!(_cli, m)?)?;
+    m.add("VARIABLES", ["l_c_mm", "l_a_mm", "l_b_mm", "r_mm", "omega_deg", "delta_deg", "v0_m_s", "a_m_s2"])?;
+    m.add("LOWER_BOUNDS", LOWER_BOUND_CLI.to_vec())?;
+    m.add("UPPER_BOUNDS", UPPER_BOUND_CLI.to_vec())?;
+    m.add("CONSTRAINT_TOLERANCE", CONSTRAINT_TOLERANCE)?;
+    m.add("CONSTRAINT_NAMES", ["l_b_le_r", "r_le_l_a", "l_a_le_l_c", "c1_catch_reaches_peak", "c2_foot_within_pitch", "c3_foot_after_start", "c4_ramp_cut"])?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
