@@ -75,7 +75,9 @@ def fit(data: PathLike, setup: PathLike, **options: Any) -> Dict[str, Any]:
     returns its JSON object as a dict: ``params``, ``objective``, ``sse_percent2`` (%^2),
     ``heldout``, ``uncertainty``, ``distribution``, ``metrics``. Keyword options are the
     command's flags with underscores: ``params=["k_elastic", "mu_fric"]``, ``objective="sse"``,
-    ``pop``, ``generations``, ``particles``, ``seed``, ``engine``, ``holdout``, ``bootstrap``,
+    ``pop``, ``generations``, ``polish``, ``particles`` (default: from the data),
+    ``max_particles``, ``normalise="loaded"|"recovered"``, ``seed``, ``engine``, ``holdout``,
+    ``bootstrap``,
     ``at={"k_elastic": 0.854, "mu_fric": 0.133}`` (score without fitting), ``out=DIR``.
     """
     args = ["fit", "--data", os.fspath(data), "--setup", os.fspath(setup), "--json"] + _flags(options)
