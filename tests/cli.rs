@@ -73,6 +73,9 @@ fn bad_input_names_the_field_and_exits_2() {
     assert_bad_input(&["simulate", "--design", LUNAR_C, "--particles", "0"], "sim.particles");
     assert_bad_input(&["simulate", "--design", LUNAR_C, "--env", "mars"], "mars");
     assert_bad_input(&["simulate", "--design", LUNAR_C, "--material", "cheese"], "cheese");
+    // the figure is SVG: a .png name is refused rather than filled with SVG bytes
+    assert_bad_input(&["simulate", "--design", LUNAR_C, "--particles", "8", "--plot", "/tmp/sawtooth-never-written.png"], ".svg");
+    assert!(!std::path::Path::new("/tmp/sawtooth-never-written.png").exists());
     assert_bad_input(&["simulate"], "no design");
     assert_bad_input(&["simulate", "--config", "/nonexistent/x.toml"], "/nonexistent/x.toml");
 }

@@ -317,8 +317,12 @@ fn bad_input_is_named_with_exit_2() {
     let text = std::fs::read_to_string(setup("test1")).unwrap().replace("motion_delay_s = 0.0", "motion_delay_s = -1.0");
     std::fs::write(&bad_motion, text).unwrap();
     let bad_motion = bad_motion.to_str().unwrap().to_string();
-    let cases: [(Vec<&str>, &str); 5] = [
+    let cases: [(Vec<&str>, &str); 7] = [
         (vec!["--data", &data, "--setup", &bad_motion], "measurement.motion_delay_s must lie in [0, 100]"),
+        (vec!["--data", &data, "--setup", s3, "--rescore-streams", "5000"], "at most"),
+        // good input, but --out holds someone else's file (bad_motion.toml): refused before
+        // any simulation
+        (vec!["--data", &data, "--setup", s3], "holds files"),
         (vec!["--data", &data, "--data", &data, "--setup", s3], "--setup"),
         (vec!["--data", &data, "--setup", s3, "--effects", "spin"], "unknown effect `spin`"),
         (vec!["--data", &data, "--setup", s3, "--pop", "3"], "--pop must be >= 5"),

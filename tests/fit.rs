@@ -327,6 +327,8 @@ fn bad_input_exits_2_naming_the_field() {
     run(&["--params", "k_drag,k_drag"], &["--params", "twice"]);
     run(&["--pop", "4"], &["--pop", ">= 5"]);
     run(&["--max-particles", "10"], &["--max-particles", ">= 1000"]);
+    run(&["--pop", "1000000000"], &["--pop", "at most"]);
+    run(&["--holdout", "0", "--max-particles", "100000000"], &["--max-particles", "at most"]);
     run(&["--particles", "0"], &["--particles", ">= 1"]);
     run(&["--holdout", "10"], &["--holdout", "number of runs", "10"]);
     run(&["--objective", "mae"], &["--objective"]);

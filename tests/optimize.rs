@@ -81,6 +81,13 @@ fn optimize_rejects_bad_settings() {
     let o = Command::new(bin()).args(["optimize", "--pop", "2", "--out", out.to_str().unwrap(), "--quiet"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--pop"));
+    // sizes that are typos are refused before any allocation or work, naming the flag
+    for (flag, value) in [("--pop", "1000000000"), ("--final-particles", "100000000"), ("--replicates", "5000"), ("--generations", "9999999999")] {
+        let o = Command::new(bin()).args(["optimize", flag, value, "--out", out.to_str().unwrap(), "--quiet"]).output().unwrap();
+        assert_eq!(o.status.code(), Some(2), "{flag} {value}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(flag) && err.contains("at most"), "{flag}: {err}");
+    }
     let o = Command::new(bin()).args(["optimize", "--resume", "--out", out.to_str().unwrap()]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("run.toml"));

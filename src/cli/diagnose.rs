@@ -101,6 +101,18 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     if a.bootstrap < 2 {
         bail!("--bootstrap must be >= 2, got {}", a.bootstrap);
     }
+    let (pop_max, boot_max, parts_max, streams_max) = (10_000, 100_000, 10_000_000, 1000);
+    if a.pop > pop_max || a.bootstrap > boot_max || a.particles.unwrap_or(a.max_particles) > parts_max || a.max_particles > parts_max || a.rescore_streams > streams_max {
+        bail!(
+            "--pop, --bootstrap and --rescore-streams must be at most {pop_max}, {boot_max} and {streams_max}, --particles and \
+             --max-particles at most {parts_max} (got {}, {}, {}, {}, {})",
+            a.pop,
+            a.bootstrap,
+            a.rescore_streams,
+            a.particles.map_or("-".to_string(), |p| p.to_string()),
+            a.max_particles
+        );
+    }
     let mut conditions: Vec<Condition> = Vec::with_capacity(a.data.len());
     for (data, setup) in a.data.iter().zip(&a.setup) {
         let mut name = stem(data);

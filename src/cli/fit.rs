@@ -98,6 +98,17 @@ pub fn run(a: FitArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     if a.max_particles < 1000 {
         bail!("--max-particles must be >= 1000, got {}", a.max_particles);
     }
+    let (pop_max, boot_max, parts_max) = (10_000, 10_000, 10_000_000);
+    if a.pop > pop_max || a.bootstrap > boot_max || a.particles.unwrap_or(a.max_particles) > parts_max || a.max_particles > parts_max {
+        bail!(
+            "--pop and --bootstrap must be at most {pop_max} and {boot_max}, --particles and --max-particles at most {parts_max} \
+             (got {}, {}, {}, {})",
+            a.pop,
+            a.bootstrap,
+            a.particles.map_or("-".to_string(), |p| p.to_string()),
+            a.max_particles
+        );
+    }
     let condition = measured_condition::load(&a.data, &a.setup, stem(&a.data), a.normalise, a.seed)?;
     let n = condition.runs.runs.len();
     if a.holdout >= n {

@@ -14,6 +14,13 @@ use crate::optim::front::print_picks;
 use crate::optim::nsga2::{Config, Mode, Selection};
 use crate::optim::runner::{read_manifest, run as run_optimisation, Algorithm, Manifest, RunOptions};
 
+/// Largest population, generation count, particle count and replicate count the GA flags
+/// accept.
+pub const MAX_POP: usize = 100_000;
+pub const MAX_GENERATIONS: u64 = 1_000_000;
+pub const MAX_PARTICLES: u32 = 10_000_000;
+pub const MAX_REPLICATES: u32 = 1000;
+
 /// GA settings shared by every command that optimises.
 #[derive(Debug, Clone, Args)]
 pub struct GaArgs {
@@ -55,11 +62,26 @@ impl GaArgs {
         if self.pop < 4 {
             bail!("--pop must be at least 4, got {}", self.pop);
         }
+        // Sizes beyond these are typos, not runs: a population of a billion needs tens of GB
+        // before the first generation, a re-evaluation beyond sim.particles' bound seats no
+        // grain and would leave an empty front.
+        if self.pop > MAX_POP {
+            bail!("--pop must be at most {MAX_POP} (one generation is one engine batch of that many designs), got {}", self.pop);
+        }
+        if self.generations > MAX_GENERATIONS {
+            bail!("--generations must be at most {MAX_GENERATIONS}, got {}", self.generations);
+        }
         if !(self.tol > 0.0 && self.tol.is_finite()) {
             bail!("--tol must be a positive number, got {}", self.tol);
         }
         if self.final_particles == 0 || self.replicates == 0 {
             bail!("--final-particles and --replicates must be at least 1");
+        }
+        if self.final_particles > MAX_PARTICLES {
+            bail!("--final-particles must be at most {MAX_PARTICLES} (the bound of sim.particles), got {}", self.final_particles);
+        }
+        if self.replicates > MAX_REPLICATES {
+            bail!("--replicates must be at most {MAX_REPLICATES}, got {}", self.replicates);
         }
         let mode = match self.algorithm {
             Algorithm::Nsga2 => Mode::Standard,

@@ -40,6 +40,12 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         (None, Some(d)) => d,
         (None, None) => bail!("no design: pass --design l_c,l_a,l_b,r,omega_deg,delta_deg,v0,a or a config file with [design]"),
     };
+    if let Some(p) = &a.plot {
+        // the figure is SVG; a .png name would get SVG bytes under the wrong extension
+        if !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg")) {
+            bail!("--plot {}: the figure is written as SVG; give a file name ending in .svg", p.display());
+        }
+    }
     let trace = a.trajectories.is_some() || a.plot.is_some();
     if trace && (scenario.effects.sled_motion.is_some() || scenario.effects.quadratic_drag.is_some()) {
         bail!("--trajectories and --plot redraw each flight as one closed-form arc; with the sled-motion or quadratic-drag effects that would be wrong, so they are not offered");
