@@ -251,7 +251,7 @@ pub fn to_markdown(d: &Diagnosis) -> String {
                 let _ = writeln!(
                     s,
                     "| {} | {} | {} | {} {} | {} | {} {} |",
-                    if j < teeth { format!("{}", j + 1) } else { "lost".into() },
+                    if j < teeth { format!("{}", j + 1) } else { c.last_bin_label().into() },
                     f(100.0 * g.measured[j], 2),
                     f(100.0 * g.before[j], 2),
                     f(100.0 * (g.before[j] - g.measured[j]), 2),
@@ -285,7 +285,7 @@ pub fn to_markdown(d: &Diagnosis) -> String {
         for (ci, (c, w)) in d.conditions.iter().zip(&d.where_).enumerate() {
             let teeth = c.teeth();
             let idx: Vec<usize> = (0..w.shown_teeth).chain(std::iter::once(teeth)).collect();
-            let heads: Vec<String> = idx.iter().map(|j| if *j < w.shown_teeth { format!("tooth {}", j + 1) } else { "lost".into() }).collect();
+            let heads: Vec<String> = idx.iter().map(|j| if *j < w.shown_teeth { format!("tooth {}", j + 1) } else { c.last_bin_label().into() }).collect();
             let row = |label: &str, bins: &[f64]| format!("| {label} | {} |", idx.iter().map(|j| f(100.0 * bins[*j], 2)).collect::<Vec<_>>().join(" | "));
             let _ = writeln!(s, "{}: % per tooth (fits on all runs)\n", c.name);
             let _ = writeln!(s, "| model | {} |", heads.join(" | "));
@@ -490,7 +490,7 @@ pub fn distributions_svg(d: &Diagnosis) -> String {
         let sum = &w.measured_summary;
         let hi = idx
             .iter()
-            .flat_map(|&j| [g.measured[j], g.before[j], g.after[j], if j < teeth { sum.max[j] } else { 0.0 }])
+            .flat_map(|&j| [g.measured[j], g.before[j], g.after[j], sum.max.get(j).copied().unwrap_or(0.0)])
             .filter(|v| v.is_finite())
             .fold(0.0f64, f64::max)
             * 100.0
@@ -506,11 +506,12 @@ pub fn distributions_svg(d: &Diagnosis) -> String {
                 let y = fr.y(100.0 * v);
                 let _ = writeln!(s, r##"<rect x="{x:.1}" y="{y:.1}" width="{bw:.1}" height="{:.1}" fill="{colour}"/>"##, fr.y0 + fr.h - y);
             }
-            if j < teeth && j < sum.min.len() && sum.min[j].is_finite() && sum.max[j].is_finite() {
+            // the runs' spread, the last bin's too (what each run did not recover)
+            if j < sum.min.len() && sum.min[j].is_finite() && sum.max[j].is_finite() {
                 let x = xc - bw;
                 let _ = writeln!(s, r##"<line x1="{x:.1}" y1="{:.1}" x2="{x:.1}" y2="{:.1}" stroke="#000"/>"##, fr.y(100.0 * sum.min[j]), fr.y(100.0 * sum.max[j]));
             }
-            let label = if j < teeth { format!("{}", j + 1) } else { "lost".into() };
+            let label = if j < teeth { format!("{}", j + 1) } else { c.last_bin_label().into() };
             let _ = writeln!(s, r##"<text x="{xc:.1}" y="{:.1}" font-size="11" text-anchor="middle">{label}</text>"##, fr.y0 + fr.h + 16.0);
         }
         let _ = writeln!(s, r##"<text x="{:.1}" y="{:.1}" font-size="11" text-anchor="middle">tooth</text>"##, fr.x0 + fr.w / 2.0, fr.y0 + fr.h + 32.0);
