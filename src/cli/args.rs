@@ -157,3 +157,65 @@ pub fn parse_alpha(v: &str) -> Result<(f64, f64), String> {
     }
     Ok((a, b))
 }
+
+/// How hard `fit` and `diagnose` work: the calibration engine's flags, one definition for
+/// both commands ([`crate::calibrate::Effort`]).
+#[derive(Debug, Clone, Args)]
+pub struct EffortArgs {
+    /// Particles per simulation at the full budget (the same streams for every candidate);
+    /// default: what the data call for (Monte-Carlo variance per tooth at most a quarter of
+    /// the measured mean's), up to --max-particles.
+    #[arg(long)]
+    pub particles: Option<u32>,
+    /// The most particles per simulation the data may call for.
+    #[arg(long, default_value_t = 12_000)]
+    pub max_particles: u32,
+    /// Differential-evolution population per model (>= 5), screening at 1/8 of the particles.
+    #[arg(long, default_value_t = 20)]
+    pub pop: usize,
+    /// Differential-evolution generations per model.
+    #[arg(long, default_value_t = 20)]
+    pub generations: usize,
+    /// Compass-search iterations polishing each fit (and each bootstrap refit of `fit`) at
+    /// the full budget.
+    #[arg(long, default_value_t = 12)]
+    pub polish: usize,
+}
+
+impl EffortArgs {
+    /// The flags' own rules, checked before anything is read or simulated.
+    pub fn validate(&self) -> anyhow::Result<()> {
+        const POP_MAX: usize = 10_000;
+        const PARTICLES_MAX: u32 = 10_000_000;
+        if self.pop < 5 {
+            bail!("--pop must be >= 5, got {}", self.pop);
+        }
+        if self.pop > POP_MAX {
+            bail!("--pop must be at most {POP_MAX}, got {}", self.pop);
+        }
+        if self.particles == Some(0) {
+            bail!("--particles must be >= 1, got 0");
+        }
+        if let Some(p) = self.particles.filter(|p| *p > PARTICLES_MAX) {
+            bail!("--particles must be at most {PARTICLES_MAX}, got {p}");
+        }
+        if self.max_particles < 1000 {
+            bail!("--max-particles must be >= 1000, got {}", self.max_particles);
+        }
+        if self.max_particles > PARTICLES_MAX {
+            bail!("--max-particles must be at most {PARTICLES_MAX}, got {}", self.max_particles);
+        }
+        Ok(())
+    }
+
+    pub fn effort(&self, seed: u64) -> crate::calibrate::Effort {
+        crate::calibrate::Effort {
+            particles: self.particles,
+            max_particles: self.max_particles,
+            pop: self.pop,
+            generations: self.generations,
+            polish: self.polish,
+            seed,
+        }
+    }
+}

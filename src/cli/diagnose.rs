@@ -9,9 +9,9 @@ use std::process::ExitCode;
 use anyhow::{bail, Context as _};
 use clap::Args;
 
-use crate::calibrate::Normalise;
-use crate::calibrate::Effort;
+use super::args::EffortArgs;
 use super::measured_condition::{self, stem};
+use crate::calibrate::Normalise;
 use crate::diagnose::diagnose::{diagnose, parse_effects, to_json, Condition, Settings};
 use crate::diagnose::render;
 use crate::engine::{make_engine, EngineKind};
@@ -37,23 +37,8 @@ pub struct DiagnoseArgs {
     /// Particle engine for the fits: cpu, gpu or auto (the listing port has no effects).
     #[arg(long, value_enum, default_value = "cpu")]
     pub engine: EngineKind,
-    /// Particles per simulation at the full budget (the same streams for every candidate);
-    /// default: what the data call for (Monte-Carlo variance per tooth at most a quarter of
-    /// the measured mean's), up to --max-particles.
-    #[arg(long)]
-    pub particles: Option<u32>,
-    /// The most particles per simulation the data may call for.
-    #[arg(long, default_value_t = 12_000)]
-    pub max_particles: u32,
-    /// Differential-evolution population per model (>= 5), screening at 1/8 of the particles.
-    #[arg(long, default_value_t = 20)]
-    pub pop: usize,
-    /// Differential-evolution generations per model.
-    #[arg(long, default_value_t = 20)]
-    pub generations: usize,
-    /// Compass-search iterations polishing each fit at the full budget.
-    #[arg(long, default_value_t = 12)]
-    pub polish: usize,
+    #[command(flatten)]
+    pub effort: EffortArgs,
     /// What the compared fractions are fractions of: `loaded` (the input mass: the weighed
     /// teeth plus a "not recovered" bin; the default when every run records input_mass) or
     /// `recovered` (listing D.4: the weighed teeth's sum).
@@ -86,32 +71,20 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     if a.engine == EngineKind::Listing {
         bail!("--engine listing: the effects are in the cpu and gpu engines only; use --engine cpu or auto");
     }
-    if a.particles == Some(0) {
-        bail!("--particles must be >= 1, got 0");
-    }
-    if a.max_particles < 1000 {
-        bail!("--max-particles must be >= 1000, got {}", a.max_particles);
-    }
-    if a.pop < 5 {
-        bail!("--pop must be >= 5, got {}", a.pop);
-    }
+    a.effort.validate()?;
     if a.rescore_streams < 1 {
         bail!("--rescore-streams must be >= 1, got 0");
     }
     if a.bootstrap < 2 {
         bail!("--bootstrap must be >= 2, got {}", a.bootstrap);
     }
-    let (pop_max, boot_max, parts_max, streams_max) = (10_000, 100_000, 10_000_000, 1000);
-    if a.pop > pop_max || a.bootstrap > boot_max || a.particles.unwrap_or(a.max_particles) > parts_max || a.max_particles > parts_max || a.rescore_streams > streams_max {
-        bail!(
-            "--pop, --bootstrap and --rescore-streams must be at most {pop_max}, {boot_max} and {streams_max}, --particles and \
-             --max-particles at most {parts_max} (got {}, {}, {}, {}, {})",
-            a.pop,
-            a.bootstrap,
-            a.rescore_streams,
-            a.particles.map_or("-".to_string(), |p| p.to_string()),
-            a.max_particles
-        );
+    const BOOTSTRAP_MAX: usize = 100_000;
+    const STREAMS_MAX: usize = 1000;
+    if a.bootstrap > BOOTSTRAP_MAX {
+        bail!("--bootstrap must be at most {BOOTSTRAP_MAX}, got {}", a.bootstrap);
+    }
+    if a.rescore_streams > STREAMS_MAX {
+        bail!("--rescore-streams must be at most {STREAMS_MAX}, got {}", a.rescore_streams);
     }
     let mut conditions: Vec<Condition> = Vec::with_capacity(a.data.len());
     for (data, setup) in a.data.iter().zip(&a.setup) {
@@ -146,14 +119,7 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let engine = make_engine(a.engine)?;
     let settings = Settings {
         effects,
-        effort: Effort {
-            particles: a.particles,
-            max_particles: a.max_particles,
-            pop: a.pop,
-            generations: a.generations,
-            polish: a.polish,
-            seed,
-        },
+        effort: a.effort.effort(seed),
         rescore_streams: a.rescore_streams,
         bootstrap: a.bootstrap,
     };

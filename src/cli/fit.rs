@@ -9,9 +9,9 @@ use std::process::ExitCode;
 use anyhow::{bail, Context as _};
 use clap::Args;
 
-use super::args::EngineArgs;
+use super::args::{EffortArgs, EngineArgs};
 use super::measured_condition::{self, stem};
-use crate::calibrate::{shared_params, Effort, Normalise};
+use crate::calibrate::{shared_params, Normalise};
 use crate::engine::make_engine;
 use crate::fit::report::{self, Meta};
 use crate::fit::{parse_assignments, parse_params, FitSettings, ObjectiveKind};
@@ -32,24 +32,8 @@ pub struct FitArgs {
     /// What the solver minimises.
     #[arg(long, value_enum, default_value = "sse")]
     pub objective: ObjectiveKind,
-    /// Differential-evolution population (>= 5), screening at 1/8 of the particles.
-    #[arg(long, default_value_t = 20)]
-    pub pop: usize,
-    /// Differential-evolution generations.
-    #[arg(long, default_value_t = 20)]
-    pub generations: usize,
-    /// Compass-search iterations polishing the fit (and each bootstrap refit) at the full
-    /// budget.
-    #[arg(long, default_value_t = 12)]
-    pub polish: usize,
-    /// Particles per simulation at the full budget (the same streams for every candidate);
-    /// default: what the data call for (Monte-Carlo variance per tooth at most a quarter of
-    /// the measured mean's), up to --max-particles.
-    #[arg(long)]
-    pub particles: Option<u32>,
-    /// The most particles per simulation the data may call for.
-    #[arg(long, default_value_t = 12_000)]
-    pub max_particles: u32,
+    #[command(flatten)]
+    pub effort: EffortArgs,
     /// What the compared fractions are fractions of: `loaded` (the input mass: the weighed
     /// teeth plus a "not recovered" bin; the default when every run records input_mass) or
     /// `recovered` (listing D.4: the weighed teeth's sum, plus a lost bin).
@@ -89,25 +73,10 @@ pub fn run(a: FitArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         (None, Some(list)) => (Some(parse_params(list)?), None),
         (None, None) => (None, None),
     };
-    if a.pop < 5 {
-        bail!("--pop must be >= 5, got {}", a.pop);
-    }
-    if a.particles == Some(0) {
-        bail!("--particles must be >= 1, got 0");
-    }
-    if a.max_particles < 1000 {
-        bail!("--max-particles must be >= 1000, got {}", a.max_particles);
-    }
-    let (pop_max, boot_max, parts_max) = (10_000, 10_000, 10_000_000);
-    if a.pop > pop_max || a.bootstrap > boot_max || a.particles.unwrap_or(a.max_particles) > parts_max || a.max_particles > parts_max {
-        bail!(
-            "--pop and --bootstrap must be at most {pop_max} and {boot_max}, --particles and --max-particles at most {parts_max} \
-             (got {}, {}, {}, {})",
-            a.pop,
-            a.bootstrap,
-            a.particles.map_or("-".to_string(), |p| p.to_string()),
-            a.max_particles
-        );
+    a.effort.validate()?;
+    const BOOTSTRAP_MAX: usize = 10_000;
+    if a.bootstrap > BOOTSTRAP_MAX {
+        bail!("--bootstrap must be at most {BOOTSTRAP_MAX}, got {}", a.bootstrap);
     }
     let condition = measured_condition::load(&a.data, &a.setup, stem(&a.data), a.normalise, a.seed)?;
     let n = condition.runs.runs.len();
@@ -121,14 +90,7 @@ pub fn run(a: FitArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     };
     let params = params.unwrap_or_else(|| shared_params(std::slice::from_ref(&condition)));
     let seed = condition.base.sim.seed;
-    let effort = Effort {
-        particles: a.particles,
-        max_particles: a.max_particles,
-        pop: a.pop,
-        generations: a.generations,
-        polish: a.polish,
-        seed,
-    };
+    let effort = a.effort.effort(seed);
     let engine = make_engine(a.engine.engine)?;
     let started = std::time::Instant::now();
     let report = match &at {
