@@ -16,7 +16,8 @@ fn engines(c: &mut Criterion) {
         let designs = neighbourhood(&scenario, &centre, 64, 0.05, 1);
         let mut group = c.benchmark_group(format!("batch64/{label}"));
         group.sample_size(10);
-        let mut engines: Vec<Box<dyn BatchEvaluator>> = vec![Box::new(particle_engine(EngineKind::Listing)), Box::new(particle_engine(EngineKind::Cpu))];
+        let mut engines: Vec<Box<dyn BatchEvaluator>> =
+            vec![Box::new(particle_engine(EngineKind::Listing)), Box::new(particle_engine(EngineKind::Cpu))];
         match GpuEngine::new(AdapterChoice::Any) {
             Ok(g) => {
                 eprintln!("gpu: {}", g.describe());
@@ -25,7 +26,8 @@ fn engines(c: &mut Criterion) {
             Err(e) => eprintln!("no GPU adapter, gpu not benchmarked: {e}"),
         }
         for engine in &engines {
-            let bounces: f64 = engine.evaluate(&scenario, &designs).iter().flatten().map(|e| e.sim.mean_bounces * 100.0).sum();
+            let bounces: f64 =
+                engine.evaluate(&scenario, &designs).iter().flatten().map(|e| e.sim.mean_bounces * 100.0).sum();
             group.throughput(Throughput::Elements(bounces as u64));
             group.bench_function(engine.backend(), |b| b.iter(|| engine.evaluate(&scenario, &designs)));
         }

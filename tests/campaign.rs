@@ -14,7 +14,11 @@ fn bin() -> &'static str {
 
 fn run(args: &[&str]) -> (i32, String, String) {
     let o: Output = Command::new(bin()).args(args).env_remove("SLURM_ARRAY_TASK_ID").output().unwrap();
-    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stdout).into(), String::from_utf8_lossy(&o.stderr).into())
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into(),
+        String::from_utf8_lossy(&o.stderr).into(),
+    )
 }
 
 fn tmp(name: &str) -> PathBuf {
@@ -23,7 +27,21 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
-const GA: &[&str] = &["--pop", "16", "--generations", "6", "--algorithm", "nsga2", "--particles", "40", "--final-particles", "60", "--replicates", "2", "--quiet"];
+const GA: &[&str] = &[
+    "--pop",
+    "16",
+    "--generations",
+    "6",
+    "--algorithm",
+    "nsga2",
+    "--particles",
+    "40",
+    "--final-particles",
+    "60",
+    "--replicates",
+    "2",
+    "--quiet",
+];
 
 fn with_ga<'a>(args: &[&'a str]) -> Vec<&'a str> {
     let mut v = args.to_vec();
@@ -107,7 +125,8 @@ fn a_repeatability_study_run_task_by_task_gives_the_one_process_bytes() {
 fn gather_refuses_a_partial_campaign_and_names_what_is_missing() {
     let arr = tmp("partial");
     let d = arr.to_str().unwrap();
-    let (code, _, err) = run(&with_ga(&["gpu-sweep", "--env", "lunar", "--alpha", "20..30", "--step", "10", "--out", d, "--plan"]));
+    let (code, _, err) =
+        run(&with_ga(&["gpu-sweep", "--env", "lunar", "--alpha", "20..30", "--step", "10", "--out", d, "--plan"]));
     assert_eq!(code, 0, "{err}");
     let (code, _, err) = run(&["campaign", "run", d, "--task", "1"]);
     assert_eq!(code, 0, "{err}");
@@ -120,7 +139,8 @@ fn gather_refuses_a_partial_campaign_and_names_what_is_missing() {
     assert_eq!(code, 0);
     assert!(status.contains("finished 1, running 0, stopped 0, not started 1"), "{status}");
     // the same folder cannot be planned with other settings
-    let (code, _, err) = run(&with_ga(&["gpu-sweep", "--env", "lunar", "--alpha", "20..40", "--step", "10", "--out", d, "--plan"]));
+    let (code, _, err) =
+        run(&with_ga(&["gpu-sweep", "--env", "lunar", "--alpha", "20..40", "--step", "10", "--out", d, "--plan"]));
     assert_eq!(code, 2);
     assert!(err.contains("different plan"), "{err}");
     let _ = std::fs::remove_dir_all(&arr);
@@ -130,7 +150,8 @@ fn gather_refuses_a_partial_campaign_and_names_what_is_missing() {
 fn bad_campaign_input_is_named() {
     let arr = tmp("bad");
     let d = arr.to_str().unwrap();
-    let (code, _, err) = run(&with_ga(&["gpu-sweep", "--env", "lunar", "--alpha", "20..30", "--step", "10", "--out", d, "--plan"]));
+    let (code, _, err) =
+        run(&with_ga(&["gpu-sweep", "--env", "lunar", "--alpha", "20..30", "--step", "10", "--out", d, "--plan"]));
     assert_eq!(code, 0, "{err}");
     let (code, _, err) = run(&["campaign", "run", d, "--task", "2"]);
     assert_eq!(code, 2);
@@ -143,11 +164,18 @@ fn bad_campaign_input_is_named() {
         assert_eq!(code, 2, "{flag} {v}");
         assert!(err.contains(flag), "{flag}: {err}");
     }
-    let (code, out, err) = run(&["campaign", "slurm", d, "--time", "0-01:00:00", "--max-parallel", "1", "--cpus-per-task", "2"]);
+    let (code, out, err) =
+        run(&["campaign", "slurm", d, "--time", "0-01:00:00", "--max-parallel", "1", "--cpus-per-task", "2"]);
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("--dependency=afterok:"), "{out}");
     let script = std::fs::read_to_string(arr.join("slurm/array.sbatch")).unwrap();
-    for line in ["#SBATCH --array=0-1%1", "#SBATCH --time=0-01:00:00", "#SBATCH --cpus-per-task=2", "/logs/%A_%a.out", "--task \"$SLURM_ARRAY_TASK_ID\""] {
+    for line in [
+        "#SBATCH --array=0-1%1",
+        "#SBATCH --time=0-01:00:00",
+        "#SBATCH --cpus-per-task=2",
+        "/logs/%A_%a.out",
+        "--task \"$SLURM_ARRAY_TASK_ID\"",
+    ] {
         assert!(script.contains(line), "{line} in\n{script}");
     }
     // not a campaign
@@ -158,7 +186,18 @@ fn bad_campaign_input_is_named() {
     assert!(err.contains("not a campaign folder"), "{err}");
     // a folder with someone else's files is not written into
     std::fs::write(plain.join("notes.txt"), "mine").unwrap();
-    let (code, _, err) = run(&with_ga(&["gpu-sweep", "--env", "lunar", "--alpha", "20..30", "--step", "10", "--out", plain.to_str().unwrap(), "--plan"]));
+    let (code, _, err) = run(&with_ga(&[
+        "gpu-sweep",
+        "--env",
+        "lunar",
+        "--alpha",
+        "20..30",
+        "--step",
+        "10",
+        "--out",
+        plain.to_str().unwrap(),
+        "--plan",
+    ]));
     assert_eq!(code, 2);
     assert!(err.contains("holds files but no"), "{err}");
     let _ = std::fs::remove_dir_all(&arr);
@@ -169,12 +208,18 @@ fn bad_campaign_input_is_named() {
 fn a_member_owned_by_another_process_is_refused() {
     let arr = tmp("locked");
     let d = arr.to_str().unwrap();
-    let (code, _, err) = run(&with_ga(&["gpu-sweep", "--env", "lunar", "--alpha", "20..30", "--step", "10", "--out", d, "--plan"]));
+    let (code, _, err) =
+        run(&with_ga(&["gpu-sweep", "--env", "lunar", "--alpha", "20..30", "--step", "10", "--out", d, "--plan"]));
     assert_eq!(code, 0, "{err}");
     // this test process plays the other task: it holds member 0's lock
     let member = arr.join("alpha_020.00");
     std::fs::create_dir_all(&member).unwrap();
-    let lock = std::fs::OpenOptions::new().create(true).truncate(false).write(true).open(member.join(".sawtooth.lock")).unwrap();
+    let lock = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(member.join(".sawtooth.lock"))
+        .unwrap();
     lock.try_lock().unwrap();
     let (code, _, err) = run(&["campaign", "run", d, "--task", "0"]);
     assert_eq!(code, 2);
@@ -195,9 +240,24 @@ fn a_member_owned_by_another_process_is_refused() {
 #[test]
 fn sigterm_saves_a_checkpoint_and_the_next_task_resumes_to_the_same_bytes() {
     let (whole, cut) = (tmp("whole"), tmp("cut"));
-    let ga = ["--pop", "16", "--generations", "200", "--algorithm", "nsga2", "--particles", "40", "--final-particles", "60", "--replicates", "2", "--quiet"];
+    let ga = [
+        "--pop",
+        "16",
+        "--generations",
+        "200",
+        "--algorithm",
+        "nsga2",
+        "--particles",
+        "40",
+        "--final-particles",
+        "60",
+        "--replicates",
+        "2",
+        "--quiet",
+    ];
     for dir in [&whole, &cut] {
-        let mut a = vec!["study", "repeatability", "--env", "lunar", "--runs", "2", "--out", dir.to_str().unwrap(), "--plan"];
+        let mut a =
+            vec!["study", "repeatability", "--env", "lunar", "--runs", "2", "--out", dir.to_str().unwrap(), "--plan"];
         a.extend_from_slice(&ga);
         let (code, _, err) = run(&a);
         assert_eq!(code, 0, "{err}");
@@ -237,11 +297,26 @@ fn a_sensitivity_plan_holds_the_grid_and_the_repeatability_interval() {
     let (rep, sens) = (tmp("rep-summary"), tmp("sens-plan"));
     std::fs::create_dir_all(&rep).unwrap();
     // the w_spec row of a gathered repeatability study: mean 400, half width 12.5
-    std::fs::write(rep.join("summary.csv"), "metric,mean,sd,cv,ci95_half_width,n\nw_spec_j_kg,4.0e2,1.0e1,2.5e-2,1.25e1,3\n").unwrap();
-    let (code, out, err) = run(&with_ga(&["study", "sensitivity", "--env", "lunar", "--repeatability", rep.to_str().unwrap(), "--out", sens.to_str().unwrap(), "--plan"]));
+    std::fs::write(
+        rep.join("summary.csv"),
+        "metric,mean,sd,cv,ci95_half_width,n\nw_spec_j_kg,4.0e2,1.0e1,2.5e-2,1.25e1,3\n",
+    )
+    .unwrap();
+    let (code, out, err) = run(&with_ga(&[
+        "study",
+        "sensitivity",
+        "--env",
+        "lunar",
+        "--repeatability",
+        rep.to_str().unwrap(),
+        "--out",
+        sens.to_str().unwrap(),
+        "--plan",
+    ]));
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("(25 members)"), "{out}");
-    let plan: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(sens.join("plan.json")).unwrap()).unwrap();
+    let plan: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(sens.join("plan.json")).unwrap()).unwrap();
     assert_eq!(plan["study"]["kind"], "sensitivity");
     assert_eq!(plan["study"]["repeatability_ci"], serde_json::json!([400.0, 12.5]));
     assert_eq!(plan["members"].as_array().unwrap().len(), 25);

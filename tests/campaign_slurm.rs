@@ -27,7 +27,11 @@ struct Slurm;
 
 impl Slurm {
     fn start() -> Option<Slurm> {
-        let o = Command::new("bash").arg(root().join("scripts/slurm-local.sh")).arg("start").output().expect("running bash");
+        let o = Command::new("bash")
+            .arg(root().join("scripts/slurm-local.sh"))
+            .arg("start")
+            .output()
+            .expect("running bash");
         let log = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
         if o.status.success() {
             eprintln!("{}", log.trim());
@@ -56,7 +60,11 @@ fn cmd(program: &str) -> Command {
 
 fn sh(program: &str, args: &[&str]) -> (i32, String, String) {
     let o = cmd(program).args(args).output().unwrap_or_else(|e| panic!("running {program}: {e}"));
-    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stdout).into(), String::from_utf8_lossy(&o.stderr).into())
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into(),
+        String::from_utf8_lossy(&o.stderr).into(),
+    )
 }
 
 fn sawtooth(args: &[&str]) -> (i32, String, String) {
@@ -95,7 +103,10 @@ fn wait_for(what: &str, secs: u64, mut done: impl FnMut() -> bool) {
 
 /// Job ids from `campaign slurm --submit`: "submitted array job A (tasks …) and gather job G …".
 fn submitted(out: &str) -> (String, String) {
-    let line = out.lines().find(|l| l.starts_with("submitted array job ")).unwrap_or_else(|| panic!("no `submitted array job` line in {out}"));
+    let line = out
+        .lines()
+        .find(|l| l.starts_with("submitted array job "))
+        .unwrap_or_else(|| panic!("no `submitted array job` line in {out}"));
     let words: Vec<&str> = line.split_whitespace().collect();
     let id = |w: &str| {
         let i = words.iter().position(|x| *x == w).unwrap_or_else(|| panic!("no `{w} job ID` in {out}"));
@@ -142,8 +153,23 @@ fn a_sweep_and_a_study_run_as_slurm_arrays_and_a_cancelled_task_resumes() {
     let t0 = Instant::now();
 
     // --- a 4-angle sweep; members long enough (200 generations) to cancel one mid-run
-    let ga = ["--pop", "16", "--generations", "200", "--algorithm", "nsga2", "--particles", "40", "--final-particles", "60", "--replicates", "2", "--quiet"];
-    let (local, arr) = plan_and_local(&["gpu-sweep", "--env", "lunar", "--alpha", "10..40", "--step", "10"], &ga, "sweep");
+    let ga = [
+        "--pop",
+        "16",
+        "--generations",
+        "200",
+        "--algorithm",
+        "nsga2",
+        "--particles",
+        "40",
+        "--final-particles",
+        "60",
+        "--replicates",
+        "2",
+        "--quiet",
+    ];
+    let (local, arr) =
+        plan_and_local(&["gpu-sweep", "--env", "lunar", "--alpha", "10..40", "--step", "10"], &ga, "sweep");
     let d = arr.to_str().unwrap();
     let (code, out, err) = sawtooth(&["campaign", "slurm", d, "--time", "10", "--submit"]);
     assert_eq!(code, 0, "{err}\n{}", slurm_logs());
@@ -182,7 +208,12 @@ fn a_sweep_and_a_study_run_as_slurm_arrays_and_a_cancelled_task_resumes() {
     assert!(out.contains(&format!("scancel {gid}")), "the stale gather job is named: {out}");
     let (jid2, gid2) = submitted(&out);
     wait_for("the resubmitted task and the gather job", 180, || !in_queue(&jid2) && !in_queue(&gid2));
-    assert_eq!(job_state(&gid2), "COMPLETED", "gather job {gid2}: {}", std::fs::read_to_string(arr.join(format!("logs/gather_{gid2}.out"))).unwrap_or_default());
+    assert_eq!(
+        job_state(&gid2),
+        "COMPLETED",
+        "gather job {gid2}: {}",
+        std::fs::read_to_string(arr.join(format!("logs/gather_{gid2}.out"))).unwrap_or_default()
+    );
     let log = std::fs::read_to_string(arr.join(format!("logs/{jid2}_{k}.out"))).unwrap();
     let resumed_at: usize = log
         .split("resuming from the checkpoint at generation ")
@@ -203,9 +234,24 @@ fn a_sweep_and_a_study_run_as_slurm_arrays_and_a_cancelled_task_resumes() {
     eprintln!("sweep as a Slurm array: cancelled member {k} at generation >= {seen}, resumed at {resumed_at}; identical to the local run ({:.1} s)", t0.elapsed().as_secs_f64());
 
     // --- a repeatability study (3 seeds) as an array, gathered by its dependent job
-    let ga = ["--pop", "16", "--generations", "8", "--algorithm", "nsga2", "--particles", "40", "--final-particles", "60", "--replicates", "2", "--quiet"];
+    let ga = [
+        "--pop",
+        "16",
+        "--generations",
+        "8",
+        "--algorithm",
+        "nsga2",
+        "--particles",
+        "40",
+        "--final-particles",
+        "60",
+        "--replicates",
+        "2",
+        "--quiet",
+    ];
     let (local_r, arr_r) = plan_and_local(&["study", "repeatability", "--env", "lunar", "--runs", "3"], &ga, "rep");
-    let (code, out, err) = sawtooth(&["campaign", "slurm", arr_r.to_str().unwrap(), "--time", "10", "--max-parallel", "2", "--submit"]);
+    let (code, out, err) =
+        sawtooth(&["campaign", "slurm", arr_r.to_str().unwrap(), "--time", "10", "--max-parallel", "2", "--submit"]);
     assert_eq!(code, 0, "{err}");
     let (jid, gid) = submitted(&out);
     wait_for("the study's array and gather job", 180, || !in_queue(&jid) && !in_queue(&gid));
@@ -216,7 +262,10 @@ fn a_sweep_and_a_study_run_as_slurm_arrays_and_a_cancelled_task_resumes() {
     for i in 0..3 {
         assert!(arr_r.join(format!("logs/{jid}_{i}.out")).exists(), "one log per task (%A_%a)");
     }
-    eprintln!("repeatability study as a Slurm array: identical to the local run ({:.1} s in all)", t0.elapsed().as_secs_f64());
+    eprintln!(
+        "repeatability study as a Slurm array: identical to the local run ({:.1} s in all)",
+        t0.elapsed().as_secs_f64()
+    );
     for d in [local, arr, local_r, arr_r] {
         let _ = std::fs::remove_dir_all(d);
     }

@@ -5,14 +5,19 @@ use std::process::Command;
 
 fn sawtooth(args: &[&str]) -> (i32, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_sawtooth")).args(args).output().expect("run binary");
-    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
 }
 
 const LUNAR_C: &str = "47.346,46.898,32.183,43.687,94.42,11.964,0.840,32.051";
 
 #[test]
 fn simulate_json_has_the_documented_keys() {
-    let (code, out, err) = sawtooth(&["simulate", "--env", "lunar", "--design", LUNAR_C, "--particles", "20", "--json"]);
+    let (code, out, err) =
+        sawtooth(&["simulate", "--env", "lunar", "--design", LUNAR_C, "--particles", "20", "--json"]);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     for k in ["distribution", "d_avg_m", "lost_fraction", "fill_area_mm2", "bounces"] {
@@ -47,7 +52,17 @@ fn trajectories_and_plot_are_written() {
     std::fs::create_dir_all(&dir).unwrap();
     let csv = dir.join("t.csv");
     let svg = dir.join("t.svg");
-    let (code, _, err) = sawtooth(&["simulate", "--design", LUNAR_C, "--particles", "8", "--trajectories", csv.to_str().unwrap(), "--plot", svg.to_str().unwrap()]);
+    let (code, _, err) = sawtooth(&[
+        "simulate",
+        "--design",
+        LUNAR_C,
+        "--particles",
+        "8",
+        "--trajectories",
+        csv.to_str().unwrap(),
+        "--plot",
+        svg.to_str().unwrap(),
+    ]);
     assert_eq!(code, 0, "{err}");
     let text = std::fs::read_to_string(&csv).unwrap();
     assert!(text.starts_with("particle,bounce,x_m,y_m,state"));
@@ -74,7 +89,10 @@ fn bad_input_names_the_field_and_exits_2() {
     assert_bad_input(&["simulate", "--design", LUNAR_C, "--env", "mars"], "mars");
     assert_bad_input(&["simulate", "--design", LUNAR_C, "--material", "cheese"], "cheese");
     // the figure is SVG: a .png name is refused rather than filled with SVG bytes
-    assert_bad_input(&["simulate", "--design", LUNAR_C, "--particles", "8", "--plot", "/tmp/sawtooth-never-written.png"], ".svg");
+    assert_bad_input(
+        &["simulate", "--design", LUNAR_C, "--particles", "8", "--plot", "/tmp/sawtooth-never-written.png"],
+        ".svg",
+    );
     assert!(!std::path::Path::new("/tmp/sawtooth-never-written.png").exists());
     assert_bad_input(&["simulate"], "no design");
     assert_bad_input(&["simulate", "--config", "/nonexistent/x.toml"], "/nonexistent/x.toml");

@@ -77,7 +77,15 @@ fn summary(v: &Value) -> String {
         .as_array()
         .unwrap()
         .iter()
-        .map(|m| format!("{} {:.1} {} ({:.0} %)", m["effect"], m["gap"], m["interval"], 100.0 * m["reduction"].as_f64().unwrap()))
+        .map(|m| {
+            format!(
+                "{} {:.1} {} ({:.0} %)",
+                m["effect"],
+                m["gap"],
+                m["interval"],
+                100.0 * m["reduction"].as_f64().unwrap()
+            )
+        })
         .collect();
     format!(
         "baseline {:.1} {}; {}; best {}; indistinguishable {}; combined {} {:.1} {}",
@@ -95,7 +103,10 @@ fn summary(v: &Value) -> String {
 /// The two best candidates fitted together: present exactly when two beat the baseline, led
 /// by the best, with well-formed numbers.
 fn check_combined(v: &Value) {
-    let beating = v["ranking"].as_array().unwrap().iter()
+    let beating = v["ranking"]
+        .as_array()
+        .unwrap()
+        .iter()
         .filter(|m| m["improvement_interval"][0].as_f64().unwrap() > 0.0 && m["reduction"].as_f64().unwrap() > 0.0)
         .count();
     let c = &v["combined"];
@@ -105,7 +116,8 @@ fn check_combined(v: &Value) {
     }
     assert_eq!(c["effects"][0], v["best"], "{c}");
     assert_eq!(c["effects"].as_array().unwrap().len(), 2, "{c}");
-    let (g, lo, hi) = (c["gap"].as_f64().unwrap(), c["interval"][0].as_f64().unwrap(), c["interval"][1].as_f64().unwrap());
+    let (g, lo, hi) =
+        (c["gap"].as_f64().unwrap(), c["interval"][0].as_f64().unwrap(), c["interval"][1].as_f64().unwrap());
     assert!(g.is_finite() && lo <= hi && g >= 0.0, "{c}");
     assert_eq!(c["improvement_over_singles"].as_array().unwrap().len(), 2, "{c}");
 }
@@ -161,7 +173,8 @@ fn campaign_with(dir: &Path, conditions: &[(&str, Option<&str>, u64)], diagnose_
 /// The three rig conditions, the same effect in each, diagnosed with the plain setups.
 fn rig_campaign(dir: &Path, effect: Option<&str>, seed: u64) -> Value {
     let setups: Vec<String> = RIG.iter().map(|n| rig_setup(n)).collect();
-    let conditions: Vec<(&str, Option<&str>, u64)> = setups.iter().enumerate().map(|(i, s)| (s.as_str(), effect, seed + i as u64)).collect();
+    let conditions: Vec<(&str, Option<&str>, u64)> =
+        setups.iter().enumerate().map(|(i, s)| (s.as_str(), effect, seed + i as u64)).collect();
     let plain: Vec<&str> = setups.iter().map(String::as_str).collect();
     campaign_with(dir, &conditions, &plain)
 }
@@ -193,9 +206,12 @@ fn polydispersity_is_found() {
 fn uniform_sizes_are_found_as_polydispersity() {
     // the data's sizes are uniform in number, the candidate's log-normal: another form
     let d = tmp("pdu");
-    let makers: Vec<String> =
-        RIG.iter().map(|n| rig_variant(&d, n, |t| t + "\n[effects.polydisperse]\nsigma_ln = 0.3\nform = \"uniform\"\n")).collect();
-    let conditions: Vec<(&str, Option<&str>, u64)> = makers.iter().enumerate().map(|(i, s)| (s.as_str(), None, 50 + i as u64)).collect();
+    let makers: Vec<String> = RIG
+        .iter()
+        .map(|n| rig_variant(&d, n, |t| t + "\n[effects.polydisperse]\nsigma_ln = 0.3\nform = \"uniform\"\n"))
+        .collect();
+    let conditions: Vec<(&str, Option<&str>, u64)> =
+        makers.iter().enumerate().map(|(i, s)| (s.as_str(), None, 50 + i as u64)).collect();
     let plain: Vec<String> = RIG.iter().map(|n| rig_setup(n)).collect();
     let v = campaign_with(&d, &conditions, &plain.iter().map(String::as_str).collect::<Vec<_>>());
     check_found(&v, "polydisperse");
@@ -225,7 +241,8 @@ fn uniform_tilt_on_random_launch_points_is_found_as_impact_scatter() {
             })
         })
         .collect();
-    let conditions: Vec<(&str, Option<&str>, u64)> = makers.iter().enumerate().map(|(i, s)| (s.as_str(), None, 100 + i as u64)).collect();
+    let conditions: Vec<(&str, Option<&str>, u64)> =
+        makers.iter().enumerate().map(|(i, s)| (s.as_str(), None, 100 + i as u64)).collect();
     let plain: Vec<String> = RIG.iter().map(|n| rig_setup(n)).collect();
     let v = campaign_with(&d, &conditions, &plain.iter().map(String::as_str).collect::<Vec<_>>());
     check_found(&v, "impact-scatter");
@@ -238,7 +255,8 @@ fn sled_returning_along_the_launch_direction_is_found_as_sled_motion() {
     // down the slope; the setup states the delay and speed, not the direction
     let d = tmp("sml");
     let stated = |t: String| {
-        t.replace("motion_delay_s = 5.0", "motion_delay_s = 0.0").replace("motion_return_speed_m_s = 0.05", "motion_return_speed_m_s = 0.3")
+        t.replace("motion_delay_s = 5.0", "motion_delay_s = 0.0")
+            .replace("motion_return_speed_m_s = 0.05", "motion_return_speed_m_s = 0.3")
     };
     let maker = rig_variant(&d, "slow", |t| {
         stated(t) + "\n[effects.sled_motion]\ndelay_s = 0.0\nreturn_speed_m_s = 0.3\ndirection = \"launch\"\n"
@@ -249,7 +267,8 @@ fn sled_returning_along_the_launch_direction_is_found_as_sled_motion() {
         p.to_str().unwrap().to_string()
     };
     let (fast, shallow) = (rig_setup("fast"), rig_setup("shallow"));
-    let v = campaign_with(&d, &[(&maker, None, 110), (&fast, None, 111), (&shallow, None, 112)], &[&told, &fast, &shallow]);
+    let v =
+        campaign_with(&d, &[(&maker, None, 110), (&fast, None, 111), (&shallow, None, 112)], &[&told, &fast, &shallow]);
     check_found(&v, "sled-motion");
     std::fs::remove_dir_all(&d).ok();
 }
@@ -260,7 +279,8 @@ fn sled_motion_is_found() {
     // 5 s (as in the practice campaign 4)
     let d = tmp("sm");
     let moving = rig_variant(&d, "slow", |t| {
-        t.replace("motion_delay_s = 5.0", "motion_delay_s = 0.0").replace("motion_return_speed_m_s = 0.05", "motion_return_speed_m_s = 0.3")
+        t.replace("motion_delay_s = 5.0", "motion_delay_s = 0.0")
+            .replace("motion_return_speed_m_s = 0.05", "motion_return_speed_m_s = 0.3")
     });
     let (fast, shallow) = (rig_setup("fast"), rig_setup("shallow"));
     let v = campaign_with(
@@ -298,7 +318,8 @@ fn no_effect_no_best() {
             let [lo, hi] = [l["depth_mm"][0].as_f64().unwrap(), l["depth_mm"][1].as_f64().unwrap()];
             assert!(lo >= last_max && hi >= lo, "{layers:?}");
             last_max = hi;
-            let sum: f64 = l["teeth_percent"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).sum::<f64>() + l["further_or_lost_percent"].as_f64().unwrap();
+            let sum: f64 = l["teeth_percent"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).sum::<f64>()
+                + l["further_or_lost_percent"].as_f64().unwrap();
             assert!((sum - 100.0).abs() < 1e-9, "{l}");
         }
     }
@@ -314,7 +335,8 @@ fn bad_input_is_named_with_exit_2() {
     let s3 = setup("test3");
     let s3 = s3.as_str();
     let bad_motion = out.join("bad_motion.toml");
-    let text = std::fs::read_to_string(setup("test1")).unwrap().replace("motion_delay_s = 0.0", "motion_delay_s = -1.0");
+    let text =
+        std::fs::read_to_string(setup("test1")).unwrap().replace("motion_delay_s = 0.0", "motion_delay_s = -1.0");
     std::fs::write(&bad_motion, text).unwrap();
     let bad_motion = bad_motion.to_str().unwrap().to_string();
     let cases: [(Vec<&str>, &str); 7] = [

@@ -9,7 +9,8 @@ use sawtooth::model::effects::{Effects, ImpactScatter, LaunchSpread, Polydispers
 use sawtooth::model::{Design, Scenario, SimOutcome};
 
 fn rig() -> (Scenario, Design) {
-    let c = ConfigFile::load(std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/data/validation/test3.toml"))).unwrap();
+    let c = ConfigFile::load(std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/data/validation/test3.toml")))
+        .unwrap();
     let mut s = c.scenario().unwrap();
     s.sim.particles = 400;
     (s, c.design().unwrap())
@@ -20,7 +21,8 @@ fn sim(s: &Scenario, d: &Design) -> SimOutcome {
 }
 
 fn l1(a: &SimOutcome, b: &SimOutcome) -> f64 {
-    a.distribution.iter().zip(&b.distribution).map(|(x, y)| (x - y).abs()).sum::<f64>() + (a.lost_fraction - b.lost_fraction).abs()
+    a.distribution.iter().zip(&b.distribution).map(|(x, y)| (x - y).abs()).sum::<f64>()
+        + (a.lost_fraction - b.lost_fraction).abs()
 }
 
 #[test]
@@ -29,7 +31,10 @@ fn effects_are_off_by_default_and_each_one_moves_the_distribution() {
     assert!(!s.effects.any());
     let base = sim(&s, &d);
     let cases = [
-        Effects { impact_scatter: Some(ImpactScatter { sigma_deg: 25.0, form: Default::default() }), ..Default::default() },
+        Effects {
+            impact_scatter: Some(ImpactScatter { sigma_deg: 25.0, form: Default::default() }),
+            ..Default::default()
+        },
         Effects { launch_spread: Some(LaunchSpread { speed_spread: 0.4, angle_sigma_deg: 5.0 }), ..Default::default() },
         Effects { polydisperse: Some(Polydisperse { sigma_ln: 0.5, form: Default::default() }), ..Default::default() },
     ];
@@ -64,19 +69,26 @@ fn launch_spread_slows_the_transport() {
 
 #[test]
 fn config_files_and_flags_carry_effects_and_other_engines_refuse_them() {
-    let c = ConfigFile::parse("[effects.impact_scatter]\nsigma_deg = 4\n[effects.polydisperse]\nsigma_ln = 0.3\n").unwrap();
+    let c =
+        ConfigFile::parse("[effects.impact_scatter]\nsigma_deg = 4\n[effects.polydisperse]\nsigma_ln = 0.3\n").unwrap();
     let s = c.scenario().unwrap();
     assert_eq!(s.effects.active(), vec!["impact-scatter", "polydisperse"]);
     assert!(ConfigFile::parse("[effects.impact_scatter]\nsigma = 4\n").is_err());
     let bin = env!("CARGO_BIN_EXE_sawtooth");
     let setup = concat!(env!("CARGO_MANIFEST_DIR"), "/data/validation/test3.toml");
-    let o = Command::new(bin).args(["simulate", "--config", setup, "--effect", "impact-scatter=5", "--engine", "listing"]).output().unwrap();
+    let o = Command::new(bin)
+        .args(["simulate", "--config", setup, "--effect", "impact-scatter=5", "--engine", "listing"])
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("in the cpu and gpu engines only"));
     let o = Command::new(bin).args(["simulate", "--config", setup, "--effect", "wobble=1"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown effect"));
-    let o = Command::new(bin).args(["simulate", "--config", setup, "--effect", "impact-scatter=3", "--json"]).output().unwrap();
+    let o = Command::new(bin)
+        .args(["simulate", "--config", setup, "--effect", "impact-scatter=3", "--json"])
+        .output()
+        .unwrap();
     assert!(o.status.success());
 }
 
@@ -86,13 +98,15 @@ fn sled_motion_after_every_flight_changes_nothing_and_a_returning_sled_carries_g
     let (s, d) = rig();
     let base = sim(&s, &d);
     let mut late = s.clone();
-    late.effects.sled_motion = Some(SledMotion { delay_s: 90.0, return_speed_m_s: 0.05, direction: Default::default() });
+    late.effects.sled_motion =
+        Some(SledMotion { delay_s: 90.0, return_speed_m_s: 0.05, direction: Default::default() });
     assert_eq!(sim(&late, &d).distribution, base.distribution, "a sled that moves after everything has settled");
     // A slow return (the POC's downstroke speed v_d = 0.05 m/s, 5.3.1) slides the profile
     // down under the flying grains, so they land further up it. (A fast immediate return can
     // do the opposite: it sweeps the next tooth's ramp into the rising grains.)
     let mut moving = s.clone();
-    moving.effects.sled_motion = Some(SledMotion { delay_s: 0.0, return_speed_m_s: 0.05, direction: Default::default() });
+    moving.effects.sled_motion =
+        Some(SledMotion { delay_s: 0.0, return_speed_m_s: 0.05, direction: Default::default() });
     let m = sim(&moving, &d);
     let total: f64 = m.distribution.iter().sum::<f64>() + m.lost_fraction;
     assert!((total - 1.0).abs() < 1e-12);
@@ -101,7 +115,8 @@ fn sled_motion_after_every_flight_changes_nothing_and_a_returning_sled_carries_g
     let mut lunar = Scenario::lunar();
     lunar.sim.particles = 200;
     let l0 = sim(&lunar, &Design::lunar_solution_c());
-    lunar.effects.sled_motion = Some(SledMotion { delay_s: 0.0, return_speed_m_s: 0.05, direction: Default::default() });
+    lunar.effects.sled_motion =
+        Some(SledMotion { delay_s: 0.0, return_speed_m_s: 0.05, direction: Default::default() });
     assert!(sim(&lunar, &Design::lunar_solution_c()).advance_m > l0.advance_m);
 }
 
@@ -109,12 +124,21 @@ fn sled_motion_after_every_flight_changes_nothing_and_a_returning_sled_carries_g
 fn sled_motion_is_refused_where_it_is_not_implemented() {
     let bin = env!("CARGO_BIN_EXE_sawtooth");
     let setup = concat!(env!("CARGO_MANIFEST_DIR"), "/data/validation/test2.toml");
-    let o = Command::new(bin).args(["simulate", "--config", setup, "--effect", "sled-motion=0.01,0.05", "--engine", "gpu"]).output().unwrap();
+    let o = Command::new(bin)
+        .args(["simulate", "--config", setup, "--effect", "sled-motion=0.01,0.05", "--engine", "gpu"])
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("sled-motion"));
-    let o = Command::new(bin).args(["simulate", "--config", setup, "--effect", "sled-motion=0.01,0.05", "--plot", "/tmp/x.svg"]).output().unwrap();
+    let o = Command::new(bin)
+        .args(["simulate", "--config", setup, "--effect", "sled-motion=0.01,0.05", "--plot", "/tmp/x.svg"])
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(2));
-    let o = Command::new(bin).args(["simulate", "--config", setup, "--effect", "sled-motion=0.01,0.05", "--json"]).output().unwrap();
+    let o = Command::new(bin)
+        .args(["simulate", "--config", setup, "--effect", "sled-motion=0.01,0.05", "--json"])
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
@@ -135,7 +159,9 @@ fn quadratic_drag_flights_match_an_rk4_integration_of_schiller_naumann() {
         [-k * v[0], -g - k * v[1]]
     };
     let (mut checked, mut worst) = (0, 0.0f64);
-    let next = |a: &sawtooth::engine::FlightRecord| det.flights.iter().find(|b| b.particle == a.particle && b.bounce == a.bounce + 1);
+    let next = |a: &sawtooth::engine::FlightRecord| {
+        det.flights.iter().find(|b| b.particle == a.particle && b.bounce == a.bounce + 1)
+    };
     for a in &det.flights {
         let Some(b) = next(a) else { continue };
         if a.t <= 0.0 {
@@ -209,12 +235,16 @@ fn form_variants_parse_change_the_outcome_and_stay_deterministic() {
     let mut uniform = normal.clone();
     uniform.effects.impact_scatter = Some(ImpactScatter { sigma_deg: 10.0, form: TiltForm::Uniform });
     let mut slope = base_s.clone();
-    slope.effects.sled_motion = Some(SledMotion { delay_s: 0.0, return_speed_m_s: 0.3, direction: MotionDirection::Slope });
+    slope.effects.sled_motion =
+        Some(SledMotion { delay_s: 0.0, return_speed_m_s: 0.3, direction: MotionDirection::Slope });
     let mut launch = slope.clone();
-    launch.effects.sled_motion = Some(SledMotion { delay_s: 0.0, return_speed_m_s: 0.3, direction: MotionDirection::Launch });
+    launch.effects.sled_motion =
+        Some(SledMotion { delay_s: 0.0, return_speed_m_s: 0.3, direction: MotionDirection::Launch });
     let mut random = base_s.clone();
     random.sim.launch_points = LaunchPoints::Random;
-    for (what, candidate, variant) in [("tilt", &normal, &uniform), ("sled", &slope, &launch), ("launch points", &base_s, &random)] {
+    for (what, candidate, variant) in
+        [("tilt", &normal, &uniform), ("sled", &slope, &launch), ("launch points", &base_s, &random)]
+    {
         let (a, b) = (sim(candidate, &d), sim(variant, &d));
         assert!(l1(&a, &b) > 0.0, "{what}: the variant changed nothing");
         assert_eq!(sim(variant, &d).distribution, b.distribution, "{what}: not deterministic");
@@ -233,7 +263,8 @@ fn form_variants_parse_change_the_outcome_and_stay_deterministic() {
         "random launch points do not depend on the seed"
     );
     let mut late = base_s.clone();
-    late.effects.sled_motion = Some(SledMotion { delay_s: 90.0, return_speed_m_s: 0.3, direction: MotionDirection::Launch });
+    late.effects.sled_motion =
+        Some(SledMotion { delay_s: 90.0, return_speed_m_s: 0.3, direction: MotionDirection::Launch });
     assert_eq!(sim(&late, &d).distribution, base.distribution);
     // the uniform tilt has no GPU twin: refused there by name
     let bin = env!("CARGO_BIN_EXE_sawtooth");
@@ -241,8 +272,13 @@ fn form_variants_parse_change_the_outcome_and_stay_deterministic() {
     let dir = std::env::temp_dir().join(format!("sawtooth-forms-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let cfg = dir.join("tilt.toml");
-    std::fs::write(&cfg, std::fs::read_to_string(setup).unwrap() + "\n[effects.impact_scatter]\nsigma_deg = 8.0\nform = \"uniform\"\n").unwrap();
-    let o = Command::new(bin).args(["simulate", "--config", cfg.to_str().unwrap(), "--engine", "gpu"]).output().unwrap();
+    std::fs::write(
+        &cfg,
+        std::fs::read_to_string(setup).unwrap() + "\n[effects.impact_scatter]\nsigma_deg = 8.0\nform = \"uniform\"\n",
+    )
+    .unwrap();
+    let o =
+        Command::new(bin).args(["simulate", "--config", cfg.to_str().unwrap(), "--engine", "gpu"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stderr).contains("uniform tilt"));
     std::fs::remove_dir_all(&dir).ok();

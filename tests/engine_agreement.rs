@@ -16,7 +16,8 @@ fn agreement(s: &Scenario, n: usize, seed: u64) -> (usize, usize) {
         let a = evaluate_detailed(cpu.as_ref(), s, &d, false).unwrap();
         let b = evaluate_detailed(listing.as_ref(), s, &d, false).unwrap();
         let pr = &a.prepared.profile;
-        let tooth = |p: &sawtooth::model::ParticleEnd| if p.state == ParticleState::Lost { 0 } else { end_tooth(pr, p.end) };
+        let tooth =
+            |p: &sawtooth::model::ParticleEnd| if p.state == ParticleState::Lost { 0 } else { end_tooth(pr, p.end) };
         for (p, q) in a.particles.iter().zip(&b.particles) {
             total += 1;
             if tooth(p) == tooth(q) {

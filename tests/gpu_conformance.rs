@@ -48,7 +48,11 @@ fn gpu_conforms_in_listing_mode_at_the_design_level() {
 fn batch_interface_matches_single_design_runs() {
     let Some(g) = gpu() else { return };
     let s = Scenario::earth();
-    let designs = vec![Design::earth_solution_c(), Design::lunar_solution_c(), Design { l_b: 0.04, ..Design::earth_solution_c() }];
+    let designs = vec![
+        Design::earth_solution_c(),
+        Design::lunar_solution_c(),
+        Design { l_b: 0.04, ..Design::earth_solution_c() },
+    ];
     let batch = g.evaluate(&s, &designs);
     assert_eq!(batch[2].as_ref().unwrap_err().rule(), "linear_chain");
     let ctx = sawtooth::engine::Context::new(&s);
@@ -68,9 +72,27 @@ fn gpu_conforms_with_each_effect_switched_on() {
     let Some(g) = gpu() else { return };
     let mut cases = Vec::new();
     for (name, e) in [
-        ("impact-scatter", sawtooth::model::effects::Effects { impact_scatter: Some(ImpactScatter { sigma_deg: 8.0, form: Default::default() }), ..Default::default() }),
-        ("launch-spread", sawtooth::model::effects::Effects { launch_spread: Some(LaunchSpread { speed_spread: 0.4, angle_sigma_deg: 5.0 }), ..Default::default() }),
-        ("polydisperse", sawtooth::model::effects::Effects { polydisperse: Some(Polydisperse { sigma_ln: 0.5, form: Default::default() }), ..Default::default() }),
+        (
+            "impact-scatter",
+            sawtooth::model::effects::Effects {
+                impact_scatter: Some(ImpactScatter { sigma_deg: 8.0, form: Default::default() }),
+                ..Default::default()
+            },
+        ),
+        (
+            "launch-spread",
+            sawtooth::model::effects::Effects {
+                launch_spread: Some(LaunchSpread { speed_spread: 0.4, angle_sigma_deg: 5.0 }),
+                ..Default::default()
+            },
+        ),
+        (
+            "polydisperse",
+            sawtooth::model::effects::Effects {
+                polydisperse: Some(Polydisperse { sigma_ln: 0.5, form: Default::default() }),
+                ..Default::default()
+            },
+        ),
     ] {
         for (env, base) in [("lunar", Scenario::lunar()), ("earth", Scenario::earth())] {
             let mut s = base;
@@ -101,9 +123,24 @@ fn calibration_variants(base: &Scenario) -> Vec<(String, Scenario)> {
         (0.8, 0.3, Some(5.439), Effects { impact_scatter: scatter(8.0), ..Default::default() }),
         (0.65, 0.2, Some(2.0), Effects { launch_spread: spread(0.4, 5.0), ..Default::default() }),
         (0.7, 0.05, Some(8.0), Effects { polydisperse: poly(0.5), ..Default::default() }),
-        (0.6, 0.4, Some(5.439), Effects { impact_scatter: scatter(4.0), launch_spread: spread(0.2, 3.0), polydisperse: poly(0.3), ..Default::default() }),
+        (
+            0.6,
+            0.4,
+            Some(5.439),
+            Effects {
+                impact_scatter: scatter(4.0),
+                launch_spread: spread(0.2, 3.0),
+                polydisperse: poly(0.3),
+                ..Default::default()
+            },
+        ),
         (0.9, 0.15, None, Effects { impact_scatter: scatter(12.0), ..Default::default() }),
-        (0.75, 0.25, Some(3.0), Effects { polydisperse: poly(0.4), launch_spread: spread(0.1, 0.0), ..Default::default() }),
+        (
+            0.75,
+            0.25,
+            Some(3.0),
+            Effects { polydisperse: poly(0.4), launch_spread: spread(0.1, 0.0), ..Default::default() },
+        ),
     ];
     variants
         .into_iter()
@@ -163,7 +200,8 @@ fn one_design_groups_of_a_calibration_run_as_one_dispatch() {
         assert_eq!(m.lost_fraction, a.lost_fraction);
         assert!((m.d_avg_m - a.d_avg_m).abs() < 1e-9);
         let c = &c[0].as_ref().unwrap().sim;
-        l1_sum += m.distribution.iter().zip(&c.distribution).map(|(x, y)| (x - y).abs()).sum::<f64>() + (m.lost_fraction - c.lost_fraction).abs();
+        l1_sum += m.distribution.iter().zip(&c.distribution).map(|(x, y)| (x - y).abs()).sum::<f64>()
+            + (m.lost_fraction - c.lost_fraction).abs();
         distinct.insert(format!("{:?}", m.distribution));
     }
     let mean_l1 = l1_sum / groups.len() as f64;
@@ -188,7 +226,12 @@ fn batch_wide_physics_splits_and_cpu_only_effects_leave_the_gpu() {
     let mut sled = lunar.clone();
     sled.effects.sled_motion = Some(SledMotion { delay_s: 0.01, return_speed_m_s: 0.2, direction: Default::default() });
     let d = Design::lunar_solution_c();
-    let groups = vec![(lunar.clone(), vec![d.clone()]), (earth, vec![Design::earth_solution_c()]), (sled.clone(), vec![d.clone()]), (lunar, vec![d.clone()])];
+    let groups = vec![
+        (lunar.clone(), vec![d.clone()]),
+        (earth, vec![Design::earth_solution_c()]),
+        (sled.clone(), vec![d.clone()]),
+        (lunar, vec![d.clone()]),
+    ];
     let (before, cpu_before) = (g.dispatches(), g.cpu_only_designs());
     let out = g.evaluate_groups(&groups);
     assert_eq!(g.dispatches() - before, 2, "one dispatch per g");

@@ -16,7 +16,11 @@ const CI_BUDGET: [&str; 2] = ["--max-particles", "6000"];
 
 fn campaigns() -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/campaigns/independent");
-    assert!(dir.join("answers.json").exists(), "the practice campaigns are missing: {} (shared/ beside the checkout)", dir.display());
+    assert!(
+        dir.join("answers.json").exists(),
+        "the practice campaigns are missing: {} (shared/ beside the checkout)",
+        dir.display()
+    );
     dir
 }
 
@@ -40,8 +44,15 @@ fn answer(name: &str) -> Option<String> {
 }
 
 fn summary(v: &Value) -> String {
-    let r: Vec<String> = v["ranking"].as_array().unwrap().iter().map(|m| format!("{} {:.1}", m["effect"], m["gap"])).collect();
-    format!("baseline {:.1}; {}; best {}; indistinguishable {}", v["baseline"]["gap"], r.join(", "), v["best"], v["indistinguishable"])
+    let r: Vec<String> =
+        v["ranking"].as_array().unwrap().iter().map(|m| format!("{} {:.1}", m["effect"], m["gap"])).collect();
+    format!(
+        "baseline {:.1}; {}; best {}; indistinguishable {}",
+        v["baseline"]["gap"],
+        r.join(", "),
+        v["best"],
+        v["indistinguishable"]
+    )
 }
 
 /// The README's grading: `best` is the withheld effect, or the effect is indistinguishable

@@ -5,19 +5,14 @@
 use sawtooth::optim::nsga2::{self, pareto_front};
 use sawtooth::optim::test_problems::{Bnh, Zdt1, Zdt2};
 use sawtooth::optim::{
-    constrained_dominates, hypervolume_2d, load_checkpoint, save_checkpoint, BatchProblem, Config,
-    Evaluation, Mode, Nsga2, State, Termination,
+    constrained_dominates, hypervolume_2d, load_checkpoint, save_checkpoint, BatchProblem, Config, Evaluation, Mode,
+    Nsga2, State, Termination,
 };
 
 const SEED: u64 = 20_240_611;
 
 fn config(max_generations: u64) -> Config {
-    Config {
-        pop: 100,
-        seed: SEED,
-        max_generations,
-        ..Config::default()
-    }
+    Config { pop: 100, seed: SEED, max_generations, ..Config::default() }
 }
 
 fn run_to_end(solver: &Nsga2, problem: &mut impl BatchProblem) -> (State, Termination) {
@@ -25,20 +20,12 @@ fn run_to_end(solver: &Nsga2, problem: &mut impl BatchProblem) -> (State, Termin
 }
 
 fn front_hv(state: &State, reference: [f64; 2]) -> f64 {
-    let pts: Vec<[f64; 2]> = pareto_front(state)
-        .iter()
-        .map(|i| [i.eval.objectives[0], i.eval.objectives[1]])
-        .collect();
+    let pts: Vec<[f64; 2]> = pareto_front(state).iter().map(|i| [i.eval.objectives[0], i.eval.objectives[1]]).collect();
     hypervolume_2d(&pts, reference)
 }
 
 /// Runs `problem` for `generations` and returns HV as a fraction of the true front's.
-fn hv_ratio(
-    problem: &mut impl BatchProblem,
-    generations: u64,
-    reference: [f64; 2],
-    truth: f64,
-) -> f64 {
+fn hv_ratio(problem: &mut impl BatchProblem, generations: u64, reference: [f64; 2], truth: f64) -> f64 {
     let solver = Nsga2::new(config(generations));
     let (state, why) = run_to_end(&solver, problem);
     assert_eq!(why, Termination::MaxGenerations);
@@ -71,36 +58,20 @@ fn bnh_front_is_feasible_and_reaches_95_percent_hypervolume() {
     let front = pareto_front(&state);
     assert!(front.len() > 50, "front of {} points", front.len());
     for ind in &front {
-        assert_eq!(
-            ind.eval.violation, 0.0,
-            "infeasible front point {:?}",
-            ind.x
-        );
+        assert_eq!(ind.eval.violation, 0.0, "infeasible front point {:?}", ind.x);
         assert_eq!(Bnh::violation(&ind.x), 0.0);
     }
     let ratio = front_hv(&state, r) / Bnh::true_hypervolume(r);
-    eprintln!(
-        "BNH: HV {:.2} % of the true front, {} points",
-        100.0 * ratio,
-        front.len()
-    );
+    eprintln!("BNH: HV {:.2} % of the true front, {} points", 100.0 * ratio, front.len());
     assert!(ratio >= 0.95, "BNH HV ratio {ratio}");
 }
 
 fn xs(state: &State) -> Vec<Vec<u64>> {
-    state
-        .population
-        .iter()
-        .map(|i| i.x.iter().map(|v| v.to_bits()).collect())
-        .collect()
+    state.population.iter().map(|i| i.x.iter().map(|v| v.to_bits()).collect()).collect()
 }
 
 fn objectives(state: &State) -> Vec<Vec<u64>> {
-    state
-        .population
-        .iter()
-        .map(|i| i.eval.objectives.iter().map(|v| v.to_bits()).collect())
-        .collect()
+    state.population.iter().map(|i| i.eval.objectives.iter().map(|v| v.to_bits()).collect()).collect()
 }
 
 #[test]
@@ -109,16 +80,9 @@ fn same_seed_gives_identical_populations() {
     let (a, _) = run_to_end(&solver, &mut Zdt1::default());
     let (b, _) = run_to_end(&solver, &mut Zdt1::default());
     assert_eq!(xs(&a), xs(&b));
-    let other = Nsga2::new(Config {
-        seed: SEED + 1,
-        ..config(40)
-    });
+    let other = Nsga2::new(Config { seed: SEED + 1, ..config(40) });
     let (c, _) = run_to_end(&other, &mut Zdt1::default());
-    assert_ne!(
-        xs(&a),
-        xs(&c),
-        "a different seed should give a different run"
-    );
+    assert_ne!(xs(&a), xs(&c), "a different seed should give a different run");
 }
 
 /// 60 generations straight vs 25 + checkpoint to disk + load + 35: bit-identical.
@@ -137,10 +101,7 @@ fn check_resume(solver: &Nsga2, problem: &mut impl BatchProblem, file: &str) {
     let mut resumed = load_checkpoint(&path).unwrap();
     std::fs::remove_file(&path).unwrap();
     // The loaded state re-serialises to the same text (NaN-safe, unlike PartialEq).
-    assert_eq!(
-        serde_json::to_string(&resumed).unwrap(),
-        serde_json::to_string(&first).unwrap()
-    );
+    assert_eq!(serde_json::to_string(&resumed).unwrap(), serde_json::to_string(&first).unwrap());
     drop(first);
     assert_eq!(resumed.generation, 25);
     for _ in 0..35 {
@@ -149,12 +110,7 @@ fn check_resume(solver: &Nsga2, problem: &mut impl BatchProblem, file: &str) {
 
     assert_eq!(xs(&resumed), xs(&straight));
     assert_eq!(objectives(&resumed), objectives(&straight));
-    let bits = |s: &State| {
-        s.spread_history
-            .iter()
-            .map(|v| v.to_bits())
-            .collect::<Vec<_>>()
-    };
+    let bits = |s: &State| s.spread_history.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&resumed), bits(&straight));
     assert_eq!(resumed.rng, straight.rng);
     assert_eq!(resumed.evaluations, straight.evaluations);
@@ -162,18 +118,10 @@ fn check_resume(solver: &Nsga2, problem: &mut impl BatchProblem, file: &str) {
 
 #[test]
 fn checkpoint_resume_is_bit_identical() {
-    check_resume(
-        &Nsga2::new(config(60)),
-        &mut Zdt1::default(),
-        "nsga2_resume_zdt1.json",
-    );
+    check_resume(&Nsga2::new(config(60)), &mut Zdt1::default(), "nsga2_resume_zdt1.json");
     // Constrained, and the MATLAB-like survival with its spread bookkeeping.
     let matlab = Nsga2::new(Config {
-        mode: Mode::MatlabLike {
-            pareto_fraction: 0.35,
-            tol: 1e-4,
-            stall_generations: 20,
-        },
+        mode: Mode::MatlabLike { pareto_fraction: 0.35, tol: 1e-4, stall_generations: 20 },
         ..config(60)
     });
     check_resume(&matlab, &mut Bnh, "nsga2_resume_bnh.json");
@@ -197,11 +145,7 @@ fn matlab_like_mode_stops_on_stalled_spread() {
         .map(|seed| {
             let solver = Nsga2::new(Config {
                 seed,
-                mode: Mode::MatlabLike {
-                    pareto_fraction: 0.35,
-                    tol: 3e-4,
-                    stall_generations: 20,
-                },
+                mode: Mode::MatlabLike { pareto_fraction: 0.35, tol: 3e-4, stall_generations: 20 },
                 ..config(max_generations)
             });
             let (state, why) = run_to_end(&solver, &mut Zdt1::default());
@@ -209,30 +153,18 @@ fn matlab_like_mode_stops_on_stalled_spread() {
         })
         .collect();
     for (seed, why, generation, ratio) in &runs {
-        eprintln!(
-            "ZDT1 MatlabLike seed {seed}: {why:?} at generation {generation}, HV {:.2} %",
-            100.0 * ratio
-        );
+        eprintln!("ZDT1 MatlabLike seed {seed}: {why:?} at generation {generation}, HV {:.2} %", 100.0 * ratio);
         assert!(*ratio >= 0.90, "seed {seed}: HV ratio {ratio}");
         if *why == Termination::SpreadStalled {
             assert!(*generation < max_generations);
         }
     }
-    let stalled = runs
-        .iter()
-        .filter(|r| r.1 == Termination::SpreadStalled)
-        .count();
-    assert!(
-        stalled >= 6,
-        "only {stalled} of 8 runs stopped on a stalled spread"
-    );
+    let stalled = runs.iter().filter(|r| r.1 == Termination::SpreadStalled).count();
+    assert!(stalled >= 6, "only {stalled} of 8 runs stopped on a stalled spread");
 }
 
 fn ev(objectives: &[f64], violation: f64) -> Evaluation {
-    Evaluation {
-        objectives: objectives.to_vec(),
-        violation,
-    }
+    Evaluation { objectives: objectives.to_vec(), violation }
 }
 
 #[test]
@@ -255,18 +187,9 @@ fn lower_violation_wins_between_infeasible() {
 
 #[test]
 fn feasible_pair_uses_pareto_dominance() {
-    assert!(constrained_dominates(
-        &ev(&[1.0, 1.0], 0.0),
-        &ev(&[1.0, 2.0], 0.0)
-    ));
-    assert!(!constrained_dominates(
-        &ev(&[0.0, 3.0], 0.0),
-        &ev(&[1.0, 2.0], 0.0)
-    ));
-    assert!(!constrained_dominates(
-        &ev(&[1.0, 2.0], 0.0),
-        &ev(&[1.0, 2.0], 0.0)
-    ));
+    assert!(constrained_dominates(&ev(&[1.0, 1.0], 0.0), &ev(&[1.0, 2.0], 0.0)));
+    assert!(!constrained_dominates(&ev(&[0.0, 3.0], 0.0), &ev(&[1.0, 2.0], 0.0)));
+    assert!(!constrained_dominates(&ev(&[1.0, 2.0], 0.0), &ev(&[1.0, 2.0], 0.0)));
 }
 
 #[test]
@@ -284,9 +207,7 @@ fn infeasible_only_population_reports_least_violating_members() {
             (vec![0.0, 0.0], vec![1.0, 1.0])
         }
         fn evaluate_batch(&mut self, xs: &[Vec<f64>], _generation: u64) -> Vec<Evaluation> {
-            xs.iter()
-                .map(|x| ev(&[x[0], 1.0 - x[0]], 1.0 + x[1]))
-                .collect()
+            xs.iter().map(|x| ev(&[x[0], 1.0 - x[0]], 1.0 + x[1])).collect()
         }
     }
     let solver = Nsga2::new(config(20));
@@ -297,11 +218,7 @@ fn infeasible_only_population_reports_least_violating_members() {
         assert_eq!(stats.feasible_fraction, 0.0);
         assert!(stats.spread.is_nan());
     }
-    let least = state
-        .population
-        .iter()
-        .map(|i| i.eval.violation)
-        .fold(f64::INFINITY, f64::min);
+    let least = state.population.iter().map(|i| i.eval.violation).fold(f64::INFINITY, f64::min);
     let front = nsga2::pareto_front(&state);
     assert!(!front.is_empty());
     assert!(front.iter().all(|i| i.eval.violation == least));
@@ -313,10 +230,7 @@ fn infeasible_only_population_reports_least_violating_members() {
 /// the same front quality on ZDT1/BNH and resumes bit for bit from a checkpoint.
 #[test]
 fn permutation_selection_reaches_the_fronts_and_resumes_exactly() {
-    let perm = |generations| Config {
-        selection: nsga2::Selection::Permutation,
-        ..config(generations)
-    };
+    let perm = |generations| Config { selection: nsga2::Selection::Permutation, ..config(generations) };
     let r = [1.1, 1.1];
     let (state, _) = run_to_end(&Nsga2::new(perm(250)), &mut Zdt1::default());
     let ratio = front_hv(&state, r) / Zdt1::true_hypervolume(r);

@@ -16,8 +16,26 @@ fn tmp(name: &str) -> PathBuf {
 }
 
 const ARGS: &[&str] = &[
-    "optimize", "--env", "lunar", "--pop", "48", "--generations", "14", "--algorithm", "nsga2", "--particles", "150",
-    "--final-particles", "100", "--replicates", "2", "--seed", "3", "--quiet", "--engine", "cpu",
+    "optimize",
+    "--env",
+    "lunar",
+    "--pop",
+    "48",
+    "--generations",
+    "14",
+    "--algorithm",
+    "nsga2",
+    "--particles",
+    "150",
+    "--final-particles",
+    "100",
+    "--replicates",
+    "2",
+    "--seed",
+    "3",
+    "--quiet",
+    "--engine",
+    "cpu",
 ];
 
 fn run_to_end(out: &Path, extra: &[&str]) -> String {
@@ -46,7 +64,13 @@ fn optimize_writes_its_outputs_and_resumes_after_a_kill_to_the_same_front() {
 
     // the same run, killed once it has logged a few generations
     let cut = tmp("cut");
-    let mut child = Command::new(bin()).args(ARGS).args(["--out", cut.to_str().unwrap()]).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
+    let mut child = Command::new(bin())
+        .args(ARGS)
+        .args(["--out", cut.to_str().unwrap()])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
     let t = Instant::now();
     while rows(&cut.join("generations.csv")) < 4 && t.elapsed() < Duration::from_secs(60) {
         std::thread::sleep(Duration::from_millis(2));
@@ -70,7 +94,10 @@ fn optimize_writes_its_outputs_and_resumes_after_a_kill_to_the_same_front() {
             assert_eq!(a, b, "{f} differs after kill + resume");
         }
     }
-    assert_eq!(std::fs::read_to_string(full.join("evaluations.csv")).unwrap(), std::fs::read_to_string(cut.join("evaluations.csv")).unwrap());
+    assert_eq!(
+        std::fs::read_to_string(full.join("evaluations.csv")).unwrap(),
+        std::fs::read_to_string(cut.join("evaluations.csv")).unwrap()
+    );
     let _ = std::fs::remove_dir_all(&full);
     let _ = std::fs::remove_dir_all(&cut);
 }
@@ -78,12 +105,23 @@ fn optimize_writes_its_outputs_and_resumes_after_a_kill_to_the_same_front() {
 #[test]
 fn optimize_rejects_bad_settings() {
     let out = tmp("bad");
-    let o = Command::new(bin()).args(["optimize", "--pop", "2", "--out", out.to_str().unwrap(), "--quiet"]).output().unwrap();
+    let o = Command::new(bin())
+        .args(["optimize", "--pop", "2", "--out", out.to_str().unwrap(), "--quiet"])
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--pop"));
     // sizes that are typos are refused before any allocation or work, naming the flag
-    for (flag, value) in [("--pop", "1000000000"), ("--final-particles", "100000000"), ("--replicates", "5000"), ("--generations", "9999999999")] {
-        let o = Command::new(bin()).args(["optimize", flag, value, "--out", out.to_str().unwrap(), "--quiet"]).output().unwrap();
+    for (flag, value) in [
+        ("--pop", "1000000000"),
+        ("--final-particles", "100000000"),
+        ("--replicates", "5000"),
+        ("--generations", "9999999999"),
+    ] {
+        let o = Command::new(bin())
+            .args(["optimize", flag, value, "--out", out.to_str().unwrap(), "--quiet"])
+            .output()
+            .unwrap();
         assert_eq!(o.status.code(), Some(2), "{flag} {value}");
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(err.contains(flag) && err.contains("at most"), "{flag}: {err}");

@@ -76,10 +76,16 @@ fn invalid_designs_are_rejected_with_the_right_reason() {
     // Eq. 5.2 chain
     assert_eq!(rule(&s, &Design { l_b: 0.045, ..c }), "linear_chain"); // l_b > r
     assert_eq!(rule(&s, &Design { l_a: 0.050, ..c }), "linear_chain"); // l_a > l_c
-    // c1: small radius with a large ω cannot reach p2 (|l_b - r cos ω| > r)
-    assert_eq!(rule(&s, &Design::from_cli_units([40.0, 30.0, 10.0, 10.0, 170.0, 10.0, 1.0, 40.0])), "c1_catch_misses_peak");
+                                                                       // c1: small radius with a large ω cannot reach p2 (|l_b - r cos ω| > r)
+    assert_eq!(
+        rule(&s, &Design::from_cli_units([40.0, 30.0, 10.0, 10.0, 170.0, 10.0, 1.0, 40.0])),
+        "c1_catch_misses_peak"
+    );
     // c2: foot p4 beyond the pitch (large r, small ω pushes x4 forward)
-    assert_eq!(rule(&s, &Design::from_cli_units([31.0, 30.0, 5.0, 29.0, 2.0, 10.0, 1.0, 40.0])), "c2_catch_overlaps_next_tooth");
+    assert_eq!(
+        rule(&s, &Design::from_cli_units([31.0, 30.0, 5.0, 29.0, 2.0, 10.0, 1.0, 40.0])),
+        "c2_catch_overlaps_next_tooth"
+    );
     // c3 (x4 < 0) cannot fire once the chain holds: x3 >= l_a >= r >= r sin ω, so x4 >= 0.
     // It stays as a defensive check; the property below holds it to the implication.
     // spill: a weak upstroke leaves the fill surface steeper than the conveyor

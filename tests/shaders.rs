@@ -41,7 +41,9 @@ fn shared_records_match_their_rust_twins() {
             .types
             .iter()
             .find_map(|(_, t)| match &t.inner {
-                naga::TypeInner::Struct { members, span } if t.name.as_deref() == Some(name) => Some((members.clone(), *span)),
+                naga::TypeInner::Struct { members, span } if t.name.as_deref() == Some(name) => {
+                    Some((members.clone(), *span))
+                }
                 _ => None,
             })
             .unwrap_or_else(|| panic!("struct {name} not found"));

@@ -6,7 +6,11 @@ use std::process::Command;
 
 fn run(args: &[&str]) -> (i32, String, String) {
     let o = Command::new(env!("CARGO_BIN_EXE_sawtooth")).args(args).output().unwrap();
-    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stdout).into(), String::from_utf8_lossy(&o.stderr).into())
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into(),
+        String::from_utf8_lossy(&o.stderr).into(),
+    )
 }
 
 fn tmp(name: &str) -> PathBuf {
@@ -15,7 +19,21 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
-const GA: &[&str] = &["--pop", "16", "--generations", "4", "--algorithm", "nsga2", "--particles", "40", "--final-particles", "60", "--replicates", "2", "--quiet"];
+const GA: &[&str] = &[
+    "--pop",
+    "16",
+    "--generations",
+    "4",
+    "--algorithm",
+    "nsga2",
+    "--particles",
+    "40",
+    "--final-particles",
+    "60",
+    "--replicates",
+    "2",
+    "--quiet",
+];
 
 #[test]
 fn sweep_writes_a_summary_per_angle_and_reruns_from_disk() {
@@ -63,7 +81,16 @@ fn repeatability_and_sensitivity_write_their_tables() {
     assert_eq!(std::fs::read_to_string(rep.join("runs.csv")).unwrap().lines().count(), 4);
 
     let sens = tmp("sens");
-    let mut args = vec!["study", "sensitivity", "--env", "lunar", "--out", sens.to_str().unwrap(), "--repeatability", rep.to_str().unwrap()];
+    let mut args = vec![
+        "study",
+        "sensitivity",
+        "--env",
+        "lunar",
+        "--out",
+        sens.to_str().unwrap(),
+        "--repeatability",
+        rep.to_str().unwrap(),
+    ];
     args.extend_from_slice(GA);
     let (code, _, err) = run(&args);
     assert_eq!(code, 0, "{err}");

@@ -34,7 +34,8 @@ fn synthetic_runs_read_back_as_measured_data() {
         assert!(total <= input * 1.0 + 0.05 && total >= 0.9 * input, "recovered {total} of {input}");
     }
     // the effect is in the data
-    let poly = measured::parse(&synth(&["--seed", "4", "--effect", "polydisperse=0.6"], &dir.join("d.csv")), "d.csv").unwrap();
+    let poly =
+        measured::parse(&synth(&["--seed", "4", "--effect", "polydisperse=0.6"], &dir.join("d.csv")), "d.csv").unwrap();
     let (m0, m1) = (runs.mean_fractions(), poly.mean_fractions());
     let l1: f64 = m0.iter().zip(&m1).map(|(x, y)| (x - y).abs()).sum();
     assert!(l1 > 0.05, "polydispersity barely changed the synthetic data ({l1})");
@@ -43,10 +44,16 @@ fn synthetic_runs_read_back_as_measured_data() {
 
 #[test]
 fn synth_rejects_bad_input() {
-    let o = Command::new(env!("CARGO_BIN_EXE_sawtooth")).args(["synth", "--setup", "/nonexistent.toml", "--out", "/tmp/x.csv"]).output().unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_sawtooth"))
+        .args(["synth", "--setup", "/nonexistent.toml", "--out", "/tmp/x.csv"])
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(2));
     let setup = concat!(env!("CARGO_MANIFEST_DIR"), "/data/validation/test3.toml");
-    let o = Command::new(env!("CARGO_BIN_EXE_sawtooth")).args(["synth", "--setup", setup, "--effect", "spin=1", "--out", "/tmp/x.csv"]).output().unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_sawtooth"))
+        .args(["synth", "--setup", setup, "--effect", "spin=1", "--out", "/tmp/x.csv"])
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown effect"));
 }

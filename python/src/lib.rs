@@ -77,10 +77,13 @@ impl PyScenario {
         randomise: bool,
         effects: Option<Vec<String>>,
     ) -> PyResult<Self> {
-        let env = match env {
-            None => None,
-            Some(e) => Some(EnvPreset::from_str(e, true).map_err(|_| PyValueError::new_err(format!("env: unknown environment `{e}` (known: lunar, earth)")))?),
-        };
+        let env =
+            match env {
+                None => None,
+                Some(e) => Some(EnvPreset::from_str(e, true).map_err(|_| {
+                    PyValueError::new_err(format!("env: unknown environment `{e}` (known: lunar, earth)"))
+                })?),
+            };
         let compat = match compat {
             None | Some("physical") => None,
             Some("listing") => Some(Compat::Listing),
@@ -90,7 +93,9 @@ impl PyScenario {
             match v {
                 None => Ok(None),
                 Some(n) if (0..=u32::MAX as i64).contains(&n) => Ok(Some(n as u32)),
-                Some(n) => Err(PyValueError::new_err(format!("{name} must be a whole number in [0, {}], got {n}", u32::MAX))),
+                Some(n) => {
+                    Err(PyValueError::new_err(format!("{name} must be a whole number in [0, {}], got {n}", u32::MAX)))
+                }
             }
         };
         let seed = match seed {
@@ -176,7 +181,8 @@ impl PyScenario {
 }
 
 fn engine_kind(name: &str) -> PyResult<EngineKind> {
-    EngineKind::from_str(name, true).map_err(|_| PyValueError::new_err(format!("engine: unknown engine `{name}` (known: listing, cpu, gpu, auto)")))
+    EngineKind::from_str(name, true)
+        .map_err(|_| PyValueError::new_err(format!("engine: unknown engine `{name}` (known: listing, cpu, gpu, auto)")))
 }
 
 /// GPU adapters take a while to open: one engine per kind per process. The CPU engines and
@@ -209,7 +215,9 @@ fn designs_from(x: &PyReadonlyArray2<f64>) -> PyResult<Vec<[f64; 8]>> {
         for (j, x) in row.iter().enumerate() {
             if !x.is_finite() {
                 let (name, unit) = VARIABLES[j];
-                return Err(PyValueError::new_err(format!("X[{i}, {j}]: design field `{name}` ({unit}) must be a finite number, got {x}")));
+                return Err(PyValueError::new_err(format!(
+                    "X[{i}, {j}]: design field `{name}` ({unit}) must be a finite number, got {x}"
+                )));
             }
             v[j] = *x;
         }
@@ -261,8 +269,10 @@ fn evaluate<'py>(
     let results = py.detach(|| eng.evaluate(&scenario, &designs));
 
     let nan = f64::NAN;
-    let (mut f_stroke, mut f_dyn, mut w_spec, mut m_dot, mut p_avg) = (vec![nan; n], vec![nan; n], vec![nan; n], vec![nan; n], vec![nan; n]);
-    let (mut d_avg, mut lost, mut advance, mut stroke, mut n_wire) = (vec![nan; n], vec![nan; n], vec![nan; n], vec![nan; n], vec![-1i64; n]);
+    let (mut f_stroke, mut f_dyn, mut w_spec, mut m_dot, mut p_avg) =
+        (vec![nan; n], vec![nan; n], vec![nan; n], vec![nan; n], vec![nan; n]);
+    let (mut d_avg, mut lost, mut advance, mut stroke, mut n_wire) =
+        (vec![nan; n], vec![nan; n], vec![nan; n], vec![nan; n], vec![-1i64; n]);
     let mut unsettled = vec![nan; n];
     let mut dist = vec![nan; n * teeth];
     let mut valid = vec![false; n];
@@ -305,7 +315,9 @@ fn evaluate<'py>(
             message[i] = format!("constraint violation {:.6} (sum of excesses beyond the tolerance {CONSTRAINT_TOLERANCE}); not simulated", violations[i]);
         }
     }
-    let arr2 = |v: Vec<f64>, cols: usize| PyArray2::from_owned_array(py, numpy::ndarray::Array2::from_shape_vec((n, cols), v).expect("shape"));
+    let arr2 = |v: Vec<f64>, cols: usize| {
+        PyArray2::from_owned_array(py, numpy::ndarray::Array2::from_shape_vec((n, cols), v).expect("shape"))
+    };
     let d = PyDict::new(py);
     d.set_item("f_stroke_hz", f_stroke.into_pyarray(py))?;
     d.set_item("f_dynamic_hz", f_dyn.into_pyarray(py))?;
@@ -342,7 +354,13 @@ fn evaluate<'py>(
 /// vx_m_s, vy_m_s, t_s, state}: each flight's start (global m) and velocity (m/s).
 #[pyfunction]
 #[pyo3(signature = (scenario, design=None, *, engine="cpu", trajectories=false))]
-fn simulate<'py>(py: Python<'py>, scenario: &PyScenario, design: Option<Vec<f64>>, engine: &str, trajectories: bool) -> PyResult<Bound<'py, PyAny>> {
+fn simulate<'py>(
+    py: Python<'py>,
+    scenario: &PyScenario,
+    design: Option<Vec<f64>>,
+    engine: &str,
+    trajectories: bool,
+) -> PyResult<Bound<'py, PyAny>> {
     let kind = engine_kind(engine)?;
     let design = match (design, scenario.design) {
         (Some(v), _) => {
@@ -361,7 +379,9 @@ fn simulate<'py>(py: Python<'py>, scenario: &PyScenario, design: Option<Vec<f64>
         return Err(PyValueError::new_err("trajectories redraw each flight as one closed-form arc; with the sled-motion or quadratic-drag effects that would be wrong, so they are not offered"));
     }
     if trajectories && matches!(kind, EngineKind::Gpu | EngineKind::Auto) {
-        return Err(PyValueError::new_err("trajectories record every flight, which only the CPU engines do: use engine=\"cpu\" or \"listing\""));
+        return Err(PyValueError::new_err(
+            "trajectories record every flight, which only the CPU engines do: use engine=\"cpu\" or \"listing\"",
+        ));
     }
     let eng = engine_for(kind, &s).map_err(value_error)?;
     let det = py
@@ -414,10 +434,19 @@ fn load_measured<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyD
     d.set_item("provenance", PyList::new(py, &m.provenance)?)?;
     d.set_item("teeth", m.teeth)?;
     d.set_item("run", PyList::new(py, m.runs.iter().map(|r| r.id.clone()))?)?;
-    d.set_item("masses_g", PyArray2::from_owned_array(py, numpy::ndarray::Array2::from_shape_vec((n, m.teeth), masses).expect("shape")))?;
-    d.set_item("input_mass_g", m.runs.iter().map(|r| r.input_mass_g.unwrap_or(f64::NAN)).collect::<Vec<_>>().into_pyarray(py))?;
+    d.set_item(
+        "masses_g",
+        PyArray2::from_owned_array(py, numpy::ndarray::Array2::from_shape_vec((n, m.teeth), masses).expect("shape")),
+    )?;
+    d.set_item(
+        "input_mass_g",
+        m.runs.iter().map(|r| r.input_mass_g.unwrap_or(f64::NAN)).collect::<Vec<_>>().into_pyarray(py),
+    )?;
     let fr: Vec<f64> = m.fractions().into_iter().flatten().collect();
-    d.set_item("fractions", PyArray2::from_owned_array(py, numpy::ndarray::Array2::from_shape_vec((n, m.teeth), fr).expect("shape")))?;
+    d.set_item(
+        "fractions",
+        PyArray2::from_owned_array(py, numpy::ndarray::Array2::from_shape_vec((n, m.teeth), fr).expect("shape")),
+    )?;
     d.set_item("mean_fractions", m.mean_fractions().into_pyarray(py))?;
     d.set_item("std_fractions", m.std_fractions().into_pyarray(py))?;
     let (ex, sx) = m.centre_and_dispersion();
@@ -433,7 +462,8 @@ fn load_measured<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyD
 #[pyfunction]
 fn _cli(py: Python<'_>, args: Vec<String>) -> PyResult<String> {
     let argv = std::iter::once("sawtooth".to_string()).chain(args);
-    let cli = sawtooth::cli::Cli::try_parse_from(argv).map_err(|e| PyValueError::new_err(e.render().to_string().trim().to_string()))?;
+    let cli = sawtooth::cli::Cli::try_parse_from(argv)
+        .map_err(|e| PyValueError::new_err(e.render().to_string().trim().to_string()))?;
     let (result, out) = py.detach(move || {
         let mut out: Vec<u8> = Vec::new();
         let r = sawtooth::cli::run(cli, &mut out);
@@ -441,7 +471,10 @@ fn _cli(py: Python<'_>, args: Vec<String>) -> PyResult<String> {
     });
     let code = result.map_err(value_error)?;
     if code != std::process::ExitCode::SUCCESS {
-        return Err(PyValueError::new_err(format!("the command ended with {code:?}: {}", String::from_utf8_lossy(&out))));
+        return Err(PyValueError::new_err(format!(
+            "the command ended with {code:?}: {}",
+            String::from_utf8_lossy(&out)
+        )));
     }
     String::from_utf8(out).map_err(|e| PyValueError::new_err(e.to_string()))
 }
@@ -457,7 +490,18 @@ fn _sawtooth(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("LOWER_BOUNDS", LOWER_BOUND_CLI.to_vec())?;
     m.add("UPPER_BOUNDS", UPPER_BOUND_CLI.to_vec())?;
     m.add("CONSTRAINT_TOLERANCE", CONSTRAINT_TOLERANCE)?;
-    m.add("CONSTRAINT_NAMES", ["l_b_le_r", "r_le_l_a", "l_a_le_l_c", "c1_catch_reaches_peak", "c2_foot_within_pitch", "c3_foot_after_start", "c4_ramp_cut"])?;
+    m.add(
+        "CONSTRAINT_NAMES",
+        [
+            "l_b_le_r",
+            "r_le_l_a",
+            "l_a_le_l_c",
+            "c1_catch_reaches_peak",
+            "c2_foot_within_pitch",
+            "c3_foot_after_start",
+            "c4_ramp_cut",
+        ],
+    )?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

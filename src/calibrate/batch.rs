@@ -40,7 +40,9 @@ impl Simulator<'_> {
                 per_cond
                     .iter()
                     .zip(self.conditions)
-                    .map(|(r, c)| r.first().and_then(|e| e.as_ref().ok()).map(|e| c.observe(objective::simulated_bins(&e.sim))))
+                    .map(|(r, c)| {
+                        r.first().and_then(|e| e.as_ref().ok()).map(|e| c.observe(objective::simulated_bins(&e.sim)))
+                    })
                     .collect()
             })
             .collect()

@@ -106,7 +106,8 @@ impl Solver {
             .collect();
         let bins = sim.simulate(&points, particles, self.seed);
         // the likelihood profiles a concentration per point: worth the threads
-        let owners: Vec<&Model> = per_model.iter().zip(models).flat_map(|(us, model)| us.iter().map(move |_| model)).collect();
+        let owners: Vec<&Model> =
+            per_model.iter().zip(models).flat_map(|(us, model)| us.iter().map(move |_| model)).collect();
         let mut it = bins
             .into_par_iter()
             .zip(owners)
@@ -151,7 +152,8 @@ impl Solver {
                 Member { pop: pop.into_iter().map(|u| (u, f64::INFINITY)).collect(), rng, evaluations: 0 }
             })
             .collect();
-        let initial: Vec<Vec<Vec<f64>>> = members.iter().map(|mem| mem.pop.iter().map(|(u, _)| u.clone()).collect()).collect();
+        let initial: Vec<Vec<Vec<f64>>> =
+            members.iter().map(|mem| mem.pop.iter().map(|(u, _)| u.clone()).collect()).collect();
         for (mem, scored) in members.iter_mut().zip(self.score(sim, models, &initial, self.screen_particles)) {
             for (ind, (v, _)) in mem.pop.iter_mut().zip(scored) {
                 ind.1 = v;
@@ -170,8 +172,10 @@ impl Solver {
                 }
             }
             if (g + 1) % 10 == 0 || g + 1 == self.generations {
-                let best: Vec<String> =
-                    members.iter().map(|m| format!("{:.1}", m.pop.iter().map(|p| p.1).fold(f64::INFINITY, f64::min))).collect();
+                let best: Vec<String> = members
+                    .iter()
+                    .map(|m| format!("{:.1}", m.pop.iter().map(|p| p.1).fold(f64::INFINITY, f64::min)))
+                    .collect();
                 log(format!("calibrate: screen generation {}/{} (best {})", g + 1, self.generations, best.join(", ")));
             }
         }
@@ -255,7 +259,9 @@ impl Solver {
             }
         }
         let mut fits = Vec::with_capacity(n);
-        for (((u, value, bins), model), (evaluations, archive)) in current.into_iter().zip(models).zip(evaluations.into_iter().zip(archives)) {
+        for (((u, value, bins), model), (evaluations, archive)) in
+            current.into_iter().zip(models).zip(evaluations.into_iter().zip(archives))
+        {
             let Some(bins) = bins.filter(|_| value.is_finite()) else {
                 bail!("no candidate could be simulated (every evaluation was rejected by the engine)");
             };
@@ -361,8 +367,14 @@ mod tests {
 
     fn test3() -> Condition {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/validation");
-        crate::cli::measured_condition::load(&dir.join("test3.csv"), &dir.join("test3.toml"), "test3".into(), None, Some(0))
-            .unwrap()
+        crate::cli::measured_condition::load(
+            &dir.join("test3.csv"),
+            &dir.join("test3.toml"),
+            "test3".into(),
+            None,
+            Some(0),
+        )
+        .unwrap()
     }
 
     #[test]
@@ -401,7 +413,10 @@ mod tests {
         }
         // the same settings give the same fits (common random numbers, seeded solver)
         let again = solver.fit(&sim, &models, &mut |_| {}).unwrap();
-        assert_eq!(again.iter().map(|f| f.x.clone()).collect::<Vec<_>>(), fits.iter().map(|f| f.x.clone()).collect::<Vec<_>>());
+        assert_eq!(
+            again.iter().map(|f| f.x.clone()).collect::<Vec<_>>(),
+            fits.iter().map(|f| f.x.clone()).collect::<Vec<_>>()
+        );
     }
 
     #[test]

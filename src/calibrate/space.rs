@@ -37,7 +37,8 @@ impl Space {
         let mut free = Vec::new();
         for (k, e) in effects.iter().enumerate() {
             for i in 0..e.param_names().len() {
-                let stated_everywhere = *e == EffectKind::SledMotion && conditions.iter().all(|c| c.motion.get(i).is_some());
+                let stated_everywhere =
+                    *e == EffectKind::SledMotion && conditions.iter().all(|c| c.motion.get(i).is_some());
                 if !stated_everywhere {
                     free.push((k, i));
                 }
@@ -120,6 +121,9 @@ impl Space {
     }
 
     pub fn to_unit(&self, x: &[f64]) -> Vec<f64> {
-        x.iter().zip(self.bounds()).map(|(x, (l, h))| if h > l { ((x - l) / (h - l)).clamp(0.0, 1.0) } else { 0.0 }).collect()
+        x.iter()
+            .zip(self.bounds())
+            .map(|(x, (l, h))| if h > l { ((x - l) / (h - l)).clamp(0.0, 1.0) } else { 0.0 })
+            .collect()
     }
 }

@@ -86,8 +86,9 @@ impl ScenarioArgs {
         }
         let mut s = file.scenario()?;
         if let Some(m) = &self.material {
-            s.material = Material::by_name(m)
-                .with_context(|| format!("--material: unknown material `{m}` (known: lunar-regolith, quartz-sand, glass-beads)"))?;
+            s.material = Material::by_name(m).with_context(|| {
+                format!("--material: unknown material `{m}` (known: lunar-regolith, quartz-sand, glass-beads)")
+            })?;
         }
         if let Some((a, b)) = self.alpha {
             if a != b {

@@ -10,11 +10,11 @@ use clap::Args;
 use serde_json::json;
 
 use crate::engine::{make_engine, BatchEvaluator, EngineKind};
-use crate::model::sampling::{neighbourhood, random_valid_designs};
 use crate::model::prepare;
-use rayon::prelude::*;
+use crate::model::sampling::{neighbourhood, random_valid_designs};
 use crate::model::scenario::EnvPreset;
 use crate::model::{Design, Scenario};
+use rayon::prelude::*;
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 pub enum Sample {
@@ -84,7 +84,12 @@ pub fn measure(engine: &dyn BatchEvaluator, scenario: &Scenario, designs: &[Desi
 }
 
 /// The groups of one calibration generation (see `BenchArgs::calibration`).
-fn calibration_groups(dir: &std::path::Path, per_model: usize, particles: u32, seed: u64) -> anyhow::Result<Vec<(Scenario, Vec<Design>)>> {
+fn calibration_groups(
+    dir: &std::path::Path,
+    per_model: usize,
+    particles: u32,
+    seed: u64,
+) -> anyhow::Result<Vec<(Scenario, Vec<Design>)>> {
     use crate::calibrate::{Condition, KnownMotion, Normalise, Space};
     use crate::diagnose::diagnose::shared_params;
     use crate::model::effects::EffectKind;
@@ -100,10 +105,16 @@ fn calibration_groups(dir: &std::path::Path, per_model: usize, particles: u32, s
     }
     let mut conditions = Vec::new();
     for f in &files {
-        let config = crate::io::config::ConfigFile::load(f).with_context(|| format!("--calibration {}", f.display()))?;
+        let config =
+            crate::io::config::ConfigFile::load(f).with_context(|| format!("--calibration {}", f.display()))?;
         let design = config.design().with_context(|| format!("--calibration {}: no [design] table", f.display()))?;
         let base = config.scenario().with_context(|| format!("--calibration {}", f.display()))?;
-        let runs = crate::io::measured::MeasuredRuns { path: String::new(), provenance: Vec::new(), teeth: 1, runs: Vec::new() };
+        let runs = crate::io::measured::MeasuredRuns {
+            path: String::new(),
+            provenance: Vec::new(),
+            teeth: 1,
+            runs: Vec::new(),
+        };
         conditions.push(Condition {
             name: f.display().to_string(),
             data: String::new(),
@@ -147,13 +158,25 @@ fn run_calibration(a: &BenchArgs, dir: &std::path::Path, out: &mut dyn Write) ->
             let t = Instant::now();
             let r = engine.evaluate_groups(&groups);
             best = best.min(t.elapsed().as_secs_f64());
-            anyhow::ensure!(r.len() == groups.len(), "the engine returned {} results for {} groups", r.len(), groups.len());
+            anyhow::ensure!(
+                r.len() == groups.len(),
+                "the engine returned {} results for {} groups",
+                r.len(),
+                groups.len()
+            );
         }
         rows.push((engine.backend(), best));
     }
     if a.json {
-        let secs: serde_json::Map<String, serde_json::Value> = rows.iter().map(|(e, s)| (e.to_string(), json!(s))).collect();
-        writeln!(out, "{}", serde_json::to_string_pretty(&json!({"seconds_per_generation": secs, "groups": groups.len(), "particles": a.particles, "threads": rayon::current_num_threads()}))?)?;
+        let secs: serde_json::Map<String, serde_json::Value> =
+            rows.iter().map(|(e, s)| (e.to_string(), json!(s))).collect();
+        writeln!(
+            out,
+            "{}",
+            serde_json::to_string_pretty(
+                &json!({"seconds_per_generation": secs, "groups": groups.len(), "particles": a.particles, "threads": rayon::current_num_threads()})
+            )?
+        )?;
     } else {
         writeln!(
             out,
@@ -202,8 +225,10 @@ pub fn run(a: BenchArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let rate = |m: &Measurement| m.particle_bounces / m.seconds;
     let base = results.iter().find(|m| m.engine == "listing").map(rate);
     if a.json {
-        let rates: serde_json::Map<String, serde_json::Value> = results.iter().map(|m| (m.engine.to_string(), json!(rate(m)))).collect();
-        let secs: serde_json::Map<String, serde_json::Value> = results.iter().map(|m| (m.engine.to_string(), json!(m.seconds))).collect();
+        let rates: serde_json::Map<String, serde_json::Value> =
+            results.iter().map(|m| (m.engine.to_string(), json!(rate(m)))).collect();
+        let secs: serde_json::Map<String, serde_json::Value> =
+            results.iter().map(|m| (m.engine.to_string(), json!(m.seconds))).collect();
         let ratios: serde_json::Map<String, serde_json::Value> =
             results.iter().filter_map(|m| base.map(|b| (m.engine.to_string(), json!(rate(m) / b)))).collect();
         let v = json!({
@@ -232,10 +257,22 @@ pub fn run(a: BenchArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
             rayon::current_num_threads()
         )?;
         writeln!(out, "preparation (validity, fill, launch points; in every engine's time): {prepare_s:.5} s/batch")?;
-        writeln!(out, "{:<10} {:>14} {:>16} {:>18} {:>10}", "engine", "s/batch", "particle-bounces", "particle-bounces/s", "ratio")?;
+        writeln!(
+            out,
+            "{:<10} {:>14} {:>16} {:>18} {:>10}",
+            "engine", "s/batch", "particle-bounces", "particle-bounces/s", "ratio"
+        )?;
         for m in &results {
             let ratio = base.map_or("-".to_string(), |b| format!("{:.1}x", rate(m) / b));
-            writeln!(out, "{:<10} {:>14.5} {:>16.0} {:>18.3e} {:>10}", m.engine, m.seconds, m.particle_bounces, rate(m), ratio)?;
+            writeln!(
+                out,
+                "{:<10} {:>14.5} {:>16.0} {:>18.3e} {:>10}",
+                m.engine,
+                m.seconds,
+                m.particle_bounces,
+                rate(m),
+                ratio
+            )?;
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -85,7 +85,11 @@ pub fn run(c: CampaignCommand, out: &mut dyn Write) -> anyhow::Result<ExitCode> 
 
 fn task_from_env() -> anyhow::Result<Option<usize>> {
     match std::env::var("SLURM_ARRAY_TASK_ID") {
-        Ok(v) => v.trim().parse::<usize>().map(Some).with_context(|| format!("SLURM_ARRAY_TASK_ID=`{v}` is not a member index (expected 0, 1, 2, …)")),
+        Ok(v) => v
+            .trim()
+            .parse::<usize>()
+            .map(Some)
+            .with_context(|| format!("SLURM_ARRAY_TASK_ID=`{v}` is not a member index (expected 0, 1, 2, …)")),
         Err(_) => Ok(None),
     }
 }
@@ -120,12 +124,24 @@ fn run_cmd(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     }
     let engine = make_engine_for(plan.engine, &m.manifest.scenario)?;
     let resume = dir.join("checkpoint.json").exists();
-    let opts = RunOptions { checkpoint_every: plan.checkpoint_every, progress: false, label: format!("member {i} ({}) ", m.label) };
-    let o = run_optimisation(&dir, (!resume).then(|| m.manifest.clone()), resume, &engine, &opts).with_context(|| format!("member {i} ({})", m.label))?;
+    let opts = RunOptions {
+        checkpoint_every: plan.checkpoint_every,
+        progress: false,
+        label: format!("member {i} ({}) ", m.label),
+    };
+    let o = run_optimisation(&dir, (!resume).then(|| m.manifest.clone()), resume, &engine, &opts)
+        .with_context(|| format!("member {i} ({})", m.label))?;
     if o.interrupted {
         return Ok(ExitCode::from(130));
     }
-    writeln!(out, "member {i} ({}) finished: {} generations ({}), {} front points", m.label, o.generations, o.termination, o.front.len())?;
+    writeln!(
+        out,
+        "member {i} ({}) finished: {} generations ({}), {} front points",
+        m.label,
+        o.generations,
+        o.termination,
+        o.front.len()
+    )?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -182,8 +198,10 @@ fn array_spec(tasks: &[usize]) -> String {
 fn scripts(a: &SlurmArgs, plan: &Plan, root: &str, exe: &str, tasks: &[usize]) -> anyhow::Result<(String, String)> {
     let q_root = shell_quote("the campaign folder", root)?;
     let q_exe = shell_quote("the sawtooth executable", exe)?;
-    let name = Path::new(root).file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "campaign".into());
-    let name: String = name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect();
+    let name =
+        Path::new(root).file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "campaign".into());
+    let name: String =
+        name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect();
     let mut common = String::new();
     if let Some(p) = &a.partition {
         common.push_str(&format!("#SBATCH --partition={p}\n"));
@@ -239,11 +257,9 @@ const LAST_SUBMIT: &str = "last-submit";
 
 /// Run sbatch; the job id it prints with --parsable (`ID` or `ID;CLUSTER`).
 fn sbatch(args: &[&str]) -> anyhow::Result<String> {
-    let o = std::process::Command::new("sbatch")
-        .arg("--parsable")
-        .args(args)
-        .output()
-        .context("--submit: running sbatch (is this a Slurm login node? without --submit the scripts are only written)")?;
+    let o = std::process::Command::new("sbatch").arg("--parsable").args(args).output().context(
+        "--submit: running sbatch (is this a Slurm login node? without --submit the scripts are only written)",
+    )?;
     if !o.status.success() {
         bail!("--submit: sbatch {} failed: {}", args.join(" "), String::from_utf8_lossy(&o.stderr).trim());
     }
@@ -258,10 +274,20 @@ fn sbatch(args: &[&str]) -> anyhow::Result<String> {
 fn slurm(a: SlurmArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let plan = read_plan(&a.dir)?;
     if let Some(p) = &a.partition {
-        check_token("--partition", p, |c| c.is_ascii_alphanumeric() || "_-.,".contains(c), "a partition name is letters, digits, `_-.` (comma-separated)")?;
+        check_token(
+            "--partition",
+            p,
+            |c| c.is_ascii_alphanumeric() || "_-.,".contains(c),
+            "a partition name is letters, digits, `_-.` (comma-separated)",
+        )?;
     }
     if let Some(t) = &a.time {
-        check_token("--time", t, |c| c.is_ascii_digit() || c == ':' || c == '-', "Slurm's time format: MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM or D-HH:MM:SS")?;
+        check_token(
+            "--time",
+            t,
+            |c| c.is_ascii_digit() || c == ':' || c == '-',
+            "Slurm's time format: MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM or D-HH:MM:SS",
+        )?;
     }
     if a.cpus_per_task == 0 {
         bail!("--cpus-per-task must be at least 1");
@@ -272,9 +298,15 @@ fn slurm(a: SlurmArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     if a.max_parallel == Some(0) {
         bail!("--max-parallel must be at least 1");
     }
-    let tasks: Vec<usize> = (0..plan.members.len()).filter(|&i| !a.unfinished || member_state(&plan.member_dir(&a.dir, i)) != MemberState::Finished).collect();
+    let tasks: Vec<usize> = (0..plan.members.len())
+        .filter(|&i| !a.unfinished || member_state(&plan.member_dir(&a.dir, i)) != MemberState::Finished)
+        .collect();
     if tasks.is_empty() {
-        bail!("every member of {} is finished: nothing to submit; summarise with `sawtooth campaign gather {}`", a.dir.display(), a.dir.display());
+        bail!(
+            "every member of {} is finished: nothing to submit; summarise with `sawtooth campaign gather {}`",
+            a.dir.display(),
+            a.dir.display()
+        );
     }
     let root = std::fs::canonicalize(&a.dir).with_context(|| format!("resolving {}", a.dir.display()))?;
     let exe = std::env::current_exe().and_then(std::fs::canonicalize).context("locating the sawtooth executable")?;
@@ -290,13 +322,21 @@ fn slurm(a: SlurmArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     writeln!(out, "wrote {ap} ({} tasks: {}) and {gp}", tasks.len(), array_spec(&tasks))?;
     let last = sdir.join(LAST_SUBMIT);
     if a.unfinished {
-        if let Some(g) = std::fs::read_to_string(&last).ok().and_then(|t| t.split_whitespace().find_map(|w| w.strip_prefix("gather=").map(String::from))) {
+        if let Some(g) = std::fs::read_to_string(&last)
+            .ok()
+            .and_then(|t| t.split_whitespace().find_map(|w| w.strip_prefix("gather=").map(String::from)))
+        {
             writeln!(out, "note: the gather job of the last submission ({g}) can never start once a task of its array failed or was cancelled; if squeue still shows it: scancel {g}")?;
         }
     }
     if !a.submit {
         writeln!(out, "submit with:")?;
-        writeln!(out, "  jid=$(sbatch --parsable {}) && sbatch --dependency=afterok:${{jid%%;*}} {}", shell_quote("path", &ap)?, shell_quote("path", &gp)?)?;
+        writeln!(
+            out,
+            "  jid=$(sbatch --parsable {}) && sbatch --dependency=afterok:${{jid%%;*}} {}",
+            shell_quote("path", &ap)?,
+            shell_quote("path", &gp)?
+        )?;
         return Ok(ExitCode::SUCCESS);
     }
     let jid = sbatch(&[&ap])?;

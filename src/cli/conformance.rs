@@ -36,7 +36,8 @@ pub fn run_cli(a: ConformanceArgs, out: &mut dyn Write) -> anyhow::Result<ExitCo
         Some(e) => vec![Scenario::preset(e)],
         None => vec![Scenario::lunar(), Scenario::earth()],
     };
-    let envs: Vec<Scenario> = envs.into_iter().map(|s| if a.compat_listing { s.into_listing_compat() } else { s }).collect();
+    let envs: Vec<Scenario> =
+        envs.into_iter().map(|s| if a.compat_listing { s.into_listing_compat() } else { s }).collect();
     let report = run(&gpu, &scenarios(&envs, a.particles), a.designs, a.seed, Tolerances::default());
     if a.json {
         writeln!(out, "{}", serde_json::to_string_pretty(&report)?).context("writing output")?;
@@ -53,7 +54,19 @@ pub fn run_cli(a: ConformanceArgs, out: &mut dyn Write) -> anyhow::Result<ExitCo
             t.max_mean_d_avg_diff_m,
             t.max_mean_lost_diff
         )?;
-        writeln!(out, "{:<18} {:>7} {:>9} {:>16} {:>14} {:>12} {:>9} {:>12} {:>10}", "scenario", "designs", "particles", "first-impact ok", "max diff (m)", "tooth+state", "mean L1", "d_avg diff", "lost diff")?;
+        writeln!(
+            out,
+            "{:<18} {:>7} {:>9} {:>16} {:>14} {:>12} {:>9} {:>12} {:>10}",
+            "scenario",
+            "designs",
+            "particles",
+            "first-impact ok",
+            "max diff (m)",
+            "tooth+state",
+            "mean L1",
+            "d_avg diff",
+            "lost diff"
+        )?;
         for r in &report.scenarios {
             writeln!(
                 out,
@@ -73,7 +86,11 @@ pub fn run_cli(a: ConformanceArgs, out: &mut dyn Write) -> anyhow::Result<ExitCo
             writeln!(out, "worst cases:")?;
             for m in &report.worst {
                 let d = m.design;
-                writeln!(out, "  [{}] design {:.3},{:.3},{:.3},{:.3},{:.2},{:.2},{:.3},{:.2} particle {}: {}", m.scenario, d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], m.particle, m.what)?;
+                writeln!(
+                    out,
+                    "  [{}] design {:.3},{:.3},{:.3},{:.3},{:.2},{:.2},{:.3},{:.2} particle {}: {}",
+                    m.scenario, d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], m.particle, m.what
+                )?;
             }
         }
         for f in &report.failures {

@@ -114,15 +114,11 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     }
     let seed = conditions[0].base.sim.seed;
     // the output folder is owned before the work, so a busy or foreign folder costs nothing
-    let _owned =
-        RunDir::acquire(&a.out, "diagnose", Access::Exclusive, |d| d.join("diagnosis.json").exists()).context("--out")?;
+    let _owned = RunDir::acquire(&a.out, "diagnose", Access::Exclusive, |d| d.join("diagnosis.json").exists())
+        .context("--out")?;
     let engine = make_engine(a.engine)?;
-    let settings = Settings {
-        effects,
-        effort: a.effort.effort(seed),
-        rescore_streams: a.rescore_streams,
-        bootstrap: a.bootstrap,
-    };
+    let settings =
+        Settings { effects, effort: a.effort.effort(seed), rescore_streams: a.rescore_streams, bootstrap: a.bootstrap };
     let started = std::time::Instant::now();
     let d = diagnose(engine.as_ref(), conditions, settings, &mut |line| eprintln!("{line}"))?;
     eprintln!("diagnose: done in {:.1} s", started.elapsed().as_secs_f64());
@@ -147,7 +143,11 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         }
         writeln!(out, "best: {}", d.best.map_or("none (the data cannot tell)", |e| e.name()))?;
         if !d.indistinguishable.is_empty() {
-            writeln!(out, "indistinguishable: {}", d.indistinguishable.iter().map(|e| e.name()).collect::<Vec<_>>().join(", "))?;
+            writeln!(
+                out,
+                "indistinguishable: {}",
+                d.indistinguishable.iter().map(|e| e.name()).collect::<Vec<_>>().join(", ")
+            )?;
         }
         for n in &d.notes {
             writeln!(out, "note: {n}")?;

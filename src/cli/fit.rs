@@ -85,7 +85,9 @@ pub fn run(a: FitArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     }
     // the output folder is owned before the work, so a busy or foreign folder costs nothing
     let _owned = match &a.out {
-        Some(dir) => Some(RunDir::acquire(dir, "fit", Access::Exclusive, |d| d.join("fit.json").exists()).context("--out")?),
+        Some(dir) => {
+            Some(RunDir::acquire(dir, "fit", Access::Exclusive, |d| d.join("fit.json").exists()).context("--out")?)
+        }
         None => None,
     };
     let params = params.unwrap_or_else(|| shared_params(std::slice::from_ref(&condition)));

@@ -18,7 +18,13 @@ pub fn stem(p: &Path) -> String {
 /// Load `data` measured with `setup`. The seed of the setup (`sim.seed`) is used where
 /// `seed` is None. `normalise` None chooses fractions of the loaded mass where every run
 /// records input_mass, else of the recovered mass (D.4).
-pub fn load(data: &Path, setup: &Path, name: String, normalise: Option<Normalise>, seed: Option<u64>) -> anyhow::Result<Condition> {
+pub fn load(
+    data: &Path,
+    setup: &Path,
+    name: String,
+    normalise: Option<Normalise>,
+    seed: Option<u64>,
+) -> anyhow::Result<Condition> {
     let runs = measured::load(data).with_context(|| format!("--data {}", data.display()))?;
     let config = ConfigFile::load(setup).with_context(|| format!("--setup {}", setup.display()))?;
     let Some(design) = config.design() else {

@@ -76,14 +76,16 @@ impl Plan {
 /// Read `root/plan.json`.
 pub fn read_plan(root: &Path) -> anyhow::Result<Plan> {
     let path = root.join(PLAN_FILE);
-    let text = std::fs::read_to_string(&path).with_context(|| format!("{} is not a campaign folder: cannot read {}", root.display(), path.display()))?;
+    let text = std::fs::read_to_string(&path)
+        .with_context(|| format!("{} is not a campaign folder: cannot read {}", root.display(), path.display()))?;
     let plan: Plan = serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
     if plan.format != PLAN_FORMAT {
         bail!("{}: plan format {} (this sawtooth reads format {PLAN_FORMAT})", path.display(), plan.format);
     }
     for (i, m) in plan.members.iter().enumerate() {
         let p = Path::new(&m.dir);
-        if m.dir.is_empty() || p.is_absolute() || p.components().any(|c| !matches!(c, std::path::Component::Normal(_))) {
+        if m.dir.is_empty() || p.is_absolute() || p.components().any(|c| !matches!(c, std::path::Component::Normal(_)))
+        {
             bail!("{}: member {i}: dir `{}` must be a plain folder name inside the campaign", path.display(), m.dir);
         }
     }
@@ -172,7 +174,11 @@ pub fn finished_fronts(root: &Path, plan: &Plan) -> anyhow::Result<Vec<Vec<Front
             MemberState::Finished => {
                 let run = read_manifest(&dir)?;
                 if settings(&run)? != settings(&m.manifest)? {
-                    bail!("member {i} ({}): {} was run with other settings than the plan's; refusing to summarise it", m.label, dir.join("run.toml").display());
+                    bail!(
+                        "member {i} ({}): {} was run with other settings than the plan's; refusing to summarise it",
+                        m.label,
+                        dir.join("run.toml").display()
+                    );
                 }
                 fronts.push(read_pareto_csv(&dir.join("pareto.csv"))?);
             }
@@ -242,7 +248,9 @@ pub fn execute(root: &Path, plan: &Plan) -> anyhow::Result<bool> {
 pub fn summarise(root: &Path, plan: &Plan, fronts: &[Vec<FrontPoint>], out: &mut dyn Write) -> anyhow::Result<()> {
     match &plan.study {
         Study::Sweep => super::sweep::summarise(root, plan, fronts, out),
-        Study::Repeatability { target_mass_flow } => super::study::summarise_repeatability(root, plan, *target_mass_flow, fronts, out),
+        Study::Repeatability { target_mass_flow } => {
+            super::study::summarise_repeatability(root, plan, *target_mass_flow, fronts, out)
+        }
         Study::Sensitivity { target_mass_flow, repeatability_ci } => {
             super::study::summarise_sensitivity(root, plan, *target_mass_flow, *repeatability_ci, fronts, out)
         }
@@ -257,9 +265,18 @@ pub fn plan_or_run(root: &Path, plan: &Plan, plan_only: bool, out: &mut dyn Writ
     if plan_only {
         let n = plan.members.len();
         writeln!(out, "wrote {} ({n} members); nothing run yet", root.join(PLAN_FILE).display())?;
-        writeln!(out, "  one member:      sawtooth campaign run {} --task I   (I in 0..{})", root.display(), n.saturating_sub(1))?;
+        writeln!(
+            out,
+            "  one member:      sawtooth campaign run {} --task I   (I in 0..{})",
+            root.display(),
+            n.saturating_sub(1)
+        )?;
         writeln!(out, "  all, here:       sawtooth campaign run {}", root.display())?;
-        writeln!(out, "  Slurm job array: sawtooth campaign slurm {} [--partition P --time T] --submit", root.display())?;
+        writeln!(
+            out,
+            "  Slurm job array: sawtooth campaign slurm {} [--partition P --time T] --submit",
+            root.display()
+        )?;
         return Ok(ExitCode::SUCCESS);
     }
     if !execute(root, plan)? {
@@ -280,8 +297,12 @@ pub fn panels_svg(title: &str, x_label: &str, x: &[f64], panels: &[Panel]) -> St
     let colours = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e"];
     let (x0, x1) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
     let span = (x1 - x0).max(1e-12);
-    let mut s = format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="11">"#);
-    s.push_str(&format!(r#"<rect width="{w}" height="{h}" fill="white"/><text x="{m}" y="22" font-size="13">{title}</text>"#));
+    let mut s = format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="11">"#
+    );
+    s.push_str(&format!(
+        r#"<rect width="{w}" height="{h}" fill="white"/><text x="{m}" y="22" font-size="13">{title}</text>"#
+    ));
     for (k, (name, series)) in panels.iter().enumerate() {
         let top = 40.0 + k as f64 * (ph + 30.0);
         let vals: Vec<f64> = series.iter().flat_map(|(_, v)| v.iter().cloned()).filter(|v| v.is_finite()).collect();
@@ -289,16 +310,35 @@ pub fn panels_svg(title: &str, x_label: &str, x: &[f64], panels: &[Panel]) -> St
         let (y0, y1) = if y0.is_finite() { (y0, y1.max(y0 + 1e-12)) } else { (0.0, 1.0) };
         let sx = |v: f64| m + (v - x0) / span * (w - 2.0 * m);
         let sy = |v: f64| top + ph - (v - y0) / (y1 - y0) * ph;
-        s.push_str(&format!(r#"<rect x="{m}" y="{top}" width="{}" height="{ph}" fill="none" stroke="black"/>"#, w - 2.0 * m));
+        s.push_str(&format!(
+            r#"<rect x="{m}" y="{top}" width="{}" height="{ph}" fill="none" stroke="black"/>"#,
+            w - 2.0 * m
+        ));
         s.push_str(&format!(r#"<text x="{}" y="{}">{name}: {y0:.4e} .. {y1:.4e}</text>"#, m + 4.0, top + 12.0));
         for (c, (label, v)) in series.iter().enumerate() {
-            let pts: Vec<String> = x.iter().zip(v).filter(|(_, y)| y.is_finite()).map(|(a, b)| format!("{:.2},{:.2}", sx(*a), sy(*b))).collect();
+            let pts: Vec<String> = x
+                .iter()
+                .zip(v)
+                .filter(|(_, y)| y.is_finite())
+                .map(|(a, b)| format!("{:.2},{:.2}", sx(*a), sy(*b)))
+                .collect();
             let col = colours[c % colours.len()];
-            s.push_str(&format!(r#"<polyline points="{}" fill="none" stroke="{col}" stroke-width="1.5"/>"#, pts.join(" ")));
-            s.push_str(&format!(r#"<text x="{}" y="{}" fill="{col}">{label}</text>"#, w - m - 120.0, top + 14.0 + 12.0 * c as f64));
+            s.push_str(&format!(
+                r#"<polyline points="{}" fill="none" stroke="{col}" stroke-width="1.5"/>"#,
+                pts.join(" ")
+            ));
+            s.push_str(&format!(
+                r#"<text x="{}" y="{}" fill="{col}">{label}</text>"#,
+                w - m - 120.0,
+                top + 14.0 + 12.0 * c as f64
+            ));
         }
     }
-    s.push_str(&format!(r#"<text x="{}" y="{}" text-anchor="middle">{x_label} ({x0} .. {x1})</text></svg>"#, w / 2.0, h - 10.0));
+    s.push_str(&format!(
+        r#"<text x="{}" y="{}" text-anchor="middle">{x_label} ({x0} .. {x1})</text></svg>"#,
+        w / 2.0,
+        h - 10.0
+    ));
     s.push('\n');
     s
 }

@@ -58,7 +58,11 @@ pub struct GaArgs {
 
 impl GaArgs {
     /// A manifest for a new run of `scenario` with these settings.
-    pub fn manifest(&self, scenario: crate::model::Scenario, engine: crate::engine::EngineKind) -> anyhow::Result<Manifest> {
+    pub fn manifest(
+        &self,
+        scenario: crate::model::Scenario,
+        engine: crate::engine::EngineKind,
+    ) -> anyhow::Result<Manifest> {
         if self.pop < 4 {
             bail!("--pop must be at least 4, got {}", self.pop);
         }
@@ -66,7 +70,10 @@ impl GaArgs {
         // before the first generation, a re-evaluation beyond sim.particles' bound seats no
         // grain and would leave an empty front.
         if self.pop > MAX_POP {
-            bail!("--pop must be at most {MAX_POP} (one generation is one engine batch of that many designs), got {}", self.pop);
+            bail!(
+                "--pop must be at most {MAX_POP} (one generation is one engine batch of that many designs), got {}",
+                self.pop
+            );
         }
         if self.generations > MAX_GENERATIONS {
             bail!("--generations must be at most {MAX_GENERATIONS}, got {}", self.generations);
@@ -78,16 +85,28 @@ impl GaArgs {
             bail!("--final-particles and --replicates must be at least 1");
         }
         if self.final_particles > MAX_PARTICLES {
-            bail!("--final-particles must be at most {MAX_PARTICLES} (the bound of sim.particles), got {}", self.final_particles);
+            bail!(
+                "--final-particles must be at most {MAX_PARTICLES} (the bound of sim.particles), got {}",
+                self.final_particles
+            );
         }
         if self.replicates > MAX_REPLICATES {
             bail!("--replicates must be at most {MAX_REPLICATES}, got {}", self.replicates);
         }
         let mode = match self.algorithm {
             Algorithm::Nsga2 => Mode::Standard,
-            Algorithm::MatlabLike => Mode::MatlabLike { pareto_fraction: 0.35, tol: self.tol, stall_generations: self.stall_generations },
+            Algorithm::MatlabLike => {
+                Mode::MatlabLike { pareto_fraction: 0.35, tol: self.tol, stall_generations: self.stall_generations }
+            }
         };
-        let config = Config { pop: self.pop, seed: scenario.sim.seed, max_generations: self.generations, mode, selection: self.selection, ..Config::default() };
+        let config = Config {
+            pop: self.pop,
+            seed: scenario.sim.seed,
+            max_generations: self.generations,
+            mode,
+            selection: self.selection,
+            ..Config::default()
+        };
         Ok(Manifest {
             version: env!("CARGO_PKG_VERSION").to_string(),
             engine,

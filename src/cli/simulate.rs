@@ -38,7 +38,9 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let design = match (&a.design, file_design) {
         (Some(s), _) => Design::parse_cli(s).map_err(anyhow::Error::msg)?,
         (None, Some(d)) => d,
-        (None, None) => bail!("no design: pass --design l_c,l_a,l_b,r,omega_deg,delta_deg,v0,a or a config file with [design]"),
+        (None, None) => {
+            bail!("no design: pass --design l_c,l_a,l_b,r,omega_deg,delta_deg,v0,a or a config file with [design]")
+        }
     };
     if let Some(p) = &a.plot {
         // the figure is SVG; a .png name would get SVG bytes under the wrong extension
@@ -51,7 +53,9 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         bail!("--trajectories and --plot redraw each flight as one closed-form arc; with the sled-motion or quadratic-drag effects that would be wrong, so they are not offered");
     }
     if trace && matches!(a.engine.engine, EngineKind::Gpu | EngineKind::Auto) {
-        bail!("--trajectories and --plot record every flight, which only the CPU engines do: use --engine cpu or listing");
+        bail!(
+            "--trajectories and --plot record every flight, which only the CPU engines do: use --engine cpu or listing"
+        );
     }
     let engine = make_engine_for(a.engine.engine, &scenario)?;
     let det = match evaluate_detailed(engine.as_ref(), &scenario, &design, trace) {
@@ -77,7 +81,10 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
 
 fn describe(d: &Design) -> String {
     let v = d.to_cli_units();
-    format!("l_c {:.3} l_a {:.3} l_b {:.3} r {:.3} mm, omega {:.2} delta {:.2} deg, v0 {:.3} m/s, a {:.2} m/s2", v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7])
+    format!(
+        "l_c {:.3} l_a {:.3} l_b {:.3} r {:.3} mm, omega {:.2} delta {:.2} deg, v0 {:.3} m/s, a {:.2} m/s2",
+        v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]
+    )
 }
 
 pub fn to_json(s: &Scenario, d: &Design, engine: &str, det: &Detailed) -> serde_json::Value {

@@ -12,10 +12,10 @@ use clap::{Args, Subcommand};
 use super::args::{EngineArgs, ScenarioArgs};
 use super::multi::{panels_svg, plan_or_run, Member, Plan, Study};
 use super::optimize::GaArgs;
-use crate::model::Scenario;
-use crate::optim::front::{closest_to_mass_flow, FrontPoint};
 use crate::engine::EngineKind;
 use crate::io::atomic::write_atomic;
+use crate::model::Scenario;
+use crate::optim::front::{closest_to_mass_flow, FrontPoint};
 
 #[derive(Debug, Subcommand)]
 pub enum StudyCommand {
@@ -99,14 +99,27 @@ fn point_row(p: Option<&FrontPoint>) -> String {
             let x = p.design.to_cli_units();
             format!(
                 "{:.6e},{:.4},{:.6e},{:.6e},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
-                p.f_stroke_hz, p.w_spec_j_kg, p.m_dot_kg_s, p.d_avg_m, p.n_wire, x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]
+                p.f_stroke_hz,
+                p.w_spec_j_kg,
+                p.m_dot_kg_s,
+                p.d_avg_m,
+                p.n_wire,
+                x[0],
+                x[1],
+                x[2],
+                x[3],
+                x[4],
+                x[5],
+                x[6],
+                x[7]
             )
         }
         None => ",,,,,,,,,,,,".into(),
     }
 }
 
-const POINT_HEADER: &str = "f_stroke_hz,w_spec_j_kg,m_dot_kg_s,d_avg_m,n_wire,l_c_mm,l_a_mm,l_b_mm,r_mm,omega_deg,delta_deg,v0_m_s,a_m_s2";
+const POINT_HEADER: &str =
+    "f_stroke_hz,w_spec_j_kg,m_dot_kg_s,d_avg_m,n_wire,l_c_mm,l_a_mm,l_b_mm,r_mm,omega_deg,delta_deg,v0_m_s,a_m_s2";
 
 fn repeatability(a: RepeatabilityArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let c = &a.common;
@@ -119,7 +132,11 @@ fn repeatability(a: RepeatabilityArgs, out: &mut dyn Write) -> anyhow::Result<Ex
         .map(|i| {
             let mut s = base.clone();
             s.sim.seed = base.sim.seed.wrapping_add(i as u64);
-            Ok(Member { label: format!("run {i:>3}"), dir: format!("run_{i:03}"), manifest: c.ga.manifest(s, c.engine.engine)? })
+            Ok(Member {
+                label: format!("run {i:>3}"),
+                dir: format!("run_{i:03}"),
+                manifest: c.ga.manifest(s, c.engine.engine)?,
+            })
         })
         .collect::<anyhow::Result<_>>()?;
     let plan = c.plan("study repeatability", Study::Repeatability { target_mass_flow: t }, members);
@@ -127,7 +144,13 @@ fn repeatability(a: RepeatabilityArgs, out: &mut dyn Write) -> anyhow::Result<Ex
 }
 
 /// runs.csv, summary.csv, repeatability.svg and the table of a finished repeatability study.
-pub fn summarise_repeatability(root: &Path, plan: &Plan, t: f64, fronts: &[Vec<FrontPoint>], out: &mut dyn Write) -> anyhow::Result<()> {
+pub fn summarise_repeatability(
+    root: &Path,
+    plan: &Plan,
+    t: f64,
+    fronts: &[Vec<FrontPoint>],
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
     let mut csv = format!("run,seed,{POINT_HEADER}\n");
     let (mut f, mut w, mut m) = (Vec::new(), Vec::new(), Vec::new());
     for (i, (member, front)) in plan.members.iter().zip(fronts).enumerate() {
@@ -153,7 +176,11 @@ pub fn summarise_repeatability(root: &Path, plan: &Plan, t: f64, fronts: &[Vec<F
         &format!("repeatability: {} runs at {t} kg/s", f.len()),
         "run",
         &idx,
-        &[("f_stroke [Hz]", vec![("run", f)]), ("W_spec [J/kg]", vec![("run", w)]), ("mass flow [kg/s]", vec![("run", m)])],
+        &[
+            ("f_stroke [Hz]", vec![("run", f)]),
+            ("W_spec [J/kg]", vec![("run", w)]),
+            ("mass flow [kg/s]", vec![("run", m)]),
+        ],
     );
     write_atomic(&root.join("repeatability.svg"), svg.as_bytes())?;
     Ok(())
@@ -162,7 +189,8 @@ pub fn summarise_repeatability(root: &Path, plan: &Plan, t: f64, fronts: &[Vec<F
 /// Mean and CI half-width of W_spec from a repeatability study's summary.csv.
 fn read_ci(dir: &Path) -> anyhow::Result<(f64, f64)> {
     let path = dir.join("summary.csv");
-    let text = std::fs::read_to_string(&path).with_context(|| format!("--repeatability: reading {}", path.display()))?;
+    let text =
+        std::fs::read_to_string(&path).with_context(|| format!("--repeatability: reading {}", path.display()))?;
     for line in text.lines() {
         let f: Vec<&str> = line.split(',').collect();
         if f.first() == Some(&"w_spec_j_kg") && f.len() >= 5 {
@@ -206,7 +234,11 @@ fn sensitivity(a: SensitivityArgs, out: &mut dyn Write) -> anyhow::Result<ExitCo
             s.collision.mu_friction *= g[1];
             s.environment.k_drag = s.environment.k_drag.map(|k| k * g[2]);
             s.validate().map_err(|e| anyhow::anyhow!("grid point {i}: {e}"))?;
-            Ok(Member { label: format!("grid {i:>2}"), dir: format!("grid_{i:02}"), manifest: c.ga.manifest(s, c.engine.engine)? })
+            Ok(Member {
+                label: format!("grid {i:>2}"),
+                dir: format!("grid_{i:02}"),
+                manifest: c.ga.manifest(s, c.engine.engine)?,
+            })
         })
         .collect::<anyhow::Result<_>>()?;
     let plan = c.plan("study sensitivity", Study::Sensitivity { target_mass_flow: t, repeatability_ci: ci }, members);
@@ -214,10 +246,21 @@ fn sensitivity(a: SensitivityArgs, out: &mut dyn Write) -> anyhow::Result<ExitCo
 }
 
 /// grid.csv, sensitivity.svg and the table of a finished sensitivity study.
-pub fn summarise_sensitivity(root: &Path, plan: &Plan, t: f64, ci: Option<(f64, f64)>, fronts: &[Vec<FrontPoint>], out: &mut dyn Write) -> anyhow::Result<()> {
+pub fn summarise_sensitivity(
+    root: &Path,
+    plan: &Plan,
+    t: f64,
+    ci: Option<(f64, f64)>,
+    fronts: &[Vec<FrontPoint>],
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
     let mut csv = format!("point,k_elastic,mu_friction,k_drag,{POINT_HEADER},w_spec_within_repeatability_ci\n");
     let mut w = Vec::new();
-    writeln!(out, "{:>5} {:>9} {:>9} {:>9} {:>14} {:>12}", "point", "k_elastic", "mu", "k_drag", "W_spec [J/kg]", "in CI")?;
+    writeln!(
+        out,
+        "{:>5} {:>9} {:>9} {:>9} {:>14} {:>12}",
+        "point", "k_elastic", "mu", "k_drag", "W_spec [J/kg]", "in CI"
+    )?;
     for (i, (member, front)) in plan.members.iter().zip(fronts).enumerate() {
         let s = &member.manifest.scenario;
         let p = closest_to_mass_flow(front, t);
@@ -225,14 +268,33 @@ pub fn summarise_sensitivity(root: &Path, plan: &Plan, t: f64, ci: Option<(f64, 
             (Some((mean, half)), Some(p)) => ((p.w_spec_j_kg - mean).abs() <= half).to_string(),
             _ => String::new(),
         };
-        csv.push_str(&format!("{i},{},{},{},{},{within}\n", s.collision.k_elastic, s.collision.mu_friction, s.environment.k_drag.unwrap_or(0.0), point_row(p)));
+        csv.push_str(&format!(
+            "{i},{},{},{},{},{within}\n",
+            s.collision.k_elastic,
+            s.collision.mu_friction,
+            s.environment.k_drag.unwrap_or(0.0),
+            point_row(p)
+        ));
         let wv = p.map_or(f64::NAN, |p| p.w_spec_j_kg);
         w.push(wv);
-        writeln!(out, "{i:>5} {:>9.4} {:>9.4} {:>9.3} {:>14.1} {:>12}", s.collision.k_elastic, s.collision.mu_friction, s.environment.k_drag.unwrap_or(0.0), wv, within)?;
+        writeln!(
+            out,
+            "{i:>5} {:>9.4} {:>9.4} {:>9.3} {:>14.1} {:>12}",
+            s.collision.k_elastic,
+            s.collision.mu_friction,
+            s.environment.k_drag.unwrap_or(0.0),
+            wv,
+            within
+        )?;
     }
     write_atomic(&root.join("grid.csv"), csv.as_bytes())?;
     let idx: Vec<f64> = (0..w.len()).map(|i| i as f64).collect();
-    let svg = panels_svg(&format!("sensitivity at {t} kg/s"), "grid point (see grid.csv)", &idx, &[("W_spec [J/kg]", vec![("grid", w)])]);
+    let svg = panels_svg(
+        &format!("sensitivity at {t} kg/s"),
+        "grid point (see grid.csv)",
+        &idx,
+        &[("W_spec [J/kg]", vec![("grid", w)])],
+    );
     write_atomic(&root.join("sensitivity.svg"), svg.as_bytes())?;
     Ok(())
 }

@@ -13,9 +13,9 @@ use clap::Args;
 use super::args::{EngineArgs, ScenarioArgs};
 use super::multi::{panels_svg, plan_or_run, Member, Plan, Study};
 use super::optimize::GaArgs;
-use crate::optim::front::{closest_to_mass_flow, picks, TARGET_MASS_FLOW_KG_S};
 use crate::io::atomic::write_atomic;
 use crate::optim::front::FrontPoint;
+use crate::optim::front::{closest_to_mass_flow, picks, TARGET_MASS_FLOW_KG_S};
 
 #[derive(Debug, Args)]
 pub struct SweepArgs {
@@ -36,7 +36,9 @@ pub struct SweepArgs {
 }
 
 pub fn run(a: SweepArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    let Some((from, to)) = a.scenario.alpha else { bail!("gpu-sweep needs --alpha FROM..TO (degrees), e.g. --alpha 1..40") };
+    let Some((from, to)) = a.scenario.alpha else {
+        bail!("gpu-sweep needs --alpha FROM..TO (degrees), e.g. --alpha 1..40")
+    };
     if !(a.step > 0.0 && a.step.is_finite()) {
         bail!("--step must be a positive number of degrees, got {}", a.step);
     }
@@ -45,7 +47,10 @@ pub fn run(a: SweepArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let (base, _) = single.resolve()?;
     let n = ((to - from) / a.step + 1e-9).floor() as usize + 1;
     if n > 400 {
-        bail!("--alpha {from}..{to} with --step {}: {n} angles; at most 400 (each angle is one optimisation run)", a.step);
+        bail!(
+            "--alpha {from}..{to} with --step {}: {n} angles; at most 400 (each angle is one optimisation run)",
+            a.step
+        );
     }
     let angles: Vec<f64> = (0..n).map(|i| from + i as f64 * a.step).collect();
     let mut members = Vec::new();
@@ -53,7 +58,11 @@ pub fn run(a: SweepArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         let mut s = base.clone();
         s.environment.alpha_deg = alpha;
         s.validate().map_err(|e| anyhow::anyhow!("--alpha {alpha}: {e}"))?;
-        members.push(Member { label: format!("alpha {alpha:>5.1}"), dir: format!("alpha_{alpha:06.2}"), manifest: a.ga.manifest(s, a.engine.engine)? });
+        members.push(Member {
+            label: format!("alpha {alpha:>5.1}"),
+            dir: format!("alpha_{alpha:06.2}"),
+            manifest: a.ga.manifest(s, a.engine.engine)?,
+        });
     }
     let plan = Plan::new("gpu-sweep", Study::Sweep, a.engine.engine, a.ga.checkpoint_every, members);
     plan_or_run(&a.out, &plan, a.plan, out)
@@ -74,7 +83,13 @@ pub fn summarise(root: &Path, plan: &Plan, fronts: &[Vec<FrontPoint>], out: &mut
                 "{alpha},{name},{:.6e},{:.4},{:.4},{:.6e},{:.3e},{:.6e},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}\n",
                 p.f_stroke_hz, p.w_spec_j_kg, p.w_spec_se, p.m_dot_kg_s, p.m_dot_se, p.d_avg_m, p.n_wire, x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]
             ));
-            writeln!(out, "{alpha:>6.1} {name:>4} {:>12.3} {:>14.1} {:>12.2}", p.f_stroke_hz * 100.0, p.w_spec_j_kg, p.m_dot_kg_s * 3600.0)?;
+            writeln!(
+                out,
+                "{alpha:>6.1} {name:>4} {:>12.3} {:>14.1} {:>12.2}",
+                p.f_stroke_hz * 100.0,
+                p.w_spec_j_kg,
+                p.m_dot_kg_s * 3600.0
+            )?;
         }
         let c = ps.iter().find(|(n, _)| *n == "C").map(|(_, p)| *p);
         let t = closest_to_mass_flow(front, TARGET_MASS_FLOW_KG_S);

@@ -10,8 +10,8 @@ use clap::Args;
 
 use crate::diagnose::synth::{synthesise, to_csv, SynthSettings};
 use crate::engine::{make_engine_for, EngineKind};
-use crate::io::config::ConfigFile;
 use crate::io::atomic::write_atomic;
+use crate::io::config::ConfigFile;
 
 #[derive(Debug, Args)]
 pub struct SynthArgs {
@@ -52,7 +52,14 @@ pub fn run(a: SynthArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     if !(a.mass_g > 0.0 && a.mass_g.is_finite()) {
         bail!("--mass-g must be a positive number of grams, got {}", a.mass_g);
     }
-    let set = SynthSettings { runs: a.runs, seed: a.seed, particles: a.particles, mass_g: a.mass_g, resolution_g: resolution, ..Default::default() };
+    let set = SynthSettings {
+        runs: a.runs,
+        seed: a.seed,
+        particles: a.particles,
+        mass_g: a.mass_g,
+        resolution_g: resolution,
+        ..Default::default()
+    };
     let engine = make_engine_for(EngineKind::Cpu, &scenario)?;
     let runs = synthesise(&engine, &scenario, &design, &set)?;
     let effects = if scenario.effects.any() { a.effects.join(" ") } else { "none".into() };

@@ -59,14 +59,14 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::{json, Map, Value};
 
-pub use crate::calibrate::{Condition, KnownMotion};
-use crate::calibrate::stats::{percentile, sample_sd};
 pub use crate::calibrate::space::shared_params;
+use crate::calibrate::stats::{percentile, sample_sd};
+pub use crate::calibrate::{Condition, KnownMotion};
 use crate::calibrate::{Effort, Fit, Model, Simulator, Space};
 use crate::engine::{evaluate_detailed, particle_engine, BatchEvaluator, EngineKind};
 use crate::fit::{MeasuredSummary, ObjectiveKind, Param, Target};
-pub use crate::model::effects::EffectKind;
 use crate::model::effects::known_effects;
+pub use crate::model::effects::EffectKind;
 use crate::model::outcome::{centre_and_dispersion, end_tooth, ParticleState};
 use crate::model::Scenario;
 
@@ -194,7 +194,13 @@ impl Residual {
     fn new(measured: f64, simulated: f64, parts: [f64; 3]) -> Self {
         let u = parts.iter().map(|p| if p.is_finite() { p * p } else { 0.0 }).sum::<f64>().sqrt();
         let residual = simulated - measured;
-        let z = if u > 0.0 { residual / u } else if residual == 0.0 { 0.0 } else { f64::INFINITY.copysign(residual) };
+        let z = if u > 0.0 {
+            residual / u
+        } else if residual == 0.0 {
+            0.0
+        } else {
+            f64::INFINITY.copysign(residual)
+        };
         Residual { measured, simulated, residual, uncertainty: u, parts, z }
     }
     pub fn flagged(&self) -> bool {
@@ -358,7 +364,8 @@ fn rescore(sim: &Simulator, spaces: &[&Space], models: &mut [ModelResult], parti
     }
     for r in 0..streams {
         // stream r + 1: the fit used `seed` itself
-        let bins = sim.simulate(&points, particles, seed.wrapping_add(1 + r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let bins =
+            sim.simulate(&points, particles, seed.wrapping_add(1 + r as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
         for (m, b) in models.iter_mut().zip(bins) {
             // a point the fit simulated cannot fail on another stream; keep the fit's bins
             m.fresh.push(b.unwrap_or_else(|| m.full.bins.clone()));
@@ -406,7 +413,12 @@ fn bootstrap_gaps(conds: &[Condition], models: &mut [ModelResult], replicates: u
 }
 
 /// Where the baseline misses, in one condition.
-fn where_condition(cond: &Condition, scenario: &Scenario, bins: &[f64], particles: u32) -> anyhow::Result<WhereCondition> {
+fn where_condition(
+    cond: &Condition,
+    scenario: &Scenario,
+    bins: &[f64],
+    particles: u32,
+) -> anyhow::Result<WhereCondition> {
     let teeth = cond.teeth();
     let runs = &cond.runs;
     let n = runs.runs.len() as f64;
@@ -496,9 +508,7 @@ fn gap_condition(cond: &Condition, before: &[f64], after: &[f64], replicates: us
         reps.push(cond.target(&idx).bins);
     }
     let iv = |sim: &[f64]| -> Vec<[f64; 2]> {
-        (0..=teeth)
-            .map(|j| interval(&reps.iter().map(|r| 100.0 * (sim[j] - r[j])).collect::<Vec<_>>()))
-            .collect()
+        (0..=teeth).map(|j| interval(&reps.iter().map(|r| 100.0 * (sim[j] - r[j])).collect::<Vec<_>>())).collect()
     };
     let ce = |b: &[f64]| centre_and_dispersion(&b[..teeth]);
     let (m, b, a) = (ce(&measured), ce(before), ce(after));
@@ -527,8 +537,11 @@ fn sled_motion_notes(conditions: &[Condition]) -> Vec<String> {
         );
     }
     for (i, name) in ["motion_delay_s", "motion_return_speed_m_s"].iter().enumerate() {
-        let mut labels: Vec<&str> =
-            conditions.iter().filter(|c| c.motion.get(i).is_none()).map(|c| c.motion_profile.as_deref().unwrap_or("unlabelled")).collect();
+        let mut labels: Vec<&str> = conditions
+            .iter()
+            .filter(|c| c.motion.get(i).is_none())
+            .map(|c| c.motion_profile.as_deref().unwrap_or("unlabelled"))
+            .collect();
         labels.sort_unstable();
         labels.dedup();
         if labels.len() > 1 {
@@ -549,7 +562,13 @@ fn sled_motion_notes(conditions: &[Condition]) -> Vec<String> {
 /// the screen near the answer in the dimensions it knows least.
 fn effect_starts(space: &Space, base_names: &[&'static str], base_x: &[f64], extra: usize) -> Vec<Vec<f64>> {
     let mut starts: Vec<Vec<f64>> = space.start_from(base_names, base_x).into_iter().collect();
-    let shared: Vec<f64> = space.names().iter().take(space.shared.len()).map(|n| base_names.iter().position(|m| m == n).map(|p| base_x[p])).collect::<Option<Vec<f64>>>().unwrap_or_default();
+    let shared: Vec<f64> = space
+        .names()
+        .iter()
+        .take(space.shared.len())
+        .map(|n| base_names.iter().position(|m| m == n).map(|p| base_x[p]))
+        .collect::<Option<Vec<f64>>>()
+        .unwrap_or_default();
     if shared.len() != space.shared.len() {
         return starts;
     }
@@ -670,14 +689,19 @@ pub fn diagnose(
 
     // the baseline first: its optimum starts every nested effect
     let base_space = Space::new(shared.clone(), &[], &conditions);
-    let base_fit = solver.fit(&sim, &[Model { space: &base_space, targets: &targets, starts: Vec::new() }], log)?.remove(0);
+    let base_fit =
+        solver.fit(&sim, &[Model { space: &base_space, targets: &targets, starts: Vec::new() }], log)?.remove(0);
     log(format!("diagnose: baseline: SSE {:.1} %² (fit streams)", base_fit.value));
     let baseline_dim = base_space.dim();
     let spaces: Vec<Space> = effects.iter().map(|e| Space::new(shared.clone(), &[*e], &conditions)).collect();
     let base_names = base_space.names();
     let models: Vec<Model> = spaces
         .iter()
-        .map(|sp| Model { space: sp, targets: &targets, starts: effect_starts(sp, &base_names, &base_fit.x, effort.pop / 2) })
+        .map(|sp| Model {
+            space: sp,
+            targets: &targets,
+            starts: effect_starts(sp, &base_names, &base_fit.x, effort.pop / 2),
+        })
         .collect();
     let fits = solver.fit(&sim, &models, log)?;
     let mut all: Vec<ModelResult> = vec![new_result(&base_space, base_fit, baseline_dim)];
@@ -689,7 +713,13 @@ pub fn diagnose(
     rescore(&sim, &all_spaces, &mut all, particles, settings.rescore_streams, seed);
     bootstrap_gaps(&conditions, &mut all, settings.bootstrap, seed);
     for m in &all {
-        log(format!("diagnose: {}: gap {:.1} %² on fresh streams, interval [{:.1}, {:.1}]", m.name(), m.gap, m.interval[0], m.interval[1]));
+        log(format!(
+            "diagnose: {}: gap {:.1} %² on fresh streams, interval [{:.1}, {:.1}]",
+            m.name(),
+            m.gap,
+            m.interval[0],
+            m.interval[1]
+        ));
     }
     let mut models = all.into_iter();
     let mut baseline = models.next().context("no baseline")?;
@@ -708,15 +738,13 @@ pub fn diagnose(
     let overlaps = |a: [f64; 2], b: [f64; 2]| a[0] <= b[1] && b[0] <= a[1];
     let others: Vec<EffectKind> =
         ranking[1..].iter().filter(|m| overlaps(m.interval, top.interval)).filter_map(|m| m.single()).collect();
-    let indistinguishable = if others.is_empty() {
-        Vec::new()
-    } else {
-        std::iter::once(top.single()).flatten().chain(others).collect()
-    };
+    let indistinguishable =
+        if others.is_empty() { Vec::new() } else { std::iter::once(top.single()).flatten().chain(others).collect() };
 
     // How far two effects go together: the two best candidates that each beat the baseline
     // beyond the uncertainty, refitted jointly from both single fits (and the baseline's).
-    let beating: Vec<&ModelResult> = ranking.iter().filter(|m| m.improvement_interval[0] > 0.0 && m.gap < baseline.gap).take(2).collect();
+    let beating: Vec<&ModelResult> =
+        ranking.iter().filter(|m| m.improvement_interval[0] > 0.0 && m.gap < baseline.gap).take(2).collect();
     let combined = if best.is_some() && beating.len() == 2 {
         let pair: Vec<EffectKind> = beating.iter().filter_map(|m| m.single()).collect();
         log(format!("diagnose: {} together", pair.iter().map(|e| e.name()).collect::<Vec<_>>().join(" + ")));

@@ -126,7 +126,10 @@ pub fn to_markdown(d: &Diagnosis) -> String {
             }
             let _ = writeln!(s, "{row}");
         }
-        let _ = writeln!(s, "\n| metric (teeth) | measured | simulated | residual | uncertainty (runs / – / MC) | z | flag |");
+        let _ = writeln!(
+            s,
+            "\n| metric (teeth) | measured | simulated | residual | uncertainty (runs / – / MC) | z | flag |"
+        );
         let _ = writeln!(s, "|---|---|---|---|---|---|---|");
         let _ = writeln!(s, "{}", residual_row("centre of mass E_x", &w.centre, 3));
         let _ = writeln!(s, "{}", residual_row("dispersion σ_x", &w.dispersion, 3));
@@ -211,7 +214,8 @@ pub fn to_markdown(d: &Diagnosis) -> String {
         }
     );
     if d.indistinguishable.is_empty() {
-        let _ = writeln!(s, "**Indistinguishable:** none (no other effect's interval overlaps the top-ranked one's).\n");
+        let _ =
+            writeln!(s, "**Indistinguishable:** none (no other effect's interval overlaps the top-ranked one's).\n");
     } else {
         let _ = writeln!(
             s,
@@ -222,7 +226,12 @@ pub fn to_markdown(d: &Diagnosis) -> String {
 
     // HOW FAR
     if let Some(t) = d.gap_model() {
-        let _ = writeln!(s, "## How far: baseline vs `{}`{}\n", t.name(), if d.best.is_some() { "" } else { " (top-ranked, not established)" });
+        let _ = writeln!(
+            s,
+            "## How far: baseline vs `{}`{}\n",
+            t.name(),
+            if d.best.is_some() { "" } else { " (top-ranked, not established)" }
+        );
         let _ = writeln!(
             s,
             "Held-out gap: {} %² {} before, {} %² {} after (reduction {} %, paired improvement interval {} %²). \
@@ -245,7 +254,10 @@ pub fn to_markdown(d: &Diagnosis) -> String {
                 f(b.gap_by_condition[ci], 1),
                 f(t.gap_by_condition[ci], 1)
             );
-            let _ = writeln!(s, "| tooth | measured % | before % | residual before [interval] | after % | residual after [interval] |");
+            let _ = writeln!(
+                s,
+                "| tooth | measured % | before % | residual before [interval] | after % | residual after [interval] |"
+            );
             let _ = writeln!(s, "|---|---|---|---|---|---|");
             for j in (0..w.shown_teeth).chain(std::iter::once(teeth)) {
                 let _ = writeln!(
@@ -263,8 +275,22 @@ pub fn to_markdown(d: &Diagnosis) -> String {
             }
             let _ = writeln!(s, "\n| metric (teeth) | measured [interval] | before | after |");
             let _ = writeln!(s, "|---|---|---|---|");
-            let _ = writeln!(s, "| centre of mass E_x | {} {} | {} | {} |", f(g.centre[0], 3), iv(g.centre_interval, 3), f(g.centre[1], 3), f(g.centre[2], 3));
-            let _ = writeln!(s, "| dispersion σ_x | {} {} | {} | {} |\n", f(g.dispersion[0], 3), iv(g.dispersion_interval, 3), f(g.dispersion[1], 3), f(g.dispersion[2], 3));
+            let _ = writeln!(
+                s,
+                "| centre of mass E_x | {} {} | {} | {} |",
+                f(g.centre[0], 3),
+                iv(g.centre_interval, 3),
+                f(g.centre[1], 3),
+                f(g.centre[2], 3)
+            );
+            let _ = writeln!(
+                s,
+                "| dispersion σ_x | {} {} | {} | {} |\n",
+                f(g.dispersion[0], 3),
+                iv(g.dispersion_interval, 3),
+                f(g.dispersion[1], 3),
+                f(g.dispersion[2], 3)
+            );
         }
     }
     if let (Some(cb), Some(t)) = (&d.combined, d.gap_model()) {
@@ -278,15 +304,25 @@ pub fn to_markdown(d: &Diagnosis) -> String {
             f(m.gap, 1),
             iv(m.interval, 1),
             f(100.0 * (1.0 - m.gap / b.gap), 1),
-            m.effects.iter().zip(&cb.improvement_over_singles).map(|(e, i)| format!("`{}` {} %²", e.name(), iv(*i, 1))).collect::<Vec<_>>().join(", "),
+            m.effects
+                .iter()
+                .zip(&cb.improvement_over_singles)
+                .map(|(e, i)| format!("`{}` {} %²", e.name(), iv(*i, 1)))
+                .collect::<Vec<_>>()
+                .join(", "),
             params_text(m),
             f(m.full.value, 1)
         );
         for (ci, (c, w)) in d.conditions.iter().zip(&d.where_).enumerate() {
             let teeth = c.teeth();
             let idx: Vec<usize> = (0..w.shown_teeth).chain(std::iter::once(teeth)).collect();
-            let heads: Vec<String> = idx.iter().map(|j| if *j < w.shown_teeth { format!("tooth {}", j + 1) } else { c.last_bin_label().into() }).collect();
-            let row = |label: &str, bins: &[f64]| format!("| {label} | {} |", idx.iter().map(|j| f(100.0 * bins[*j], 2)).collect::<Vec<_>>().join(" | "));
+            let heads: Vec<String> = idx
+                .iter()
+                .map(|j| if *j < w.shown_teeth { format!("tooth {}", j + 1) } else { c.last_bin_label().into() })
+                .collect();
+            let row = |label: &str, bins: &[f64]| {
+                format!("| {label} | {} |", idx.iter().map(|j| f(100.0 * bins[*j], 2)).collect::<Vec<_>>().join(" | "))
+            };
             let _ = writeln!(s, "{}: % per tooth (fits on all runs)\n", c.name);
             let _ = writeln!(s, "| model | {} |", heads.join(" | "));
             let _ = writeln!(s, "|---|{}", "---|".repeat(idx.len()));
@@ -324,16 +360,37 @@ impl Frame {
         self.y0 + self.h - (v.clamp(self.lo, self.hi) - self.lo) / (self.hi - self.lo) * self.h
     }
     fn axes(&self, s: &mut String, title: &str, ylabel: &str) {
-        let _ = writeln!(s, r##"<rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="none" stroke="#444"/>"##, self.x0, self.y0, self.w, self.h);
+        let _ = writeln!(
+            s,
+            r##"<rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="none" stroke="#444"/>"##,
+            self.x0, self.y0, self.w, self.h
+        );
         let step = nice_step(self.hi - self.lo);
         let mut t = (self.lo / step).ceil() * step;
         while t <= self.hi + 1e-9 {
             let y = self.y(t);
-            let _ = writeln!(s, r##"<line x1="{:.1}" y1="{y:.1}" x2="{:.1}" y2="{y:.1}" stroke="#ddd"/>"##, self.x0, self.x0 + self.w);
-            let _ = writeln!(s, r##"<text x="{:.1}" y="{:.1}" font-size="11" text-anchor="end">{}</text>"##, self.x0 - 4.0, y + 4.0, fmt_tick(t));
+            let _ = writeln!(
+                s,
+                r##"<line x1="{:.1}" y1="{y:.1}" x2="{:.1}" y2="{y:.1}" stroke="#ddd"/>"##,
+                self.x0,
+                self.x0 + self.w
+            );
+            let _ = writeln!(
+                s,
+                r##"<text x="{:.1}" y="{:.1}" font-size="11" text-anchor="end">{}</text>"##,
+                self.x0 - 4.0,
+                y + 4.0,
+                fmt_tick(t)
+            );
             t += step;
         }
-        let _ = writeln!(s, r##"<text x="{:.1}" y="{:.1}" font-size="13" font-weight="bold">{}</text>"##, self.x0, self.y0 - 8.0, esc(title));
+        let _ = writeln!(
+            s,
+            r##"<text x="{:.1}" y="{:.1}" font-size="13" font-weight="bold">{}</text>"##,
+            self.x0,
+            self.y0 - 8.0,
+            esc(title)
+        );
         let _ = writeln!(
             s,
             r##"<text x="{:.1}" y="{:.1}" font-size="11" transform="rotate(-90 {:.1} {:.1})" text-anchor="middle">{}</text>"##,
@@ -388,19 +445,38 @@ pub fn residuals_svg(d: &Diagnosis) -> String {
     let mut s = svg_open(pw + 100.0, (ph + 80.0) * n as f64 + 30.0);
     for (i, (c, w)) in d.conditions.iter().zip(&d.where_).enumerate() {
         let rs = &w.teeth_residuals;
-        let (lo, hi) = range_of(rs.iter().flat_map(|r| [r.residual - 2.0 * r.uncertainty, r.residual + 2.0 * r.uncertainty]), 0.08, true);
+        let (lo, hi) = range_of(
+            rs.iter().flat_map(|r| [r.residual - 2.0 * r.uncertainty, r.residual + 2.0 * r.uncertainty]),
+            0.08,
+            true,
+        );
         let fr = Frame { x0: 70.0, y0: 40.0 + i as f64 * (ph + 80.0), w: pw, h: ph, lo, hi };
-        fr.axes(&mut s, &format!("{}: baseline residual per tooth (bars ±1 and ±2 uncertainty; red |z| > {Z_FLAG})", c.name), "simulated − measured (pp)");
+        fr.axes(
+            &mut s,
+            &format!("{}: baseline residual per tooth (bars ±1 and ±2 uncertainty; red |z| > {Z_FLAG})", c.name),
+            "simulated − measured (pp)",
+        );
         let y0 = fr.y(0.0);
-        let _ = writeln!(s, r##"<line x1="{:.1}" y1="{y0:.1}" x2="{:.1}" y2="{y0:.1}" stroke="#000"/>"##, fr.x0, fr.x0 + fr.w);
+        let _ = writeln!(
+            s,
+            r##"<line x1="{:.1}" y1="{y0:.1}" x2="{:.1}" y2="{y0:.1}" stroke="#000"/>"##,
+            fr.x0,
+            fr.x0 + fr.w
+        );
         let step = fr.w / rs.len() as f64;
         for (j, r) in rs.iter().enumerate() {
             let x = fr.x0 + step * (j as f64 + 0.5);
             let colour = if r.flagged() { "#c0392b" } else { "#2c6fbb" };
             let (a2, b2) = (fr.y(r.residual - 2.0 * r.uncertainty), fr.y(r.residual + 2.0 * r.uncertainty));
             let (a1, b1) = (fr.y(r.residual - r.uncertainty), fr.y(r.residual + r.uncertainty));
-            let _ = writeln!(s, r##"<line x1="{x:.1}" y1="{a2:.1}" x2="{x:.1}" y2="{b2:.1}" stroke="{colour}" stroke-width="1"/>"##);
-            let _ = writeln!(s, r##"<line x1="{x:.1}" y1="{a1:.1}" x2="{x:.1}" y2="{b1:.1}" stroke="{colour}" stroke-width="4"/>"##);
+            let _ = writeln!(
+                s,
+                r##"<line x1="{x:.1}" y1="{a2:.1}" x2="{x:.1}" y2="{b2:.1}" stroke="{colour}" stroke-width="1"/>"##
+            );
+            let _ = writeln!(
+                s,
+                r##"<line x1="{x:.1}" y1="{a1:.1}" x2="{x:.1}" y2="{b1:.1}" stroke="{colour}" stroke-width="4"/>"##
+            );
             let _ = writeln!(s, r##"<circle cx="{x:.1}" cy="{:.1}" r="4" fill="{colour}"/>"##, fr.y(r.residual));
             let _ = writeln!(
                 s,
@@ -441,17 +517,27 @@ pub fn ranking_svg(d: &Diagnosis) -> String {
         100.0 * INTERVAL.0,
         100.0 * INTERVAL.1
     );
-    let _ = writeln!(s, r##"<rect x="{x0:.1}" y="{y0:.1}" width="{w:.1}" height="{h:.1}" fill="none" stroke="#444"/>"##);
+    let _ =
+        writeln!(s, r##"<rect x="{x0:.1}" y="{y0:.1}" width="{w:.1}" height="{h:.1}" fill="none" stroke="#444"/>"##);
     let step = nice_step(hi - lo);
     let mut t = (lo / step).ceil() * step;
     while t <= hi + 1e-9 {
         let x = xp(t);
         let _ = writeln!(s, r##"<line x1="{x:.1}" y1="{y0:.1}" x2="{x:.1}" y2="{:.1}" stroke="#ddd"/>"##, y0 + h);
-        let _ = writeln!(s, r##"<text x="{x:.1}" y="{:.1}" font-size="11" text-anchor="middle">{}</text>"##, y0 + h + 15.0, fmt_tick(t));
+        let _ = writeln!(
+            s,
+            r##"<text x="{x:.1}" y="{:.1}" font-size="11" text-anchor="middle">{}</text>"##,
+            y0 + h + 15.0,
+            fmt_tick(t)
+        );
         t += step;
     }
     let bx = xp(d.baseline.gap);
-    let _ = writeln!(s, r##"<line x1="{bx:.1}" y1="{y0:.1}" x2="{bx:.1}" y2="{:.1}" stroke="#888" stroke-dasharray="4 3"/>"##, y0 + h);
+    let _ = writeln!(
+        s,
+        r##"<line x1="{bx:.1}" y1="{y0:.1}" x2="{bx:.1}" y2="{:.1}" stroke="#888" stroke-dasharray="4 3"/>"##,
+        y0 + h
+    );
     for (i, m) in models.iter().enumerate() {
         let y = y0 + row * (i as f64 + 0.5);
         let best = m.single().is_some() && m.single() == d.best;
@@ -464,8 +550,19 @@ pub fn ranking_svg(d: &Diagnosis) -> String {
         } else {
             "#2c6fbb"
         };
-        let _ = writeln!(s, r##"<text x="{:.1}" y="{:.1}" font-size="12" text-anchor="end">{}</text>"##, x0 - 8.0, y + 4.0, esc(&m.name()));
-        let _ = writeln!(s, r##"<line x1="{:.1}" y1="{y:.1}" x2="{:.1}" y2="{y:.1}" stroke="{colour}" stroke-width="3"/>"##, xp(m.interval[0]), xp(m.interval[1]));
+        let _ = writeln!(
+            s,
+            r##"<text x="{:.1}" y="{:.1}" font-size="12" text-anchor="end">{}</text>"##,
+            x0 - 8.0,
+            y + 4.0,
+            esc(&m.name())
+        );
+        let _ = writeln!(
+            s,
+            r##"<line x1="{:.1}" y1="{y:.1}" x2="{:.1}" y2="{y:.1}" stroke="{colour}" stroke-width="3"/>"##,
+            xp(m.interval[0]),
+            xp(m.interval[1])
+        );
         let _ = writeln!(s, r##"<circle cx="{:.1}" cy="{y:.1}" r="5" fill="{colour}"/>"##, xp(m.gap));
     }
     let _ = writeln!(
@@ -496,25 +593,49 @@ pub fn distributions_svg(d: &Diagnosis) -> String {
             * 100.0
             * 1.1;
         let fr = Frame { x0: 70.0, y0: 40.0 + i as f64 * (ph + 80.0), w: pw, h: ph, lo: 0.0, hi: hi.max(1.0) };
-        fr.axes(&mut s, &format!("{}: measured (grey, runs' min-max), baseline (blue), {effect} (green)", c.name), "share of mass (%)");
+        fr.axes(
+            &mut s,
+            &format!("{}: measured (grey, runs' min-max), baseline (blue), {effect} (green)", c.name),
+            "share of mass (%)",
+        );
         let step = fr.w / idx.len() as f64;
         let bw = step / 4.0;
         for (k, &j) in idx.iter().enumerate() {
             let xc = fr.x0 + step * (k as f64 + 0.5);
-            for (m, (v, colour)) in [(g.measured[j], "#999"), (g.before[j], "#2c6fbb"), (g.after[j], "#1e8449")].into_iter().enumerate() {
+            for (m, (v, colour)) in
+                [(g.measured[j], "#999"), (g.before[j], "#2c6fbb"), (g.after[j], "#1e8449")].into_iter().enumerate()
+            {
                 let x = xc + (m as f64 - 1.5) * bw;
                 let y = fr.y(100.0 * v);
-                let _ = writeln!(s, r##"<rect x="{x:.1}" y="{y:.1}" width="{bw:.1}" height="{:.1}" fill="{colour}"/>"##, fr.y0 + fr.h - y);
+                let _ = writeln!(
+                    s,
+                    r##"<rect x="{x:.1}" y="{y:.1}" width="{bw:.1}" height="{:.1}" fill="{colour}"/>"##,
+                    fr.y0 + fr.h - y
+                );
             }
             // the runs' spread, the last bin's too (what each run did not recover)
             if j < sum.min.len() && sum.min[j].is_finite() && sum.max[j].is_finite() {
                 let x = xc - bw;
-                let _ = writeln!(s, r##"<line x1="{x:.1}" y1="{:.1}" x2="{x:.1}" y2="{:.1}" stroke="#000"/>"##, fr.y(100.0 * sum.min[j]), fr.y(100.0 * sum.max[j]));
+                let _ = writeln!(
+                    s,
+                    r##"<line x1="{x:.1}" y1="{:.1}" x2="{x:.1}" y2="{:.1}" stroke="#000"/>"##,
+                    fr.y(100.0 * sum.min[j]),
+                    fr.y(100.0 * sum.max[j])
+                );
             }
             let label = if j < teeth { format!("{}", j + 1) } else { c.last_bin_label().into() };
-            let _ = writeln!(s, r##"<text x="{xc:.1}" y="{:.1}" font-size="11" text-anchor="middle">{label}</text>"##, fr.y0 + fr.h + 16.0);
+            let _ = writeln!(
+                s,
+                r##"<text x="{xc:.1}" y="{:.1}" font-size="11" text-anchor="middle">{label}</text>"##,
+                fr.y0 + fr.h + 16.0
+            );
         }
-        let _ = writeln!(s, r##"<text x="{:.1}" y="{:.1}" font-size="11" text-anchor="middle">tooth</text>"##, fr.x0 + fr.w / 2.0, fr.y0 + fr.h + 32.0);
+        let _ = writeln!(
+            s,
+            r##"<text x="{:.1}" y="{:.1}" font-size="11" text-anchor="middle">tooth</text>"##,
+            fr.x0 + fr.w / 2.0,
+            fr.y0 + fr.h + 32.0
+        );
     }
     s.push_str("</svg>\n");
     s

@@ -29,7 +29,16 @@ pub struct SynthSettings {
 
 impl Default for SynthSettings {
     fn default() -> Self {
-        SynthSettings { runs: 10, seed: 0, particles: 2000, mass_g: 2.0, mass_sd_g: 0.03, recovery: (0.96, 1.0), resolution_g: 0.01, min_teeth: 4 }
+        SynthSettings {
+            runs: 10,
+            seed: 0,
+            particles: 2000,
+            mass_g: 2.0,
+            mass_sd_g: 0.03,
+            recovery: (0.96, 1.0),
+            resolution_g: 0.01,
+            min_teeth: 4,
+        }
     }
 }
 
@@ -44,11 +53,21 @@ fn quantise(x: f64, step: f64) -> f64 {
     ((x / step).round() * step * 1e9).round() / 1e9
 }
 
-pub fn synthesise(engine: &dyn BatchEvaluator, scenario: &Scenario, design: &Design, set: &SynthSettings) -> anyhow::Result<Vec<SynthRun>> {
+pub fn synthesise(
+    engine: &dyn BatchEvaluator,
+    scenario: &Scenario,
+    design: &Design,
+    set: &SynthSettings,
+) -> anyhow::Result<Vec<SynthRun>> {
     if set.runs == 0 || set.particles == 0 {
         anyhow::bail!("synth: --runs and --particles must be at least 1");
     }
-    if !(set.resolution_g > 0.0 && set.mass_g > 0.0 && set.recovery.0 > 0.0 && set.recovery.0 <= set.recovery.1 && set.recovery.1 <= 1.5) {
+    if !(set.resolution_g > 0.0
+        && set.mass_g > 0.0
+        && set.recovery.0 > 0.0
+        && set.recovery.0 <= set.recovery.1
+        && set.recovery.1 <= 1.5)
+    {
         anyhow::bail!("synth: resolution, mass and recovery (lo <= hi) must be positive");
     }
     let mut rng = ChaCha8Rng::seed_from_u64(set.seed);
@@ -57,7 +76,11 @@ pub fn synthesise(engine: &dyn BatchEvaluator, scenario: &Scenario, design: &Des
         let mut s = scenario.clone();
         s.sim.particles = set.particles;
         s.sim.seed = set.seed.wrapping_mul(0x9E37_79B9).wrapping_add(r as u64 + 1);
-        let e = engine.evaluate(&s, std::slice::from_ref(design)).pop().expect("one design").map_err(|e| anyhow::anyhow!("synth: invalid setup design ({}): {e}", e.rule()))?;
+        let e = engine
+            .evaluate(&s, std::slice::from_ref(design))
+            .pop()
+            .expect("one design")
+            .map_err(|e| anyhow::anyhow!("synth: invalid setup design ({}): {e}", e.rule()))?;
         let input = (set.mass_g + set.mass_sd_g * standard_normal(&mut rng)).max(set.resolution_g);
         let recovery = rng.random_range(set.recovery.0..=set.recovery.1);
         let teeth_g = e.sim.distribution.iter().map(|f| quantise(f * input * recovery, set.resolution_g)).collect();
@@ -74,7 +97,12 @@ fn standard_normal(rng: &mut impl Rng) -> f64 {
 
 /// The runs in the measured-data CSV format (`io::measured`), with provenance lines.
 pub fn to_csv(runs: &[SynthRun], provenance: &[String], min_teeth: usize, resolution_g: f64) -> String {
-    let used = runs.iter().map(|r| r.teeth_g.iter().rposition(|m| *m > 0.0).map_or(0, |i| i + 1)).max().unwrap_or(0).max(min_teeth);
+    let used = runs
+        .iter()
+        .map(|r| r.teeth_g.iter().rposition(|m| *m > 0.0).map_or(0, |i| i + 1))
+        .max()
+        .unwrap_or(0)
+        .max(min_teeth);
     let decimals = (-resolution_g.log10()).ceil().max(0.0) as usize;
     let mut out = String::new();
     for p in provenance {

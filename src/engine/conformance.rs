@@ -104,18 +104,37 @@ fn tooth(prep: &Prepared, p: &ParticleEnd) -> u32 {
 }
 
 /// Each case's designs on the GPU, one `run_prepared` call per case.
-pub fn run(gpu: &GpuEngine, cases: &[(String, Scenario)], designs_per_case: usize, seed: u64, tol: Tolerances) -> Report {
+pub fn run(
+    gpu: &GpuEngine,
+    cases: &[(String, Scenario)],
+    designs_per_case: usize,
+    seed: u64,
+    tol: Tolerances,
+) -> Report {
     run_cases(gpu, cases, designs_per_case, seed, tol, false)
 }
 
 /// As `run`, but every case's designs go to the GPU in ONE `run_jobs` call, each under its own
 /// case's context, as `evaluate_groups` sends a calibration's candidates: cases that differ
 /// only in per-design physics (restitution, drag, effect parameters) share a dispatch.
-pub fn run_merged(gpu: &GpuEngine, cases: &[(String, Scenario)], designs_per_case: usize, seed: u64, tol: Tolerances) -> Report {
+pub fn run_merged(
+    gpu: &GpuEngine,
+    cases: &[(String, Scenario)],
+    designs_per_case: usize,
+    seed: u64,
+    tol: Tolerances,
+) -> Report {
     run_cases(gpu, cases, designs_per_case, seed, tol, true)
 }
 
-fn run_cases(gpu: &GpuEngine, cases: &[(String, Scenario)], designs_per_case: usize, seed: u64, tol: Tolerances, merged: bool) -> Report {
+fn run_cases(
+    gpu: &GpuEngine,
+    cases: &[(String, Scenario)],
+    designs_per_case: usize,
+    seed: u64,
+    tol: Tolerances,
+    merged: bool,
+) -> Report {
     let cpu32 = CpuEngine { precision: Precision::F32 };
     let cpu64 = CpuEngine { precision: Precision::F64 };
     let mut reports = Vec::new();
@@ -131,11 +150,16 @@ fn run_cases(gpu: &GpuEngine, cases: &[(String, Scenario)], designs_per_case: us
         })
         .collect();
     let mut gpu_by_case: Vec<Vec<_>> = if merged {
-        let jobs: Vec<(&Context, &Prepared)> = contexts.iter().zip(&prepared).flat_map(|(c, ps)| ps.iter().map(move |p| (c, p))).collect();
+        let jobs: Vec<(&Context, &Prepared)> =
+            contexts.iter().zip(&prepared).flat_map(|(c, ps)| ps.iter().map(move |p| (c, p))).collect();
         let mut all = gpu.run_jobs(&jobs, true).into_iter();
         prepared.iter().map(|ps| all.by_ref().take(ps.len()).collect()).collect()
     } else {
-        contexts.iter().zip(&prepared).map(|(c, ps)| gpu.run_prepared(c, &ps.iter().collect::<Vec<_>>(), true)).collect()
+        contexts
+            .iter()
+            .zip(&prepared)
+            .map(|(c, ps)| gpu.run_prepared(c, &ps.iter().collect::<Vec<_>>(), true))
+            .collect()
     };
     for (ci, (name, _)) in cases.iter().enumerate() {
         let ctx = &contexts[ci];
@@ -188,12 +212,16 @@ fn run_cases(gpu: &GpuEngine, cases: &[(String, Scenario)], designs_per_case: us
                         tooth(prep, c),
                         c.state
                     );
-                    worst.push((if diff.is_finite() { diff } else { 1.0 }, Mismatch { scenario: name.clone(), design: prep.design.to_cli_units(), particle: i, what }));
+                    worst.push((
+                        if diff.is_finite() { diff } else { 1.0 },
+                        Mismatch { scenario: name.clone(), design: prep.design.to_cli_units(), particle: i, what },
+                    ));
                 }
             }
             let c64 = cpu64.run(prep, ctx, None);
             let csim = summarise(&prep.profile, prep.fill.area, &c64.particles, c64.iterations);
-            let l1: f64 = gsim.distribution.iter().zip(&csim.distribution).map(|(a, b)| (a - b).abs()).sum::<f64>() + (gsim.lost_fraction - csim.lost_fraction).abs();
+            let l1: f64 = gsim.distribution.iter().zip(&csim.distribution).map(|(a, b)| (a - b).abs()).sum::<f64>()
+                + (gsim.lost_fraction - csim.lost_fraction).abs();
             r.mean_distribution_l1 += l1;
             r.max_distribution_l1 = r.max_distribution_l1.max(l1);
             r.mean_d_avg_diff_m += (gsim.d_avg_m - csim.d_avg_m).abs();
@@ -205,10 +233,16 @@ fn run_cases(gpu: &GpuEngine, cases: &[(String, Scenario)], designs_per_case: us
         r.mean_lost_diff /= nd;
         let share = |a: usize, b: usize| if b == 0 { 1.0 } else { a as f64 / b as f64 };
         if share(r.first_impacts_within_tol, r.first_impacts_compared) < tol.min_first_impact_agreement {
-            failures.push(format!("{name}: first impacts within {} m: {}/{}", tol.first_impact_tol_m, r.first_impacts_within_tol, r.first_impacts_compared));
+            failures.push(format!(
+                "{name}: first impacts within {} m: {}/{}",
+                tol.first_impact_tol_m, r.first_impacts_within_tol, r.first_impacts_compared
+            ));
         }
         if share(r.tooth_and_state_agree, r.particles) < tol.min_particle_agreement {
-            failures.push(format!("{name}: final tooth and state agree for {}/{} particles", r.tooth_and_state_agree, r.particles));
+            failures.push(format!(
+                "{name}: final tooth and state agree for {}/{} particles",
+                r.tooth_and_state_agree, r.particles
+            ));
         }
         if r.mean_distribution_l1 > tol.max_mean_distribution_l1 {
             failures.push(format!("{name}: mean distribution L1 {:.4}", r.mean_distribution_l1));

@@ -72,12 +72,19 @@ pub fn kernel_physics<T: Real>(ctx: &Context) -> KPhysics<T> {
         size_uniform: ctx.effects.polydisperse.is_some_and(|e| e.form == crate::model::effects::SizeForm::Uniform),
         sled_delay: T::c(ctx.effects.sled_motion.map_or(0.0, |e| e.delay_s)),
         sled_speed: T::c(ctx.effects.sled_motion.map_or(0.0, |e| e.return_speed_m_s)),
-        sled_along_launch: ctx.effects.sled_motion.is_some_and(|e| e.direction == crate::model::effects::MotionDirection::Launch),
+        sled_along_launch: ctx
+            .effects
+            .sled_motion
+            .is_some_and(|e| e.direction == crate::model::effects::MotionDirection::Launch),
         scatter_uniform: ctx.effects.impact_scatter.is_some_and(|e| e.form == crate::model::effects::TiltForm::Uniform),
         // quadratic drag needs air: it replaces the linear drag where there is some
         qd_k0: T::c(ctx.effects.quadratic_drag.filter(|_| ctx.k_drag > 0.0).map_or(0.0, |e| e.coefficients().0)),
         qd_re_per_speed: T::c(ctx.effects.quadratic_drag.map_or(0.0, |e| e.coefficients().1)),
-        qd_step: T::c(if ctx.effects.quadratic_drag.is_some() && ctx.k_drag > 0.0 { crate::model::effects::QUADRATIC_DRAG_STEP_S } else { 0.0 }),
+        qd_step: T::c(if ctx.effects.quadratic_drag.is_some() && ctx.k_drag > 0.0 {
+            crate::model::effects::QUADRATIC_DRAG_STEP_S
+        } else {
+            0.0
+        }),
     }
 }
 
@@ -93,7 +100,12 @@ fn state_of(code: u32) -> ParticleState {
 pub fn run_design<T: Real>(prep: &Prepared, ctx: &Context, mut trace: Option<&mut Vec<FlightRecord>>) -> Run {
     let d = kernel_design::<T>(prep);
     let ph = kernel_physics::<T>(ctx);
-    let mut parts: Vec<KParticle<T>> = prep.launches.iter().enumerate().map(|(i, l)| init_particle(&d, &ph, [T::c(l[0]), T::c(l[1])], i as u32)).collect();
+    let mut parts: Vec<KParticle<T>> = prep
+        .launches
+        .iter()
+        .enumerate()
+        .map(|(i, l)| init_particle(&d, &ph, [T::c(l[0]), T::c(l[1])], i as u32))
+        .collect();
     let mut iterations = 0;
     for bounce in 0..ctx.max_bounces {
         let (mut flying, mut hop_sum, mut hop_n) = (0usize, 0.0f64, 0usize);

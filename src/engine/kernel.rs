@@ -10,7 +10,10 @@
 use crate::model::collision::Restitution;
 use crate::model::flight::Flight;
 use crate::model::real::Real;
-use crate::model::rng::{normal, uniform, DRAW_ANGLE, DRAW_LAUNCH_ANGLE, DRAW_LAUNCH_SPEED, DRAW_SCATTER, DRAW_SIZE, DRAW_SPEED, PER_PARTICLE};
+use crate::model::rng::{
+    normal, uniform, DRAW_ANGLE, DRAW_LAUNCH_ANGLE, DRAW_LAUNCH_SPEED, DRAW_SCATTER, DRAW_SIZE, DRAW_SPEED,
+    PER_PARTICLE,
+};
 
 pub const SURFACE_NONE: u32 = 0;
 pub const SURFACE_BASE: u32 = 1;
@@ -212,7 +215,8 @@ pub fn randomise_launch<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KPart
         }
         if spread {
             // launch-spread effect: earlier (slower) departures and a jittered direction
-            speed = speed * (T::one() - ph.launch_speed_spread * T::c(uniform(ph.seed, index, bounce, DRAW_LAUNCH_SPEED)));
+            speed =
+                speed * (T::one() - ph.launch_speed_spread * T::c(uniform(ph.seed, index, bounce, DRAW_LAUNCH_SPEED)));
             ang = ang + ph.launch_angle_sigma * T::c(normal(ph.seed, index, bounce, DRAW_LAUNCH_ANGLE));
         }
         let (s, c) = (ang * fa).ksin_cos();
@@ -271,7 +275,14 @@ pub fn first_hit<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bo
 /// `first_hit` for a given flight (possibly drifting: sled motion), looking no further than
 /// `t_limit`. With drift the flight's x(t) is no longer the air-frame one, so the x-window
 /// and concavity culls are skipped (they are exact only without drift).
-pub fn first_hit_in<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, fl: &Flight<T>, bounce: u32, t_limit: T) -> Hit<T> {
+pub fn first_hit_in<T: Real>(
+    d: &KDesign<T>,
+    ph: &KPhysics<T>,
+    p: &KParticle<T>,
+    fl: &Flight<T>,
+    bounce: u32,
+    t_limit: T,
+) -> Hit<T> {
     let fl = *fl;
     let drifting = fl.drift != [T::zero(); 2];
     let rel_vel = [fl.v0[0] + fl.drift[0], fl.v0[1] + fl.drift[1]];
@@ -359,7 +370,8 @@ pub fn first_hit_in<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>,
             } else {
                 (T::infinity(), T::infinity())
             };
-            let mut roots = if t_lo > t_max { [None, None] } else { fl.line_crossings(a, n, departing, t_lo, t_max.min(t_hi)) };
+            let mut roots =
+                if t_lo > t_max { [None, None] } else { fl.line_crossings(a, n, departing, t_lo, t_max.min(t_hi)) };
             if !departing && hop_ok(ph, p.pos, p.pos) && contact(d, p.pos, rel_vel, a, b, n) {
                 roots = [Some(T::zero()), None];
             }
@@ -448,11 +460,17 @@ fn schiller_naumann_k<T: Real>(ph: &KPhysics<T>, speed: T) -> T {
 /// (each piece a Stokes flight with k from the speed at its midpoint). Returns the hit (time
 /// counted from the start of the whole flight) and the flight of the piece it lies in, with
 /// that piece's start time.
-fn first_hit_piecewise<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bounce: u32) -> (Hit<T>, Flight<T>, T) {
+fn first_hit_piecewise<T: Real>(
+    d: &KDesign<T>,
+    ph: &KPhysics<T>,
+    p: &KParticle<T>,
+    bounce: u32,
+) -> (Hit<T>, Flight<T>, T) {
     let mut q = *p;
     let mut elapsed = T::zero();
     loop {
-        let (drift, mut phase_end) = if ph.sled_speed > T::zero() { sled_phase(d, ph, q.clock) } else { ([T::zero(); 2], T::infinity()) };
+        let (drift, mut phase_end) =
+            if ph.sled_speed > T::zero() { sled_phase(d, ph, q.clock) } else { ([T::zero(); 2], T::infinity()) };
         let mut k = q.k_drag;
         if ph.qd_step > T::zero() {
             // midpoint rule for the drag rate: predict the speed half a piece ahead with the
@@ -487,7 +505,13 @@ fn first_hit_piecewise<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<
 }
 
 /// One flight and bounce of one particle (one iteration of the bounce loop, 4.2.4).
-pub fn step_particle<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KParticle<T>, index: u32, bounce: u32) -> Flown<T> {
+pub fn step_particle<T: Real>(
+    d: &KDesign<T>,
+    ph: &KPhysics<T>,
+    p: &mut KParticle<T>,
+    index: u32,
+    bounce: u32,
+) -> Flown<T> {
     randomise_launch(d, ph, p, index, bounce);
     let flown = Flown { from_tooth: p.tooth, from: p.pos, vel: p.vel, t: T::zero() };
     let (hit, fl, piece_start) = if ph.sled_speed > T::zero() || ph.qd_step > T::zero() {

@@ -142,7 +142,9 @@ impl ParticleEngine for ListingEngine {
         let mm = 1e3;
         let pr = &prep.profile;
         let n = pr.teeth as usize;
-        let pt = |j: usize, off: P| -> P { [(pr.pitch[0] * j as f64 + off[0]) * mm, (pr.pitch[1] * j as f64 + off[1]) * mm] };
+        let pt = |j: usize, off: P| -> P {
+            [(pr.pitch[0] * j as f64 + off[0]) * mm, (pr.pitch[1] * j as f64 + off[1]) * mm]
+        };
         let p1: Vec<P> = (0..n).map(|j| pt(j, [0.0, 0.0])).collect();
         let p2: Vec<P> = (0..n).map(|j| pt(j, pr.p2)).collect();
         let p4: Vec<P> = (0..n).map(|j| pt(j, pr.p4)).collect();
@@ -200,7 +202,11 @@ impl ParticleEngine for ListingEngine {
                     continue;
                 }
                 // D.3 randomisation (shared with the cpu kernel so both draw the same numbers)
-                let mut kp = KParticle { vel: [s.v * s.delta.cos(), s.v * s.delta.sin()], surface: s.surface, ..Default::default() };
+                let mut kp = KParticle {
+                    vel: [s.v * s.delta.cos(), s.v * s.delta.sin()],
+                    surface: s.surface,
+                    ..Default::default()
+                };
                 randomise_launch(&kd, &kph, &mut kp, i as u32, bounce);
                 s.v = kp.vel[0].hypot(kp.vel[1]);
                 s.delta = kp.vel[1].atan2(kp.vel[0]);
@@ -238,7 +244,14 @@ impl ParticleEngine for ListingEngine {
                 let Some((hit, surf)) = pick else {
                     s.lost = true;
                     if let Some(t) = trace.as_deref_mut() {
-                        t.push(FlightRecord { particle: i as u32, bounce, from: [from[0] / mm, from[1] / mm], vel: launch_vel, t: 0.0, state: ParticleState::Lost });
+                        t.push(FlightRecord {
+                            particle: i as u32,
+                            bounce,
+                            from: [from[0] / mm, from[1] / mm],
+                            vel: launch_vel,
+                            t: 0.0,
+                            state: ParticleState::Lost,
+                        });
                     }
                     continue;
                 };
@@ -282,7 +295,14 @@ impl ParticleEngine for ListingEngine {
                 }
                 if let Some(tr) = trace.as_deref_mut() {
                     let state = if s.resting { ParticleState::Resting } else { ParticleState::Flying };
-                    tr.push(FlightRecord { particle: i as u32, bounce, from: [from[0] / mm, from[1] / mm], vel: launch_vel, t, state });
+                    tr.push(FlightRecord {
+                        particle: i as u32,
+                        bounce,
+                        from: [from[0] / mm, from[1] / mm],
+                        vel: launch_vel,
+                        t,
+                        state,
+                    });
                 }
             }
             iterations = bounce + 1;

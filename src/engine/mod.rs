@@ -121,7 +121,11 @@ pub trait BatchEvaluator: Sync {
 }
 
 /// Designs in parallel (rayon); each design's particles on one thread.
-pub fn evaluate_batch(engine: &dyn ParticleEngine, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
+pub fn evaluate_batch(
+    engine: &dyn ParticleEngine,
+    scenario: &Scenario,
+    designs: &[Design],
+) -> Vec<Result<Evaluation, Invalid>> {
     let ctx = Context::new(scenario);
     designs
         .par_iter()
@@ -135,9 +139,13 @@ pub fn evaluate_batch(engine: &dyn ParticleEngine, scenario: &Scenario, designs:
 
 /// Several groups as one parallel job: every (group, design) pair is a task, so groups of one
 /// design each (a calibration: candidates × conditions) keep every core busy.
-pub fn evaluate_groups_flat(engine: &dyn ParticleEngine, groups: &[(Scenario, Vec<Design>)]) -> Vec<Vec<Result<Evaluation, Invalid>>> {
+pub fn evaluate_groups_flat(
+    engine: &dyn ParticleEngine,
+    groups: &[(Scenario, Vec<Design>)],
+) -> Vec<Vec<Result<Evaluation, Invalid>>> {
     let contexts: Vec<Context> = groups.iter().map(|(s, _)| Context::new(s)).collect();
-    let tasks: Vec<(usize, &Design)> = groups.iter().enumerate().flat_map(|(g, (_, ds))| ds.iter().map(move |d| (g, d))).collect();
+    let tasks: Vec<(usize, &Design)> =
+        groups.iter().enumerate().flat_map(|(g, (_, ds))| ds.iter().map(move |d| (g, d))).collect();
     let mut flat: Vec<Result<Evaluation, Invalid>> = tasks
         .par_iter()
         .with_max_len(1)
@@ -192,7 +200,12 @@ fn finish(scenario: &Scenario, prep: &Prepared, run: &Run) -> Evaluation {
 }
 
 /// Evaluate one design and keep every particle (and optionally every flight).
-pub fn evaluate_detailed(engine: &dyn ParticleEngine, scenario: &Scenario, design: &Design, trace: bool) -> Result<Detailed, Invalid> {
+pub fn evaluate_detailed(
+    engine: &dyn ParticleEngine,
+    scenario: &Scenario,
+    design: &Design,
+    trace: bool,
+) -> Result<Detailed, Invalid> {
     let ctx = Context::new(scenario);
     let prepared = prepare(scenario, design)?;
     let mut flights = Vec::new();
@@ -220,7 +233,9 @@ pub fn particle_engine(kind: EngineKind) -> Box<dyn Engine> {
     match kind {
         EngineKind::Listing => Box::new(listing::ListingEngine),
         EngineKind::Cpu => Box::new(cpu::CpuEngine::default()),
-        EngineKind::Gpu | EngineKind::Auto => panic!("particle_engine covers the CPU engines; use make_engine for {kind:?}"),
+        EngineKind::Gpu | EngineKind::Auto => {
+            panic!("particle_engine covers the CPU engines; use make_engine for {kind:?}")
+        }
     }
 }
 
@@ -228,8 +243,11 @@ pub fn particle_engine(kind: EngineKind) -> Box<dyn Engine> {
 /// and the uniform size law.
 pub fn cpu_only_effects(e: &crate::model::effects::Effects) -> Vec<&'static str> {
     use crate::model::effects::{EffectKind, SizeForm, TiltForm};
-    let mut v: Vec<&'static str> =
-        [EffectKind::SledMotion, EffectKind::QuadraticDrag].into_iter().filter(|k| e.is_on(*k)).map(EffectKind::name).collect();
+    let mut v: Vec<&'static str> = [EffectKind::SledMotion, EffectKind::QuadraticDrag]
+        .into_iter()
+        .filter(|k| e.is_on(*k))
+        .map(EffectKind::name)
+        .collect();
     if e.polydisperse.is_some_and(|p| p.form == SizeForm::Uniform) {
         v.push("polydisperse (uniform sizes)");
     }

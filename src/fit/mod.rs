@@ -38,8 +38,8 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::calibrate::stats::{percentile, sample_sd};
 use crate::calibrate::solver::MIN_STEP;
+use crate::calibrate::stats::{percentile, sample_sd};
 use crate::calibrate::{Condition, Effort, Model, Simulator, Solver, Space};
 use crate::engine::BatchEvaluator;
 use crate::io::measured::MeasuredRuns;
@@ -261,7 +261,10 @@ fn check(condition: &Condition, params: &[Param]) -> anyhow::Result<()> {
         bail!("k_drag does not apply: the setup {} is in vacuum (no environment.k_drag)", condition.setup);
     }
     if runs.teeth > teeth {
-        bail!("the measured data has {} teeth but the setup simulates only {teeth} (sim.teeth): raise sim.teeth", runs.teeth);
+        bail!(
+            "the measured data has {} teeth but the setup simulates only {teeth} (sim.teeth): raise sim.teeth",
+            runs.teeth
+        );
     }
     if !(condition.resolution_g.is_finite() && condition.resolution_g > 0.0) {
         bail!("scale resolution must be > 0 g, got {}", condition.resolution_g);
@@ -346,7 +349,19 @@ pub fn fit(
         bootstrap(&sim, &space, &solver, condition, &main, settings.bootstrap)
     });
     let uncertainty = uncertainty.transpose()?;
-    Ok(report(condition, params, settings.objective, &solver, main.x, main.bins.into_iter().next().expect("one condition"), main.evaluations, uncertainty, heldout, Some(solver), notes))
+    Ok(report(
+        condition,
+        params,
+        settings.objective,
+        &solver,
+        main.x,
+        main.bins.into_iter().next().expect("one condition"),
+        main.evaluations,
+        uncertainty,
+        heldout,
+        Some(solver),
+        notes,
+    ))
 }
 
 /// Resample the runs with replacement `replicates` times and refit each resample with the
@@ -555,7 +570,19 @@ pub fn evaluate_at(
     let Some(mut bins) = sim.simulate(&[(&space, x.to_vec())], solver.particles, solver.seed).pop().flatten() else {
         bail!("the engine rejected the setup at these parameters");
     };
-    Ok(report(condition, params, kind, &solver, x.to_vec(), bins.remove(0), 1, None, None, None, note.into_iter().collect()))
+    Ok(report(
+        condition,
+        params,
+        kind,
+        &solver,
+        x.to_vec(),
+        bins.remove(0),
+        1,
+        None,
+        None,
+        None,
+        note.into_iter().collect(),
+    ))
 }
 
 #[cfg(test)]
@@ -610,7 +637,8 @@ mod tests {
     #[test]
     fn loaded_mass_counts_hold_what_was_not_recovered() {
         let runs =
-            crate::io::measured::parse("run,tooth_1,tooth_2,input_mass\na,1.0,0.5,2.0\nb,1.2,0.6,2.0\n", "t.csv").unwrap();
+            crate::io::measured::parse("run,tooth_1,tooth_2,input_mass\na,1.0,0.5,2.0\nb,1.2,0.6,2.0\n", "t.csv")
+                .unwrap();
         let t = Target::of_loaded_mass(&runs, 3, 0.1).unwrap();
         // (1.0 + 1.2) / 4, (0.5 + 0.6) / 4, 0, then the 0.7 g of 4 g not recovered
         for (g, w) in t.bins.iter().zip([0.55, 0.275, 0.0, 0.175]) {

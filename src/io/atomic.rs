@@ -21,7 +21,11 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
 
 /// Write `path` atomically from a writer callback (e.g. a serde serialiser).
 pub fn write_atomic_with(path: &Path, write: impl FnOnce(&mut dyn Write) -> anyhow::Result<()>) -> anyhow::Result<()> {
-    let name = path.file_name().with_context(|| format!("{} has no file name", path.display()))?.to_string_lossy().into_owned();
+    let name = path
+        .file_name()
+        .with_context(|| format!("{} has no file name", path.display()))?
+        .to_string_lossy()
+        .into_owned();
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -45,7 +49,9 @@ pub fn write_atomic_with(path: &Path, write: impl FnOnce(&mut dyn Write) -> anyh
     }
     tmp.as_file().sync_all().with_context(|| format!("writing {}: fsync", path.display()))?;
     // On failure the temporary file is removed when `e.file` drops.
-    tmp.persist(path).map_err(|e| e.error).with_context(|| format!("writing {}: renaming the temporary file over it", path.display()))?;
+    tmp.persist(path)
+        .map_err(|e| e.error)
+        .with_context(|| format!("writing {}: renaming the temporary file over it", path.display()))?;
     // Make the rename durable; directories cannot be opened for this on Windows.
     #[cfg(unix)]
     if let Ok(d) = std::fs::File::open(dir) {
@@ -81,7 +87,8 @@ pub fn clean_stale_temps(dir: &Path) -> anyhow::Result<usize> {
         let e = e.with_context(|| format!("listing {}", dir.display()))?;
         let name = e.file_name().to_string_lossy().into_owned();
         if is_temp_name(&name) && e.file_type().is_ok_and(|t| t.is_file()) {
-            std::fs::remove_file(e.path()).with_context(|| format!("removing stale temporary file {}", e.path().display()))?;
+            std::fs::remove_file(e.path())
+                .with_context(|| format!("removing stale temporary file {}", e.path().display()))?;
             n += 1;
         }
     }
@@ -128,11 +135,22 @@ mod tests {
     #[test]
     fn stale_temporaries_are_recognised_and_removed() {
         let d = tempfile::tempdir().unwrap();
-        for n in [".a.csv.x1y2z3.sawtooth-tmp", ".checkpoint.json.tmp123", ".plot.svg.77.tmp", "run.tmp", "keep.csv", "tmpfile", ".hidden"] {
+        for n in [
+            ".a.csv.x1y2z3.sawtooth-tmp",
+            ".checkpoint.json.tmp123",
+            ".plot.svg.77.tmp",
+            "run.tmp",
+            "keep.csv",
+            "tmpfile",
+            ".hidden",
+        ] {
             std::fs::write(d.path().join(n), b"x").unwrap();
         }
         assert_eq!(clean_stale_temps(d.path()).unwrap(), 4);
-        let mut left: Vec<String> = std::fs::read_dir(d.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        let mut left: Vec<String> = std::fs::read_dir(d.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
         left.sort();
         assert_eq!(left, [".hidden", "keep.csv", "tmpfile"]);
     }

@@ -152,7 +152,8 @@ impl MeasurementTable {
 
 impl ConfigFile {
     pub fn load(path: &Path) -> anyhow::Result<Self> {
-        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read config file {}", path.display()))?;
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("cannot read config file {}", path.display()))?;
         Self::parse(&text).with_context(|| format!("in config file {}", path.display()))
     }
 
@@ -181,7 +182,9 @@ impl ConfigFile {
             if let Some(name) = &m.name {
                 match Material::by_name(name) {
                     Some(mat) => s.material = mat,
-                    None => bail!("material.name: unknown material `{name}` (known: lunar-regolith, quartz-sand, glass-beads)"),
+                    None => bail!(
+                        "material.name: unknown material `{name}` (known: lunar-regolith, quartz-sand, glass-beads)"
+                    ),
                 }
             }
             set(&mut s.material.aor_deg, m.aor_deg);

@@ -2,7 +2,7 @@
 
 pub mod atomic;
 pub mod config;
+pub mod measured;
 pub mod plot;
 pub mod run_dir;
 pub mod trajectories;
-pub mod measured;

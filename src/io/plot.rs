@@ -14,7 +14,8 @@ use crate::model::geometry::{Profile, V2};
 use crate::model::ParticleState;
 
 /// Particle colours, by index (matplotlib's tab10).
-const PALETTE: [&str; 10] = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"];
+const PALETTE: [&str; 10] =
+    ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"];
 const FILL_COLOUR: &str = "#e3c9a0";
 const ARC_SAMPLES: usize = 32;
 const FLIGHT_SAMPLES: usize = 24;
@@ -31,7 +32,8 @@ fn mm(p: V2) -> V2 {
 
 /// Number of teeth to draw: up to one past the furthest launch or impact point.
 fn teeth_to_draw(profile: &Profile, det: &Detailed, g: f64, k_drag: f64) -> u32 {
-    let x_max = trajectory_points(det, g, k_drag).iter().map(|p| p.pos[0]).filter(|x| x.is_finite()).fold(0.0, f64::max);
+    let x_max =
+        trajectory_points(det, g, k_drag).iter().map(|p| p.pos[0]).filter(|x| x.is_finite()).fold(0.0, f64::max);
     let last = (x_max / profile.pitch[0]).floor().max(0.0) as u32 + 1;
     (last + 1).min(profile.teeth).max(1)
 }
@@ -44,7 +46,10 @@ fn profile_points(profile: &Profile, n: u32) -> Vec<V2> {
         pts.push(profile.p1_of(j));
         for k in 0..ARC_SAMPLES {
             let a = a2 + (a4 - a2) * k as f64 / (ARC_SAMPLES - 1) as f64;
-            pts.push(profile.point_of(j, [profile.p3[0] + profile.radius * a.cos(), profile.p3[1] + profile.radius * a.sin()]));
+            pts.push(
+                profile
+                    .point_of(j, [profile.p3[0] + profile.radius * a.cos(), profile.p3[1] + profile.radius * a.sin()]),
+            );
         }
     }
     // Base on to the next tooth's p1; the profile ends at p4 after its last tooth.
@@ -119,8 +124,12 @@ fn axes(s: &mut String, f: &Frame, u: f64) {
     let mut x = (f.min[0] / step).ceil() * step;
     while x <= f.max[0] + 1e-9 * step {
         let y = -f.min[1];
-        let _ =
-            writeln!(s, r##"<line x1="{x:.4}" y1="{y:.4}" x2="{x:.4}" y2="{:.4}" stroke="#444" stroke-width="{:.4}"/>"##, y + u, 0.15 * u);
+        let _ = writeln!(
+            s,
+            r##"<line x1="{x:.4}" y1="{y:.4}" x2="{x:.4}" y2="{:.4}" stroke="#444" stroke-width="{:.4}"/>"##,
+            y + u,
+            0.15 * u
+        );
         let _ = writeln!(
             s,
             r##"<text x="{x:.4}" y="{:.4}" font-size="{fs:.4}" text-anchor="middle">{}</text>"##,
@@ -175,7 +184,12 @@ fn legend(s: &mut String, f: &Frame, u: f64) {
     let y = -f.min[1] + 5.0 * u + 3.0 * fs;
     let mut x = f.min[0];
     let label = |s: &mut String, x: &mut f64, text: &str| {
-        let _ = writeln!(s, r##"<text x="{:.4}" y="{:.4}" font-size="{fs:.4}">{text}</text>"##, *x + 1.5 * u, y + 0.35 * fs);
+        let _ = writeln!(
+            s,
+            r##"<text x="{:.4}" y="{:.4}" font-size="{fs:.4}">{text}</text>"##,
+            *x + 1.5 * u,
+            y + 0.35 * fs
+        );
         *x += 1.5 * u + 0.52 * fs * text.len() as f64 + 3.0 * u;
     };
     let _ = writeln!(s, r##"<circle cx="{x:.4}" cy="{y:.4}" r="{:.4}" fill="{}"/>"##, 0.5 * u, colour(0));
@@ -212,7 +226,12 @@ fn legend(s: &mut String, f: &Frame, u: f64) {
 fn content(s: &mut String, det: &Detailed, profile_pts: &[V2], flights: &[(u32, Vec<V2>)], u: f64) {
     let poly = svg_points(&det.prepared.fill.polygon);
     let _ = writeln!(s, r##"<polygon points="{poly}" fill="{FILL_COLOUR}" stroke="none"/>"##);
-    let _ = writeln!(s, r##"<polyline points="{}" fill="none" stroke="#000" stroke-width="{:.4}"/>"##, svg_points(profile_pts), 0.25 * u);
+    let _ = writeln!(
+        s,
+        r##"<polyline points="{}" fill="none" stroke="#000" stroke-width="{:.4}"/>"##,
+        svg_points(profile_pts),
+        0.25 * u
+    );
     for (p, pts) in flights {
         let _ = writeln!(
             s,
@@ -224,7 +243,14 @@ fn content(s: &mut String, det: &Detailed, profile_pts: &[V2], flights: &[(u32, 
     }
     for r in det.flights.iter().filter(|r| r.bounce == 0) {
         let p = mm(r.from);
-        let _ = writeln!(s, r##"<circle cx="{:.4}" cy="{:.4}" r="{:.4}" fill="{}"/>"##, p[0], -p[1], 0.35 * u, colour(r.particle));
+        let _ = writeln!(
+            s,
+            r##"<circle cx="{:.4}" cy="{:.4}" r="{:.4}" fill="{}"/>"##,
+            p[0],
+            -p[1],
+            0.35 * u,
+            colour(r.particle)
+        );
     }
     for (i, end) in det.particles.iter().enumerate().filter(|(_, e)| e.state == ParticleState::Resting) {
         let p = mm(end.end);
@@ -310,7 +336,8 @@ mod tests {
         let (s, det) = small_lunar();
         let dir = temp_dir("plot");
         let path = dir.join("flights.svg");
-        write_svg(&path, &det, s.environment.g, s.environment.k_drag.unwrap_or(0.0), "Solution C <lunar> & co").unwrap();
+        write_svg(&path, &det, s.environment.g, s.environment.k_drag.unwrap_or(0.0), "Solution C <lunar> & co")
+            .unwrap();
         let text = std::fs::read_to_string(&path).unwrap();
         assert!(text.starts_with("<svg"));
         assert!(text.contains("<polyline"));

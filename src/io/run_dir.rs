@@ -39,7 +39,12 @@ pub struct RunDir {
 /// Open the lock file of `dir` and try to take it; `Ok(None)` when another process holds it.
 fn try_lock(dir: &Path, access: Access) -> anyhow::Result<Option<File>> {
     let path = dir.join(LOCK_FILE);
-    let f = OpenOptions::new().create(true).truncate(false).write(true).open(&path).with_context(|| format!("opening lock file {}", path.display()))?;
+    let f = OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&path)
+        .with_context(|| format!("opening lock file {}", path.display()))?;
     let r = match access {
         Access::Exclusive => f.try_lock(),
         Access::Shared => f.try_lock_shared(),

@@ -54,8 +54,13 @@ pub fn write_trajectories(path: &Path, det: &Detailed, g: f64, k_drag: f64) -> R
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(["particle", "bounce", "x_m", "y_m", "state"]).with_context(ctx)?;
     for p in trajectory_points(det, g, k_drag) {
-        let row =
-            [p.particle.to_string(), p.bounce.to_string(), p.pos[0].to_string(), p.pos[1].to_string(), state_name(p.state).to_string()];
+        let row = [
+            p.particle.to_string(),
+            p.bounce.to_string(),
+            p.pos[0].to_string(),
+            p.pos[1].to_string(),
+            state_name(p.state).to_string(),
+        ];
         w.write_record(&row).with_context(ctx)?;
     }
     let bytes = w.into_inner().map_err(|e| anyhow::anyhow!("{}", e.error())).with_context(ctx)?;
@@ -103,7 +108,10 @@ pub(crate) mod tests {
             let rec = rec.unwrap();
             let key = (rec[0].parse().unwrap(), rec[1].parse().unwrap());
             assert!(["flying", "resting", "lost"].contains(&&rec[4]), "{rec:?}");
-            assert!(rows.insert(key, [rec[2].parse().unwrap(), rec[3].parse().unwrap()]).is_none(), "duplicate {key:?}");
+            assert!(
+                rows.insert(key, [rec[2].parse().unwrap(), rec[3].parse().unwrap()]).is_none(),
+                "duplicate {key:?}"
+            );
         }
         for p in 0..5 {
             assert!(rows.contains_key(&(p, 0)), "particle {p} has no launch row");

@@ -8,7 +8,8 @@ use super::scenario::{Material, PhysicsMode};
 /// p_limit the lower of 1.6 Y_conveyor and Y_particle (Eq. 4.6).
 pub fn limit_velocity(m: &Material) -> f64 {
     let (p, c) = (&m.particle, &m.conveyor);
-    let e_star = 1.0 / ((1.0 - c.poisson_ratio.powi(2)) / c.youngs_modulus + (1.0 - p.poisson_ratio.powi(2)) / p.youngs_modulus);
+    let e_star =
+        1.0 / ((1.0 - c.poisson_ratio.powi(2)) / c.youngs_modulus + (1.0 - p.poisson_ratio.powi(2)) / p.youngs_modulus);
     let p_limit = (1.6 * c.strength).min(p.strength);
     std::f64::consts::PI.powi(2) * p_limit.powf(2.5) / ((40.0 * p.density).sqrt() * e_star * e_star)
 }

@@ -58,16 +58,7 @@ impl Design {
 
     /// To the CLI/Table 5.3 units: mm, mm, mm, mm, deg, deg, m/s, m/s².
     pub fn to_cli_units(&self) -> [f64; 8] {
-        [
-            self.l_c * 1e3,
-            self.l_a * 1e3,
-            self.l_b * 1e3,
-            self.r * 1e3,
-            self.omega_deg,
-            self.delta_deg,
-            self.v0,
-            self.a,
-        ]
+        [self.l_c * 1e3, self.l_a * 1e3, self.l_b * 1e3, self.r * 1e3, self.omega_deg, self.delta_deg, self.v0, self.a]
     }
 
     /// Parse `l_c,l_a,l_b,r,omega_deg,delta_deg,v0,a` in mm, mm, mm, mm, °, °, m/s, m/s².
@@ -83,9 +74,7 @@ impl Design {
         let mut v = [0.0; 8];
         for (i, p) in parts.iter().enumerate() {
             let (name, unit) = VARIABLES[i];
-            v[i] = p
-                .parse::<f64>()
-                .map_err(|_| format!("design field `{name}` ({unit}): `{p}` is not a number"))?;
+            v[i] = p.parse::<f64>().map_err(|_| format!("design field `{name}` ({unit}): `{p}` is not a number"))?;
         }
         Ok(Self::from_cli_units(v))
     }

@@ -131,7 +131,10 @@ pub const QUADRATIC_DRAG_STEP_S: f64 = 0.02;
 impl QuadraticDrag {
     /// Stokes part 18 μ / (ρ_p d²), 1/s, and Re per unit speed ρ_air d / μ, s/m.
     pub fn coefficients(&self) -> (f64, f64) {
-        (18.0 * AIR_VISCOSITY / (self.density_kg_m3 * self.diameter_m.powi(2)), AIR_DENSITY * self.diameter_m / AIR_VISCOSITY)
+        (
+            18.0 * AIR_VISCOSITY / (self.density_kg_m3 * self.diameter_m.powi(2)),
+            AIR_DENSITY * self.diameter_m / AIR_VISCOSITY,
+        )
     }
 }
 
@@ -165,8 +168,13 @@ pub enum EffectKind {
 }
 
 impl EffectKind {
-    pub const ALL: [EffectKind; 5] =
-        [EffectKind::ImpactScatter, EffectKind::LaunchSpread, EffectKind::Polydisperse, EffectKind::SledMotion, EffectKind::QuadraticDrag];
+    pub const ALL: [EffectKind; 5] = [
+        EffectKind::ImpactScatter,
+        EffectKind::LaunchSpread,
+        EffectKind::Polydisperse,
+        EffectKind::SledMotion,
+        EffectKind::QuadraticDrag,
+    ];
 
     /// The name on the command line and in the outputs.
     pub fn name(self) -> &'static str {
@@ -255,7 +263,9 @@ impl EffectKind {
                 let form = e.impact_scatter.map(|x| x.form).unwrap_or_default();
                 e.impact_scatter = Some(ImpactScatter { sigma_deg: v[0], form })
             }
-            EffectKind::LaunchSpread => e.launch_spread = Some(LaunchSpread { speed_spread: v[0], angle_sigma_deg: v[1] }),
+            EffectKind::LaunchSpread => {
+                e.launch_spread = Some(LaunchSpread { speed_spread: v[0], angle_sigma_deg: v[1] })
+            }
             EffectKind::Polydisperse => {
                 // keep a size law set by a config (the calibration fits only sigma_ln)
                 let form = e.polydisperse.map(|p| p.form).unwrap_or_default();
@@ -265,7 +275,9 @@ impl EffectKind {
                 let direction = e.sled_motion.map(|x| x.direction).unwrap_or_default();
                 e.sled_motion = Some(SledMotion { delay_s: v[0], return_speed_m_s: v[1], direction })
             }
-            EffectKind::QuadraticDrag => e.quadratic_drag = Some(QuadraticDrag { diameter_m: v[0], density_kg_m3: v[1] }),
+            EffectKind::QuadraticDrag => {
+                e.quadratic_drag = Some(QuadraticDrag { diameter_m: v[0], density_kg_m3: v[1] })
+            }
         }
     }
 
@@ -318,8 +330,11 @@ impl Effects {
     /// polydisperse=SIGMA_LN, sled-motion=DELAY_S,RETURN_SPEED_M_S,
     /// quadratic-drag=DIAMETER_M,DENSITY_KG_M3.
     pub fn set_from_cli(&mut self, spec: &str) -> Result<(), String> {
-        let (name, params) = spec.split_once('=').ok_or_else(|| format!("--effect `{spec}`: expected NAME=PARAMS, e.g. impact-scatter=5"))?;
-        let kind = EffectKind::from_name(name).ok_or_else(|| format!("--effect: unknown effect `{name}` (known: {})", known_effects()))?;
+        let (name, params) = spec
+            .split_once('=')
+            .ok_or_else(|| format!("--effect `{spec}`: expected NAME=PARAMS, e.g. impact-scatter=5"))?;
+        let kind = EffectKind::from_name(name)
+            .ok_or_else(|| format!("--effect: unknown effect `{name}` (known: {})", known_effects()))?;
         let values: Vec<f64> = params
             .split(',')
             .map(|p| p.trim().parse::<f64>().map_err(|_| format!("--effect {name}: `{p}` is not a number")))

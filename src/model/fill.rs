@@ -140,7 +140,14 @@ fn line_cross(p: V2, ang: f64, a: V2, b: V2) -> Option<(f64, V2)> {
 
 /// Build the fill polygon. `alpha_sim` is the conveyor angle the simulation uses (the listing
 /// forces 35°, erratum 4), `launch_angle` the sled's acceleration direction.
-pub fn build_fill(profile: &Profile, g: f64, d: &Design, launch_angle: f64, aor_deg: f64, mode: PhysicsMode) -> Result<Fill, Invalid> {
+pub fn build_fill(
+    profile: &Profile,
+    g: f64,
+    d: &Design,
+    launch_angle: f64,
+    aor_deg: f64,
+    mode: PhysicsMode,
+) -> Result<Fill, Invalid> {
     let surface_angle = fill_surface_angle(g, d.a, launch_angle, aor_deg);
     let p2_1 = profile.p2;
     let p1_2 = profile.p1_of(1);
@@ -161,7 +168,8 @@ pub fn build_fill(profile: &Profile, g: f64, d: &Design, launch_angle: f64, aor_
             }
             let on_ramp = line_cross(p2_1, surface_angle, p1_2, p2_2).filter(|(s, _)| (0.0..=1.0).contains(s));
             let end = profile.point_of(profile.teeth - 1, profile.p4);
-            let on_base = line_cross(p2_1, surface_angle, [0.0, 0.0], end).filter(|(_, p)| p[0] >= p2_1[0].min(p4_1[0]));
+            let on_base =
+                line_cross(p2_1, surface_angle, [0.0, 0.0], end).filter(|(_, p)| p[0] >= p2_1[0].min(p4_1[0]));
             match (on_ramp, on_base) {
                 (Some((_, r)), Some((_, b))) => {
                     if r[0] <= b[0] {
@@ -187,7 +195,9 @@ pub fn build_fill(profile: &Profile, g: f64, d: &Design, launch_angle: f64, aor_
             let fr = |x: f64| fill(x) - ramp2(x);
             let fb = |x: f64| fill(x) - base(x);
             if fr(p2_1[0]).signum() == fr(p2_2[0]).signum() {
-                return Err(spill("listing fill construction: fill surface does not cross ramp 2 before its peak".into()));
+                return Err(spill(
+                    "listing fill construction: fill surface does not cross ramp 2 before its peak".into(),
+                ));
             }
             if fb(p2_1[0]).signum() == fb(x_end).signum() {
                 return Err(spill("listing fill construction: fill surface does not cross the base".into()));
@@ -260,7 +270,8 @@ pub fn in_polygon(p: V2, poly: &[V2]) -> bool {
         let (a, b) = (poly[i], poly[j]);
         // on-edge test
         let cross = (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
-        let within = p[0] >= a[0].min(b[0]) && p[0] <= a[0].max(b[0]) && p[1] >= a[1].min(b[1]) && p[1] <= a[1].max(b[1]);
+        let within =
+            p[0] >= a[0].min(b[0]) && p[0] <= a[0].max(b[0]) && p[1] >= a[1].min(b[1]) && p[1] <= a[1].max(b[1]);
         if cross.abs() <= 1e-18 && within {
             return true;
         }
@@ -293,7 +304,13 @@ pub fn radical_inverse(mut i: u64, base: u64) -> f64 {
 /// listing stops after 2000 candidates; the physical mode keeps drawing (deviation: the
 /// thesis's 2000 cannot seat 10 000 particles). `LaunchPoints::Random` replaces the Halton
 /// candidates by independent uniform ones keyed by (seed, candidate).
-pub fn launch_points(fill: &Fill, n: usize, mode: PhysicsMode, sampling: LaunchPoints, seed: u64) -> Result<Vec<V2>, Invalid> {
+pub fn launch_points(
+    fill: &Fill,
+    n: usize,
+    mode: PhysicsMode,
+    sampling: LaunchPoints,
+    seed: u64,
+) -> Result<Vec<V2>, Invalid> {
     let (mut xmin, mut xmax, mut ymin, mut ymax) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
     for p in &fill.polygon {
         xmin = xmin.min(p[0]);
@@ -312,7 +329,10 @@ pub fn launch_points(fill: &Fill, n: usize, mode: PhysicsMode, sampling: LaunchP
             LaunchPoints::Halton => (radical_inverse(i, 2), radical_inverse(i, 3)),
             LaunchPoints::Random => {
                 let w = seed_word(seed);
-                (uniform(w, i as u32, PER_PARTICLE, DRAW_LAUNCH_POINT), uniform(w, i as u32, PER_PARTICLE, DRAW_LAUNCH_POINT + 1))
+                (
+                    uniform(w, i as u32, PER_PARTICLE, DRAW_LAUNCH_POINT),
+                    uniform(w, i as u32, PER_PARTICLE, DRAW_LAUNCH_POINT + 1),
+                )
             }
         };
         let p = [xmin + (xmax - xmin) * u, ymin + (ymax - ymin) * v];
@@ -366,7 +386,10 @@ mod tests {
 
     /// The physical fill of lunar solution C (α 35°, launch offset 18.434°, AOR 58°).
     fn solution_c_fill() -> Fill {
-        use crate::model::{geometry::{check_design, Profile}, Design};
+        use crate::model::{
+            geometry::{check_design, Profile},
+            Design,
+        };
         let d = Design::lunar_solution_c();
         let prof = Profile::new(&d, check_design(&d).unwrap(), 35.0, 10);
         let ang = (35.0f64 + 18.434 + d.delta_deg).to_radians();

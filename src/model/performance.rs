@@ -57,7 +57,8 @@ pub fn performance(s: &Scenario, d: &Design, d_avg_m: f64, fill_area_m2: f64) ->
     let n_wire = (force / (p.wire_force - bias)).ceil().max(0.0) as u32; // Eq. 3.6
     let wire_length = stroke / p.contraction_ratio;
     // Eq. 3.7-3.8 per wire, times n_wire (D.7 line 40)
-    let stroke_energy = p.wire_delta_t * p.wire_heat_capacity * wire_area * p.wire_density * wire_length * n_wire as f64;
+    let stroke_energy =
+        p.wire_delta_t * p.wire_heat_capacity * wire_area * p.wire_density * wire_length * n_wire as f64;
     let t_cool = cooling_time(p);
     let t_stroke = d.v0 / d.a + stroke / p.downstroke_speed; // Eq. 5.12-5.13
     let f_dynamic = 1.0 / (t_stroke + t_cool); // Eq. 5.11

@@ -372,10 +372,7 @@ impl Scenario {
         }
         finite("performance.wire_bias_stress", p.wire_bias_stress)?;
         if p.t_high <= p.t_low {
-            return Err(format!(
-                "`performance.t_high` ({}) must exceed `performance.t_low` ({})",
-                p.t_high, p.t_low
-            ));
+            return Err(format!("`performance.t_high` ({}) must exceed `performance.t_low` ({})", p.t_high, p.t_low));
         }
         if let Some(g) = p.spill_check_g {
             positive("performance.spill_check_g", g)?;

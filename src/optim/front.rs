@@ -7,12 +7,12 @@ use std::path::Path;
 
 use anyhow::Context as _;
 
-use super::runner::Manifest;
-use crate::io::atomic::write_atomic;
-use crate::engine::BatchEvaluator;
-use crate::model::Design;
 use super::nsga2::{Nsga2, State};
+use super::runner::Manifest;
 use super::sawtooth::design_of;
+use crate::engine::BatchEvaluator;
+use crate::io::atomic::write_atomic;
+use crate::model::Design;
 
 /// Target mass flow of solution A (5.5): 48 kg/h, in kg/s.
 pub const TARGET_MASS_FLOW_KG_S: f64 = 48.0 / 3600.0;
@@ -104,11 +104,14 @@ pub fn write_outputs(dir: &Path, front: &[FrontPoint], evaluations_csv: &Path) -
         ));
     }
     write_atomic(&dir.join("pareto.csv"), csv.as_bytes())?;
-    let text = std::fs::read_to_string(evaluations_csv).with_context(|| format!("reading {}", evaluations_csv.display()))?;
+    let text =
+        std::fs::read_to_string(evaluations_csv).with_context(|| format!("reading {}", evaluations_csv.display()))?;
     let mut cloud = Vec::new();
     for line in text.lines().skip(1) {
         let f: Vec<&str> = line.split(',').collect();
-        if let (Some(a), Some(b)) = (f.get(9).and_then(|v| v.parse::<f64>().ok()), f.get(10).and_then(|v| v.parse::<f64>().ok())) {
+        if let (Some(a), Some(b)) =
+            (f.get(9).and_then(|v| v.parse::<f64>().ok()), f.get(10).and_then(|v| v.parse::<f64>().ok()))
+        {
             if a > 0.0 && a < 2.0 && b < 1e5 {
                 cloud.push([a, b]);
             }
@@ -134,16 +137,26 @@ fn pareto_svg(cloud: &[[f64; 2]], front: &[[f64; 2]]) -> String {
     let (w, h, m) = (640.0, 440.0, 60.0);
     let sx = |x: f64| m + (x - x0) / (x1 - x0).max(1e-12) * (w - 2.0 * m);
     let sy = |y: f64| h - m - (y - y0) / (y1 - y0).max(1e-12) * (h - 2.0 * m);
-    let mut s = format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="12">"#);
+    let mut s = format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="12">"#
+    );
     s.push_str(&format!(r#"<rect x="0" y="0" width="{w}" height="{h}" fill="white"/>"#));
-    s.push_str(&format!(r#"<rect x="{m}" y="{m}" width="{}" height="{}" fill="none" stroke="black"/>"#, w - 2.0 * m, h - 2.0 * m));
+    s.push_str(&format!(
+        r#"<rect x="{m}" y="{m}" width="{}" height="{}" fill="none" stroke="black"/>"#,
+        w - 2.0 * m,
+        h - 2.0 * m
+    ));
     for p in cloud {
         s.push_str(&format!(r##"<circle cx="{:.2}" cy="{:.2}" r="1.5" fill="#bbb"/>"##, sx(p[0]), sy(p[1])));
     }
     for p in front {
         s.push_str(&format!(r##"<circle cx="{:.2}" cy="{:.2}" r="3" fill="#d62728"/>"##, sx(p[0]), sy(p[1])));
     }
-    s.push_str(&format!(r#"<text x="{}" y="{}" text-anchor="middle">f_stroke [Hz]  ({x0:.4} .. {x1:.4})</text>"#, w / 2.0, h - 20.0));
+    s.push_str(&format!(
+        r#"<text x="{}" y="{}" text-anchor="middle">f_stroke [Hz]  ({x0:.4} .. {x1:.4})</text>"#,
+        w / 2.0,
+        h - 20.0
+    ));
     s.push_str(&format!(r#"<text x="15" y="{}" transform="rotate(-90 15 {})" text-anchor="middle">W_spec [J/kg]  ({y0:.0} .. {y1:.0})</text>"#, h / 2.0, h / 2.0));
     s.push_str(&format!(r#"<text x="{m}" y="30">grey: all evaluations; red: final front, re-evaluated</text>"#));
     s.push_str("</svg>\n");
@@ -153,7 +166,9 @@ fn pareto_svg(cloud: &[[f64; 2]], front: &[[f64; 2]]) -> String {
 /// Picks A (closest to 48 kg/h), B (highest mass flow), C (lowest W_spec) as in Table 5.2.
 pub fn picks(front: &[FrontPoint]) -> Vec<(&'static str, &FrontPoint)> {
     let mut out = Vec::new();
-    if let Some(a) = front.iter().min_by(|a, b| (a.m_dot_kg_s - TARGET_MASS_FLOW_KG_S).abs().total_cmp(&(b.m_dot_kg_s - TARGET_MASS_FLOW_KG_S).abs())) {
+    if let Some(a) = front.iter().min_by(|a, b| {
+        (a.m_dot_kg_s - TARGET_MASS_FLOW_KG_S).abs().total_cmp(&(b.m_dot_kg_s - TARGET_MASS_FLOW_KG_S).abs())
+    }) {
         out.push(("A", a));
     }
     if let Some(b) = front.iter().max_by(|a, b| a.m_dot_kg_s.total_cmp(&b.m_dot_kg_s)) {
@@ -165,9 +180,22 @@ pub fn picks(front: &[FrontPoint]) -> Vec<(&'static str, &FrontPoint)> {
     out
 }
 
-pub fn print_picks(out: &mut dyn Write, front: &[FrontPoint], termination: &str, generations: u64) -> anyhow::Result<()> {
-    writeln!(out, "stopped after {generations} generations ({termination}); {} front designs re-evaluated", front.len())?;
-    writeln!(out, "{:<4} {:>12} {:>16} {:>14} {:>10} {:>7} {:>10}", "", "f [Hz e-2]", "W_spec [J/kg]", "m_dot [kg/h]", "l_str [mm]", "n_wire", "d_avg [mm]")?;
+pub fn print_picks(
+    out: &mut dyn Write,
+    front: &[FrontPoint],
+    termination: &str,
+    generations: u64,
+) -> anyhow::Result<()> {
+    writeln!(
+        out,
+        "stopped after {generations} generations ({termination}); {} front designs re-evaluated",
+        front.len()
+    )?;
+    writeln!(
+        out,
+        "{:<4} {:>12} {:>16} {:>14} {:>10} {:>7} {:>10}",
+        "", "f [Hz e-2]", "W_spec [J/kg]", "m_dot [kg/h]", "l_str [mm]", "n_wire", "d_avg [mm]"
+    )?;
     for (name, p) in picks(front) {
         writeln!(
             out,
@@ -184,7 +212,11 @@ pub fn print_picks(out: &mut dyn Write, front: &[FrontPoint], termination: &str,
     }
     for (name, p) in picks(front) {
         let x = p.design.to_cli_units();
-        writeln!(out, "{name}: --design {:.3},{:.3},{:.3},{:.3},{:.2},{:.2},{:.3},{:.2}", x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7])?;
+        writeln!(
+            out,
+            "{name}: --design {:.3},{:.3},{:.3},{:.3},{:.2},{:.2},{:.3},{:.2}",
+            x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]
+        )?;
     }
     Ok(())
 }
@@ -194,7 +226,11 @@ pub fn read_pareto_csv(path: &Path) -> anyhow::Result<Vec<FrontPoint>> {
     let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let mut out = Vec::new();
     for (i, line) in text.lines().enumerate().skip(1) {
-        let v: Vec<f64> = line.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().with_context(|| format!("{}:{}: not a number", path.display(), i + 1))?;
+        let v: Vec<f64> = line
+            .split(',')
+            .map(|x| x.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .with_context(|| format!("{}:{}: not a number", path.display(), i + 1))?;
         if v.len() < 17 {
             anyhow::bail!("{}:{}: expected 17 columns, got {}", path.display(), i + 1, v.len());
         }

@@ -8,11 +8,8 @@
 /// reference's first coordinate. O(n log n); dominated points and duplicates add zero.
 pub fn hypervolume_2d(points: &[[f64; 2]], reference: [f64; 2]) -> f64 {
     let [r0, r1] = reference;
-    let mut pts: Vec<[f64; 2]> = points
-        .iter()
-        .copied()
-        .filter(|p| p[0].is_finite() && p[1].is_finite() && p[0] < r0 && p[1] < r1)
-        .collect();
+    let mut pts: Vec<[f64; 2]> =
+        points.iter().copied().filter(|p| p[0].is_finite() && p[1].is_finite() && p[0] < r0 && p[1] < r1).collect();
     pts.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
     let mut area = 0.0;
     let mut level = r1;
@@ -69,10 +66,7 @@ mod tests {
         let pts = [[0.1, 0.9], [0.5, 0.5], [0.9, 0.1], [0.3, 0.7]];
         let mut rev = pts;
         rev.reverse();
-        assert_eq!(
-            hypervolume_2d(&pts, [1.0, 1.0]),
-            hypervolume_2d(&rev, [1.0, 1.0])
-        );
+        assert_eq!(hypervolume_2d(&pts, [1.0, 1.0]), hypervolume_2d(&rev, [1.0, 1.0]));
     }
 
     #[test]

@@ -44,7 +44,8 @@ impl<'a> Lockstep<'a> {
             return;
         }
         let slots: Vec<usize> = (0..inner.pending.len()).filter(|&i| inner.pending[i].is_some()).collect();
-        let groups: Vec<(Scenario, Vec<Design>)> = slots.iter().map(|&i| inner.pending[i].take().expect("deposited")).collect();
+        let groups: Vec<(Scenario, Vec<Design>)> =
+            slots.iter().map(|&i| inner.pending[i].take().expect("deposited")).collect();
         let results = self.engine.evaluate_groups(&groups);
         for (slot, r) in slots.into_iter().zip(results) {
             inner.results[slot] = Some(r);

@@ -11,8 +11,8 @@ pub mod test_problems;
 
 pub use hypervolume::hypervolume_2d;
 pub use nsga2::{
-    constrained_dominates, load_checkpoint, pareto_front, save_checkpoint, BatchProblem, Config,
-    Evaluation, GenerationStats, Individual, Mode, Nsga2, State, Termination,
+    constrained_dominates, load_checkpoint, pareto_front, save_checkpoint, BatchProblem, Config, Evaluation,
+    GenerationStats, Individual, Mode, Nsga2, State, Termination,
 };
 pub mod front;
 pub mod lockstep;

@@ -62,11 +62,7 @@ impl Evaluation {
                 *f = f64::INFINITY;
             }
         }
-        self.violation = if self.violation.is_nan() {
-            f64::INFINITY
-        } else {
-            self.violation.max(0.0)
-        };
+        self.violation = if self.violation.is_nan() { f64::INFINITY } else { self.violation.max(0.0) };
         self
     }
 }
@@ -92,11 +88,7 @@ pub enum Mode {
     /// average relative change of the spread over `stall_generations` generations is at most
     /// `tol` and the spread is not rising (see `spread_change`).
     /// MATLAB's defaults are 0.35, 1e-4 and 100.
-    MatlabLike {
-        pareto_fraction: f64,
-        tol: f64,
-        stall_generations: u64,
-    },
+    MatlabLike { pareto_fraction: f64, tol: f64, stall_generations: u64 },
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -210,11 +202,7 @@ impl Nsga2 {
         let mut rng = ChaCha8Rng::seed_from_u64(self.config.seed);
         let xs: Vec<Vec<f64>> = (0..n)
             .map(|_| {
-                let mut x: Vec<f64> = lo
-                    .iter()
-                    .zip(&hi)
-                    .map(|(&l, &h)| l + rng.random::<f64>() * (h - l))
-                    .collect();
+                let mut x: Vec<f64> = lo.iter().zip(&hi).map(|(&l, &h)| l + rng.random::<f64>() * (h - l)).collect();
                 problem.repair(&mut x);
                 x
             })
@@ -251,15 +239,9 @@ impl Nsga2 {
     }
 
     pub fn should_stop(&self, state: &State) -> Option<Termination> {
-        if let Mode::MatlabLike {
-            tol,
-            stall_generations,
-            ..
-        } = self.config.mode
-        {
+        if let Mode::MatlabLike { tol, stall_generations, .. } = self.config.mode {
             let h = &state.spread_history;
-            if spread_change(h, stall_generations).is_some_and(|c| c <= tol)
-                && spread_not_rising(h, stall_generations)
+            if spread_change(h, stall_generations).is_some_and(|c| c <= tol) && spread_not_rising(h, stall_generations)
             {
                 return Some(Termination::SpreadStalled);
             }
@@ -299,19 +281,10 @@ impl Nsga2 {
     /// members with the smallest violation. Computed directly (not from `rank`) so it also
     /// holds for a hand-edited state.
     pub fn pareto_front(state: &State) -> Vec<Individual> {
-        front_indices(&state.population)
-            .into_iter()
-            .map(|i| state.population[i].clone())
-            .collect()
+        front_indices(&state.population).into_iter().map(|i| state.population[i].clone()).collect()
     }
 
-    fn offspring(
-        &self,
-        state: &mut State,
-        lo: &[f64],
-        hi: &[f64],
-        problem: &impl BatchProblem,
-    ) -> Vec<Vec<f64>> {
+    fn offspring(&self, state: &mut State, lo: &[f64], hi: &[f64], problem: &impl BatchProblem) -> Vec<Vec<f64>> {
         let n = self.config.pop;
         let mutation_prob = 1.0 / lo.len().max(1) as f64;
         let pop = &state.population;
@@ -344,15 +317,8 @@ impl Nsga2 {
         while kids.len() < n {
             let a = pick(rng);
             let b = pick(rng);
-            let (mut c1, mut c2) = sbx(
-                &pop[a].x,
-                &pop[b].x,
-                lo,
-                hi,
-                self.config.crossover_eta,
-                self.config.crossover_prob,
-                rng,
-            );
+            let (mut c1, mut c2) =
+                sbx(&pop[a].x, &pop[b].x, lo, hi, self.config.crossover_eta, self.config.crossover_prob, rng);
             for c in [&mut c1, &mut c2] {
                 polynomial_mutation(c, lo, hi, self.config.mutation_eta, mutation_prob, rng);
                 problem.repair(c);
@@ -374,9 +340,7 @@ impl Nsga2 {
         let mut chosen: Vec<usize> = Vec::with_capacity(n);
         match self.config.mode {
             Mode::Standard => fill_by_fronts(&fronts, &union, n, &mut chosen),
-            Mode::MatlabLike {
-                pareto_fraction, ..
-            } => {
+            Mode::MatlabLike { pareto_fraction, .. } => {
                 // MATLAB distributes the population over all fronts geometrically, with the
                 // first front capped at ParetoFraction. Approximation: cap the first front
                 // (keeping its least crowded members), fill from later fronts as in
@@ -393,10 +357,7 @@ impl Nsga2 {
         }
         debug_assert_eq!(chosen.len(), n);
         let mut slots: Vec<Option<Individual>> = union.into_iter().map(Some).collect();
-        chosen
-            .into_iter()
-            .map(|i| slots[i].take().expect("each individual is chosen once"))
-            .collect()
+        chosen.into_iter().map(|i| slots[i].take().expect("each individual is chosen once")).collect()
     }
 }
 
@@ -433,7 +394,9 @@ pub fn dominates(a: &[f64], b: &[f64]) -> bool {
 /// best first, each in ascending index order. Two finite objectives (the sawtooth problem)
 /// take an O(N log N + N F) path; anything else the O(M N²) sort of Deb et al. 2002.
 pub fn non_dominated_sort(evals: &[&Evaluation]) -> Vec<Vec<usize>> {
-    let two_d = evals.iter().all(|e| e.objectives.len() == 2 && e.objectives.iter().all(|v| v.is_finite()) && !e.violation.is_nan());
+    let two_d = evals
+        .iter()
+        .all(|e| e.objectives.len() == 2 && e.objectives.iter().all(|v| v.is_finite()) && !e.violation.is_nan());
     if two_d {
         non_dominated_sort_2d(evals)
     } else {
@@ -453,7 +416,8 @@ fn non_dominated_sort_2d(evals: &[&Evaluation]) -> Vec<Vec<usize>> {
     let mut fronts: Vec<Vec<usize>> = Vec::new();
     let mut last: Vec<usize> = Vec::new();
     for p in feasible {
-        let k = last.iter().position(|&q| !dominates(&evals[q].objectives, &evals[p].objectives)).unwrap_or(fronts.len());
+        let k =
+            last.iter().position(|&q| !dominates(&evals[q].objectives, &evals[p].objectives)).unwrap_or(fronts.len());
         if k == fronts.len() {
             fronts.push(Vec::new());
             last.push(p);
@@ -524,11 +488,7 @@ pub fn crowding_distance(objectives: &[&[f64]]) -> Vec<f64> {
     #[allow(clippy::needless_range_loop)] // k indexes the inner (objective) dimension
     for k in 0..m {
         // Ties broken by index: the order never depends on the previous objective's sort.
-        order.sort_by(|&a, &b| {
-            objectives[a][k]
-                .total_cmp(&objectives[b][k])
-                .then(a.cmp(&b))
-        });
+        order.sort_by(|&a, &b| objectives[a][k].total_cmp(&objectives[b][k]).then(a.cmp(&b)));
         let (first, last) = (order[0], order[n - 1]);
         dist[first] = f64::INFINITY;
         dist[last] = f64::INFINITY;
@@ -571,11 +531,7 @@ pub fn spread(front: &[&[f64]], prev_extremes: &[Vec<f64>]) -> (f64, Vec<Vec<f64
         })
         .collect();
     let movement: f64 = if prev_extremes.len() == m {
-        extremes
-            .iter()
-            .zip(prev_extremes)
-            .map(|(e, p)| euclid(e, p))
-            .sum()
+        extremes.iter().zip(prev_extremes).map(|(e, p)| euclid(e, p)).sum()
     } else {
         0.0
     };
@@ -620,9 +576,7 @@ fn spread_change(history: &[f64], stall: u64) -> Option<f64> {
 /// MATLAB's second stopping condition: the newest spread is no larger than the window mean,
 /// so a run does not stop while its front is getting less uniform.
 fn spread_not_rising(history: &[f64], stall: u64) -> bool {
-    let window = usize::try_from(stall)
-        .unwrap_or(usize::MAX)
-        .saturating_add(1);
+    let window = usize::try_from(stall).unwrap_or(usize::MAX).saturating_add(1);
     let tail = &history[history.len().saturating_sub(window + 1)..];
     let mean = tail.iter().sum::<f64>() / tail.len() as f64;
     tail.last().is_some_and(|&last| last <= mean)
@@ -640,8 +594,7 @@ pub fn save_checkpoint(path: impl AsRef<Path>, state: &State) -> anyhow::Result<
 /// [`Config`]: continue it with the same config and problem to reproduce the original run.
 pub fn load_checkpoint(path: impl AsRef<Path>) -> anyhow::Result<State> {
     let path = path.as_ref();
-    let text = fs::read_to_string(path)
-        .with_context(|| format!("reading checkpoint {}", path.display()))?;
+    let text = fs::read_to_string(path).with_context(|| format!("reading checkpoint {}", path.display()))?;
     serde_json::from_str(&text).with_context(|| format!("parsing checkpoint {}", path.display()))
 }
 
@@ -651,14 +604,9 @@ pub fn load_checkpoint(path: impl AsRef<Path>) -> anyhow::Result<State> {
 fn checked_bounds(problem: &impl BatchProblem) -> (Vec<f64>, Vec<f64>) {
     let (lo, hi) = problem.bounds();
     let d = problem.dim();
+    assert!(lo.len() == d && hi.len() == d, "bounds must have dim() = {d} entries");
     assert!(
-        lo.len() == d && hi.len() == d,
-        "bounds must have dim() = {d} entries"
-    );
-    assert!(
-        lo.iter()
-            .zip(&hi)
-            .all(|(l, h)| l <= h && l.is_finite() && h.is_finite()),
+        lo.iter().zip(&hi).all(|(l, h)| l <= h && l.is_finite() && h.is_finite()),
         "bounds must be finite with lower <= upper"
     );
     (lo, hi)
@@ -666,11 +614,7 @@ fn checked_bounds(problem: &impl BatchProblem) -> (Vec<f64>, Vec<f64>) {
 
 fn evaluate(problem: &mut impl BatchProblem, xs: &[Vec<f64>], generation: u64) -> Vec<Evaluation> {
     let evals = problem.evaluate_batch(xs, generation);
-    assert_eq!(
-        evals.len(),
-        xs.len(),
-        "evaluate_batch must return one Evaluation per candidate"
-    );
+    assert_eq!(evals.len(), xs.len(), "evaluate_batch must return one Evaluation per candidate");
     let m = problem.n_objectives();
     evals
         .into_iter()
@@ -682,15 +626,7 @@ fn evaluate(problem: &mut impl BatchProblem, xs: &[Vec<f64>], generation: u64) -
 }
 
 fn into_individuals(xs: Vec<Vec<f64>>, evals: Vec<Evaluation>) -> Vec<Individual> {
-    xs.into_iter()
-        .zip(evals)
-        .map(|(x, eval)| Individual {
-            x,
-            eval,
-            rank: 0,
-            crowding: 0.0,
-        })
-        .collect()
+    xs.into_iter().zip(evals).map(|(x, eval)| Individual { x, eval, rank: 0, crowding: 0.0 }).collect()
 }
 
 /// Sort `pop` into fronts and store each member's rank and crowding distance.
@@ -698,10 +634,7 @@ fn rank_and_crowd(pop: &mut [Individual]) -> Vec<Vec<usize>> {
     let evals: Vec<&Evaluation> = pop.iter().map(|i| &i.eval).collect();
     let fronts = non_dominated_sort(&evals);
     for (rank, front) in fronts.iter().enumerate() {
-        let objs: Vec<&[f64]> = front
-            .iter()
-            .map(|&i| pop[i].eval.objectives.as_slice())
-            .collect();
+        let objs: Vec<&[f64]> = front.iter().map(|&i| pop[i].eval.objectives.as_slice()).collect();
         let cd = crowding_distance(&objs);
         for (&i, d) in front.iter().zip(cd) {
             pop[i].rank = rank;
@@ -746,11 +679,7 @@ fn tournament(pop: &[Individual], rng: &mut ChaCha8Rng) -> usize {
     if constrained_dominates(&ib.eval, &ia.eval) {
         return b;
     }
-    match ia
-        .rank
-        .cmp(&ib.rank)
-        .then_with(|| ib.crowding.total_cmp(&ia.crowding))
-    {
+    match ia.rank.cmp(&ib.rank).then_with(|| ib.crowding.total_cmp(&ia.crowding)) {
         Ordering::Less => a,
         Ordering::Greater => b,
         Ordering::Equal => {
@@ -810,11 +739,7 @@ fn sbx(
         if rng.random::<f64>() > 0.5 || (p1[j] - p2[j]).abs() <= 1e-14 {
             continue;
         }
-        let (y1, y2) = if p1[j] < p2[j] {
-            (p1[j], p2[j])
-        } else {
-            (p2[j], p1[j])
-        };
+        let (y1, y2) = if p1[j] < p2[j] { (p1[j], p2[j]) } else { (p2[j], p1[j]) };
         let (yl, yu) = (lo[j], hi[j]);
         let u = rng.random::<f64>();
         let betaq = |beta: f64| {
@@ -841,14 +766,7 @@ fn sbx(
 
 /// Bounded polynomial mutation (Deb's reference code, `real_mutate_ind`): the perturbation
 /// shrinks near a bound so the result stays inside it.
-fn polynomial_mutation(
-    x: &mut [f64],
-    lo: &[f64],
-    hi: &[f64],
-    eta: f64,
-    prob: f64,
-    rng: &mut ChaCha8Rng,
-) {
+fn polynomial_mutation(x: &mut [f64], lo: &[f64], hi: &[f64], eta: f64, prob: f64, rng: &mut ChaCha8Rng) {
     let exponent = 1.0 / (eta + 1.0);
     for j in 0..x.len() {
         if rng.random::<f64>() > prob {
@@ -877,22 +795,13 @@ fn polynomial_mutation(
 fn front_indices(pop: &[Individual]) -> Vec<usize> {
     let feasible: Vec<usize> = (0..pop.len()).filter(|&i| pop[i].eval.feasible()).collect();
     if feasible.is_empty() {
-        let least = pop
-            .iter()
-            .map(|i| i.eval.violation)
-            .fold(f64::INFINITY, f64::min);
-        return (0..pop.len())
-            .filter(|&i| pop[i].eval.violation == least)
-            .collect();
+        let least = pop.iter().map(|i| i.eval.violation).fold(f64::INFINITY, f64::min);
+        return (0..pop.len()).filter(|&i| pop[i].eval.violation == least).collect();
     }
     feasible
         .iter()
         .copied()
-        .filter(|&i| {
-            !feasible
-                .iter()
-                .any(|&j| dominates(&pop[j].eval.objectives, &pop[i].eval.objectives))
-        })
+        .filter(|&i| !feasible.iter().any(|&j| dominates(&pop[j].eval.objectives, &pop[i].eval.objectives)))
         .collect()
 }
 
@@ -902,10 +811,7 @@ fn record(state: &mut State) -> GenerationStats {
     let front = front_indices(pop);
     let any_feasible = front.first().is_some_and(|&i| pop[i].eval.feasible());
     let s = if any_feasible {
-        let objs: Vec<&[f64]> = front
-            .iter()
-            .map(|&i| pop[i].eval.objectives.as_slice())
-            .collect();
+        let objs: Vec<&[f64]> = front.iter().map(|&i| pop[i].eval.objectives.as_slice()).collect();
         let (s, extremes) = spread(&objs, &state.prev_extremes);
         state.prev_extremes = extremes;
         s
@@ -920,27 +826,16 @@ fn record(state: &mut State) -> GenerationStats {
         feasible_fraction: feasible as f64 / pop.len() as f64,
         front_size: front.len(),
         spread: s,
-        min_violation: pop
-            .iter()
-            .map(|i| i.eval.violation)
-            .fold(f64::INFINITY, f64::min),
+        min_violation: pop.iter().map(|i| i.eval.violation).fold(f64::INFINITY, f64::min),
     }
 }
 
 fn euclid(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y) * (x - y))
-        .sum::<f64>()
-        .sqrt()
+    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt()
 }
 
 fn lex_cmp(a: &[f64], b: &[f64]) -> Ordering {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| x.total_cmp(y))
-        .find(|o| o.is_ne())
-        .unwrap_or(Ordering::Equal)
+    a.iter().zip(b).map(|(x, y)| x.total_cmp(y)).find(|o| o.is_ne()).unwrap_or(Ordering::Equal)
 }
 
 /// Exact f64 (de)serialisation for checkpoints. serde_json without its `float_roundtrip`
@@ -994,10 +889,7 @@ mod exact_f64 {
         }
 
         pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
-            Ok(Vec::<Exact>::deserialize(d)?
-                .into_iter()
-                .map(|e| e.0)
-                .collect())
+            Ok(Vec::<Exact>::deserialize(d)?.into_iter().map(|e| e.0).collect())
         }
     }
 
@@ -1005,10 +897,7 @@ mod exact_f64 {
         use super::*;
 
         pub fn serialize<S: Serializer>(v: &[Vec<f64>], s: S) -> Result<S::Ok, S::Error> {
-            s.collect_seq(
-                v.iter()
-                    .map(|row| row.iter().map(|&x| Exact(x)).collect::<Vec<_>>()),
-            )
+            s.collect_seq(v.iter().map(|row| row.iter().map(|&x| Exact(x)).collect::<Vec<_>>()))
         }
 
         pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Vec<f64>>, D::Error> {
@@ -1025,10 +914,7 @@ mod tests {
     use super::*;
 
     fn ev(objectives: &[f64], violation: f64) -> Evaluation {
-        Evaluation {
-            objectives: objectives.to_vec(),
-            violation,
-        }
+        Evaluation { objectives: objectives.to_vec(), violation }
     }
 
     #[test]
@@ -1063,18 +949,9 @@ mod tests {
         assert!(!constrained_dominates(&same, &infeasible_good));
         assert!(!constrained_dominates(&infeasible_good, &same));
         // Feasible pair: Pareto dominance; equal points do not dominate each other.
-        assert!(constrained_dominates(
-            &ev(&[1.0, 2.0], 0.0),
-            &ev(&[1.0, 3.0], 0.0)
-        ));
-        assert!(!constrained_dominates(
-            &ev(&[1.0, 3.0], 0.0),
-            &ev(&[2.0, 2.0], 0.0)
-        ));
-        assert!(!constrained_dominates(
-            &ev(&[1.0, 2.0], 0.0),
-            &ev(&[1.0, 2.0], 0.0)
-        ));
+        assert!(constrained_dominates(&ev(&[1.0, 2.0], 0.0), &ev(&[1.0, 3.0], 0.0)));
+        assert!(!constrained_dominates(&ev(&[1.0, 3.0], 0.0), &ev(&[2.0, 2.0], 0.0)));
+        assert!(!constrained_dominates(&ev(&[1.0, 2.0], 0.0), &ev(&[1.0, 2.0], 0.0)));
     }
 
     #[test]
@@ -1087,10 +964,7 @@ mod tests {
             ev(&[0.0, 0.0], 1.0),
         ];
         let refs: Vec<&Evaluation> = evals.iter().collect();
-        assert_eq!(
-            non_dominated_sort(&refs),
-            vec![vec![1, 2, 3], vec![4], vec![0]]
-        );
+        assert_eq!(non_dominated_sort(&refs), vec![vec![1, 2, 3], vec![4], vec![0]]);
     }
 
     #[test]
@@ -1134,12 +1008,8 @@ mod tests {
         let lo = [0.0, -1.0, 5.0];
         let hi = [1.0, 1.0, 5.0];
         for _ in 0..2000 {
-            let p1: Vec<f64> = (0..3)
-                .map(|j| lo[j] + rng.random::<f64>() * (hi[j] - lo[j]))
-                .collect();
-            let p2: Vec<f64> = (0..3)
-                .map(|j| lo[j] + rng.random::<f64>() * (hi[j] - lo[j]))
-                .collect();
+            let p1: Vec<f64> = (0..3).map(|j| lo[j] + rng.random::<f64>() * (hi[j] - lo[j])).collect();
+            let p2: Vec<f64> = (0..3).map(|j| lo[j] + rng.random::<f64>() * (hi[j] - lo[j])).collect();
             let (mut c1, mut c2) = sbx(&p1, &p2, &lo, &hi, 15.0, 0.9, &mut rng);
             polynomial_mutation(&mut c1, &lo, &hi, 20.0, 1.0, &mut rng);
             polynomial_mutation(&mut c2, &lo, &hi, 20.0, 1.0, &mut rng);
@@ -1166,12 +1036,7 @@ mod tests {
             2.225_073_858_507_201e-308,
             9007199254740993.0,
         ];
-        let ind = Individual {
-            x: awkward.to_vec(),
-            eval: ev(&awkward, 0.0),
-            rank: 3,
-            crowding: f64::INFINITY,
-        };
+        let ind = Individual { x: awkward.to_vec(), eval: ev(&awkward, 0.0), rank: 3, crowding: f64::INFINITY };
         let json = serde_json::to_string(&ind).unwrap();
         let back: Individual = serde_json::from_str(&json).unwrap();
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
@@ -1179,8 +1044,7 @@ mod tests {
         assert_eq!(bits(&back.eval.objectives), bits(&ind.eval.objectives));
         assert_eq!(back.crowding, f64::INFINITY);
         // Plain numbers are accepted too (hand-written files).
-        let e: Evaluation =
-            serde_json::from_str(r#"{"objectives":[1.5,2],"violation":0}"#).unwrap();
+        let e: Evaluation = serde_json::from_str(r#"{"objectives":[1.5,2],"violation":0}"#).unwrap();
         assert_eq!(e, ev(&[1.5, 2.0], 0.0));
     }
 }

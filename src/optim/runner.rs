@@ -110,7 +110,10 @@ fn evaluation_row(l: &Logged) -> String {
                 e.sim.lost_fraction
             ));
         }
-        None => row.push_str(&format!(",,,,,,,,{}", l.invalid.as_deref().unwrap_or(if l.violation > 0.0 { "infeasible" } else { "" }))),
+        None => row.push_str(&format!(
+            ",,,,,,,,{}",
+            l.invalid.as_deref().unwrap_or(if l.violation > 0.0 { "infeasible" } else { "" })
+        )),
     }
     row
 }
@@ -137,7 +140,11 @@ fn truncate_csv(path: &Path, last: u64) -> anyhow::Result<()> {
 }
 
 fn append(path: &Path, lines: &str) -> anyhow::Result<()> {
-    let mut f = OpenOptions::new().append(true).create(true).open(path).with_context(|| format!("appending to {}", path.display()))?;
+    let mut f = OpenOptions::new()
+        .append(true)
+        .create(true)
+        .open(path)
+        .with_context(|| format!("appending to {}", path.display()))?;
     f.write_all(lines.as_bytes())?;
     f.flush()?;
     Ok(())
@@ -151,7 +158,6 @@ fn front_points(state: &State) -> Vec<[f64; 2]> {
         .map(|i| [i.eval.objectives[0], i.eval.objectives[1]])
         .collect()
 }
-
 
 /// Paths of a run directory.
 struct Paths {
@@ -178,7 +184,8 @@ pub const RUN_KIND: &str = "optimize";
 /// Read a run's manifest (for --resume).
 pub fn read_manifest(dir: &Path) -> anyhow::Result<Manifest> {
     let path = dir.join("run.toml");
-    let text = std::fs::read_to_string(&path).with_context(|| format!("--resume: no run manifest at {}", path.display()))?;
+    let text =
+        std::fs::read_to_string(&path).with_context(|| format!("--resume: no run manifest at {}", path.display()))?;
     toml::from_str(&text).with_context(|| format!("--resume: reading {}", path.display()))
 }
 
@@ -189,7 +196,13 @@ pub fn is_finished(dir: &Path) -> bool {
 
 /// Run (or with `resume`, continue) the optimisation in `dir`. `manifest` describes a new
 /// run; with `resume` it is read from the directory instead.
-pub fn run(dir: &Path, manifest: Option<Manifest>, resume: bool, engine: &dyn BatchEvaluator, opts: &RunOptions) -> anyhow::Result<RunOutcome> {
+pub fn run(
+    dir: &Path,
+    manifest: Option<Manifest>,
+    resume: bool,
+    engine: &dyn BatchEvaluator,
+    opts: &RunOptions,
+) -> anyhow::Result<RunOutcome> {
     let paths = Paths::new(dir);
     if resume && !paths.manifest.exists() {
         bail!("--resume: no run manifest at {}", paths.manifest.display());
@@ -198,7 +211,8 @@ pub fn run(dir: &Path, manifest: Option<Manifest>, resume: bool, engine: &dyn Ba
     let _owned = RunDir::acquire(dir, RUN_KIND, Access::Exclusive, |d| d.join("run.toml").exists())?;
     let (mut manifest, state) = if resume {
         let m = read_manifest(dir)?;
-        let state = load_checkpoint(&paths.checkpoint).with_context(|| format!("--resume: reading {}", paths.checkpoint.display()))?;
+        let state = load_checkpoint(&paths.checkpoint)
+            .with_context(|| format!("--resume: reading {}", paths.checkpoint.display()))?;
         truncate_csv(&paths.evaluations, state.generation)?;
         truncate_csv(&paths.generations, state.generation)?;
         eprintln!("{}resuming from the checkpoint at generation {}", opts.label, state.generation);
@@ -215,7 +229,10 @@ pub fn run(dir: &Path, manifest: Option<Manifest>, resume: bool, engine: &dyn Ba
     if state.is_none() {
         write_atomic(&paths.manifest, toml::to_string_pretty(&manifest)?.as_bytes())?;
         write_atomic(&paths.evaluations, format!("{}\n", csv_header_evaluations()).as_bytes())?;
-        write_atomic(&paths.generations, b"generation,hypervolume,spread,feasible_fraction,front_size,evaluations,elapsed_s\n")?;
+        write_atomic(
+            &paths.generations,
+            b"generation,hypervolume,spread,feasible_fraction,front_size,evaluations,elapsed_s\n",
+        )?;
     }
 
     let log_error: std::cell::RefCell<Option<anyhow::Error>> = std::cell::RefCell::new(None);
@@ -225,7 +242,12 @@ pub fn run(dir: &Path, manifest: Option<Manifest>, resume: bool, engine: &dyn Ba
             log_error.borrow_mut().get_or_insert(e);
         }
     };
-    let mut problem = SawtoothProblem { scenario: manifest.scenario.clone(), engine, base_seed: manifest.seed, log: Some(Box::new(log)) };
+    let mut problem = SawtoothProblem {
+        scenario: manifest.scenario.clone(),
+        engine,
+        base_seed: manifest.seed,
+        log: Some(Box::new(log)),
+    };
     let ga = Nsga2 { config: manifest.config.clone() };
     install_interrupt_handler();
     let start = Instant::now();
@@ -239,7 +261,10 @@ pub fn run(dir: &Path, manifest: Option<Manifest>, resume: bool, engine: &dyn Ba
     };
     let bar = if opts.progress {
         let b = indicatif::ProgressBar::new(manifest.config.max_generations);
-        b.set_style(indicatif::ProgressStyle::with_template("{prefix}{bar:30} gen {pos}/{len} {msg} eta {eta}").expect("valid template"));
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{prefix}{bar:30} gen {pos}/{len} {msg} eta {eta}")
+                .expect("valid template"),
+        );
         b.set_prefix(opts.label.clone());
         b.set_position(state.generation);
         b
@@ -272,15 +297,34 @@ pub fn run(dir: &Path, manifest: Option<Manifest>, resume: bool, engine: &dyn Ba
             save_checkpoint(&paths.checkpoint, &state)?;
         }
         bar.set_position(state.generation);
-        bar.set_message(format!("HV {hv:.4e} feasible {:.0}% front {}", stats.feasible_fraction * 100.0, stats.front_size));
+        bar.set_message(format!(
+            "HV {hv:.4e} feasible {:.0}% front {}",
+            stats.feasible_fraction * 100.0,
+            stats.front_size
+        ));
         if !opts.progress && state.generation % 10 == 0 {
-            eprintln!("{}generation {} HV {hv:.4e} feasible {:.0}%", opts.label, state.generation, stats.feasible_fraction * 100.0);
+            eprintln!(
+                "{}generation {} HV {hv:.4e} feasible {:.0}%",
+                opts.label,
+                state.generation,
+                stats.feasible_fraction * 100.0
+            );
         }
         if INTERRUPTED.load(Ordering::SeqCst) {
             save_checkpoint(&paths.checkpoint, &state)?;
             bar.abandon();
-            eprintln!("{}interrupted: checkpoint saved at generation {}; continue with --resume", opts.label, state.generation);
-            return Ok(RunOutcome { dir: dir.to_path_buf(), manifest, front: Vec::new(), termination: "Interrupted".into(), generations: state.generation, interrupted: true });
+            eprintln!(
+                "{}interrupted: checkpoint saved at generation {}; continue with --resume",
+                opts.label, state.generation
+            );
+            return Ok(RunOutcome {
+                dir: dir.to_path_buf(),
+                manifest,
+                front: Vec::new(),
+                termination: "Interrupted".into(),
+                generations: state.generation,
+                interrupted: true,
+            });
         }
     };
     save_checkpoint(&paths.checkpoint, &state)?;
@@ -290,7 +334,14 @@ pub fn run(dir: &Path, manifest: Option<Manifest>, resume: bool, engine: &dyn Ba
     write_outputs(dir, &front, &paths.evaluations)?;
     manifest.termination = Some(termination.clone());
     write_atomic(&paths.manifest, toml::to_string_pretty(&manifest)?.as_bytes())?;
-    Ok(RunOutcome { dir: dir.to_path_buf(), manifest, front, termination, generations: state.generation, interrupted: false })
+    Ok(RunOutcome {
+        dir: dir.to_path_buf(),
+        manifest,
+        front,
+        termination,
+        generations: state.generation,
+        interrupted: false,
+    })
 }
 
 #[cfg(test)]

@@ -144,7 +144,14 @@ impl BatchProblem for SawtoothProblem<'_> {
                 // finite so JSON checkpoints can hold it; Deb's rules rank by violation anyway
                 ([1e12, 1e12], None, None)
             };
-            logged.push(Logged { generation, x: design_of(x).to_cli_units(), objectives: objs, violation: violations[i], evaluation, invalid });
+            logged.push(Logged {
+                generation,
+                x: design_of(x).to_cli_units(),
+                objectives: objs,
+                violation: violations[i],
+                evaluation,
+                invalid,
+            });
             out.push(GaEvaluation { objectives: objs.to_vec(), violation: violations[i] });
         }
         if let Some(log) = self.log.as_mut() {

@@ -17,9 +17,7 @@ fn zdt_g(x: &[f64]) -> f64 {
 }
 
 fn sampled_hypervolume(f: impl Fn(f64) -> [f64; 2], reference: [f64; 2]) -> f64 {
-    let pts: Vec<[f64; 2]> = (0..FRONT_SAMPLES)
-        .map(|i| f(i as f64 / (FRONT_SAMPLES - 1) as f64))
-        .collect();
+    let pts: Vec<[f64; 2]> = (0..FRONT_SAMPLES).map(|i| f(i as f64 / (FRONT_SAMPLES - 1) as f64)).collect();
     hypervolume_2d(&pts, reference)
 }
 
@@ -55,10 +53,7 @@ impl BatchProblem for Zdt1 {
         xs.iter()
             .map(|x| {
                 let g = zdt_g(x);
-                Evaluation {
-                    objectives: vec![x[0], g * (1.0 - (x[0] / g).sqrt())],
-                    violation: 0.0,
-                }
+                Evaluation { objectives: vec![x[0], g * (1.0 - (x[0] / g).sqrt())], violation: 0.0 }
             })
             .collect()
     }
@@ -97,10 +92,7 @@ impl BatchProblem for Zdt2 {
             .map(|x| {
                 let g = zdt_g(x);
                 let r = x[0] / g;
-                Evaluation {
-                    objectives: vec![x[0], g * (1.0 - r * r)],
-                    violation: 0.0,
-                }
+                Evaluation { objectives: vec![x[0], g * (1.0 - r * r)], violation: 0.0 }
             })
             .collect()
     }
@@ -114,10 +106,7 @@ pub struct Bnh;
 
 impl Bnh {
     pub fn objectives(x: &[f64]) -> [f64; 2] {
-        [
-            4.0 * x[0] * x[0] + 4.0 * x[1] * x[1],
-            (x[0] - 5.0).powi(2) + (x[1] - 5.0).powi(2),
-        ]
+        [4.0 * x[0] * x[0] + 4.0 * x[1] * x[1], (x[0] - 5.0).powi(2) + (x[1] - 5.0).powi(2)]
     }
 
     pub fn violation(x: &[f64]) -> f64 {
@@ -152,10 +141,7 @@ impl BatchProblem for Bnh {
     }
     fn evaluate_batch(&mut self, xs: &[Vec<f64>], _generation: u64) -> Vec<Evaluation> {
         xs.iter()
-            .map(|x| Evaluation {
-                objectives: Self::objectives(x).to_vec(),
-                violation: Self::violation(x),
-            })
+            .map(|x| Evaluation { objectives: Self::objectives(x).to_vec(), violation: Self::violation(x) })
             .collect()
     }
 }

@@ -111,7 +111,11 @@ impl GpuEngine {
                 wgpu::BindGroupLayoutEntry {
                     binding: 0,
                     visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
                     count: None,
                 },
                 storage(1, true),
@@ -152,7 +156,10 @@ impl GpuEngine {
 
     /// "name (backend, device type)" for logs and run manifests.
     pub fn describe(&self) -> String {
-        format!("{} ({:?}, {:?}, driver {})", self.info.name, self.info.backend, self.info.device_type, self.info.driver_info)
+        format!(
+            "{} ({:?}, {:?}, driver {})",
+            self.info.name, self.info.backend, self.info.device_type, self.info.driver_info
+        )
     }
 
     pub fn is_hardware(&self) -> bool {
@@ -180,7 +187,13 @@ impl GpuEngine {
         (self.limits.max_compute_workgroups_per_dimension as u64).min(by_storage).max(1) as usize
     }
 
-    fn run_chunk(&self, phys: &GpuPhysics, designs: &[GpuDesign], particles: &[GpuParticle], want_particles: bool) -> anyhow::Result<ChunkResult> {
+    fn run_chunk(
+        &self,
+        phys: &GpuPhysics,
+        designs: &[GpuDesign],
+        particles: &[GpuParticle],
+        want_particles: bool,
+    ) -> anyhow::Result<ChunkResult> {
         let t_chunk = std::time::Instant::now();
         let dev = &self.device;
         let n = designs.len();
@@ -237,7 +250,8 @@ impl GpuEngine {
         let mut enc = dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("simulate") });
         enc.clear_buffer(&hist_buf, 0, None);
         {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("simulate"), timestamp_writes: None });
+            let mut pass = enc
+                .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("simulate"), timestamp_writes: None });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &bind, &[]);
             pass.dispatch_workgroups(n as u32, 1, 1);
@@ -261,8 +275,11 @@ impl GpuEngine {
         slice.map_async(wgpu::MapMode::Read, move |r| {
             let _ = tx.send(r);
         });
-        dev.poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: Some(TIMEOUT) }).map_err(|e| anyhow!("GPU batch did not finish: {e}"))?;
-        rx.recv_timeout(TIMEOUT).map_err(|_| anyhow!("GPU readback never completed"))?.map_err(|e| anyhow!("GPU readback failed: {e}"))?;
+        dev.poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: Some(TIMEOUT) })
+            .map_err(|e| anyhow!("GPU batch did not finish: {e}"))?;
+        rx.recv_timeout(TIMEOUT)
+            .map_err(|_| anyhow!("GPU readback never completed"))?
+            .map_err(|e| anyhow!("GPU readback failed: {e}"))?;
         if let Some(e) = self.uncaptured.lock().unwrap().take() {
             bail!("GPU error: {e}");
         }
@@ -330,7 +347,13 @@ impl GpuEngine {
                 on_cpu.push(i);
                 continue;
             }
-            let key = GpuPhysics::from_kernel(&kernel_physics::<f32>(ctx), ctx.max_bounces, prep.launches.len() as u32, 0, prep.profile.teeth);
+            let key = GpuPhysics::from_kernel(
+                &kernel_physics::<f32>(ctx),
+                ctx.max_bounces,
+                prep.launches.len() as u32,
+                0,
+                prep.profile.teeth,
+            );
             match batches.iter_mut().find(|(k, _)| bytemuck::bytes_of(k) == bytemuck::bytes_of(&key)) {
                 Some((_, members)) => members.push(i),
                 None => batches.push((key, vec![i])),
@@ -354,7 +377,13 @@ impl GpuEngine {
     }
 
     /// One dispatch of `jobs[chunk]`, which share the batch-wide record `key`.
-    fn run_batch(&self, key: GpuPhysics, jobs: &[(&Context, &Prepared)], chunk: &[usize], want_particles: bool) -> Vec<DesignRun> {
+    fn run_batch(
+        &self,
+        key: GpuPhysics,
+        jobs: &[(&Context, &Prepared)],
+        chunk: &[usize],
+        want_particles: bool,
+    ) -> Vec<DesignRun> {
         let n_particles = key.n_particles;
         let teeth = key.teeth_hist;
         let mut designs = Vec::with_capacity(chunk.len());
@@ -366,7 +395,12 @@ impl GpuEngine {
             let kp = kernel_physics::<f32>(ctx);
             let kd = kernel_design::<f32>(prep);
             designs.push(GpuDesign::new(&kd, &kp));
-            particles.extend(prep.launches.iter().enumerate().map(|(j, l)| GpuParticle::from(&init_particle(&kd, &kp, [l[0] as f32, l[1] as f32], j as u32))));
+            particles.extend(
+                prep.launches
+                    .iter()
+                    .enumerate()
+                    .map(|(j, l)| GpuParticle::from(&init_particle(&kd, &kp, [l[0] as f32, l[1] as f32], j as u32))),
+            );
         }
         let phys = GpuPhysics { n_designs: chunk.len() as u32, ..key };
         match self.run_chunk(&phys, &designs, &particles, want_particles) {
@@ -389,13 +423,19 @@ impl GpuEngine {
                         o.bounce_sum as u64,
                     );
                     let parts = r.particles.as_ref().map(|ps| {
-                        ps[c * n_particles as usize..(c + 1) * n_particles as usize].iter().map(|p| particle_end(prep, p)).collect()
+                        ps[c * n_particles as usize..(c + 1) * n_particles as usize]
+                            .iter()
+                            .map(|p| particle_end(prep, p))
+                            .collect()
                     });
                     (sim, parts)
                 })
                 .collect(),
             Err(e) => {
-                eprintln!("warning: GPU failed on a batch of {} designs ({e:#}); re-running it on the cpu engine", chunk.len());
+                eprintln!(
+                    "warning: GPU failed on a batch of {} designs ({e:#}); re-running it on the cpu engine",
+                    chunk.len()
+                );
                 run_on_cpu(jobs, chunk, want_particles)
             }
         }
@@ -452,8 +492,10 @@ impl BatchEvaluator for GpuEngine {
     fn evaluate_groups(&self, groups: &[(Scenario, Vec<Design>)]) -> Vec<Vec<Result<Evaluation, Invalid>>> {
         let contexts: Vec<Context> = groups.iter().map(|(s, _)| Context::new(s)).collect();
         // prepare every (group, design) pair in parallel: a calibration sends one-design groups
-        let tasks: Vec<(usize, &Design)> = groups.iter().enumerate().flat_map(|(g, (_, ds))| ds.iter().map(move |d| (g, d))).collect();
-        let prepared: Vec<Result<Prepared, Invalid>> = tasks.par_iter().map(|(g, d)| prepare(&groups[*g].0, d)).collect();
+        let tasks: Vec<(usize, &Design)> =
+            groups.iter().enumerate().flat_map(|(g, (_, ds))| ds.iter().map(move |d| (g, d))).collect();
+        let prepared: Vec<Result<Prepared, Invalid>> =
+            tasks.par_iter().map(|(g, d)| prepare(&groups[*g].0, d)).collect();
         let jobs: Vec<(&Context, &Prepared)> =
             tasks.iter().zip(&prepared).filter_map(|((g, _), p)| p.as_ref().ok().map(|p| (&contexts[*g], p))).collect();
         let mut sims = self.run_jobs(&jobs, false).into_iter();
