@@ -26,6 +26,18 @@ fi
 # lavapipe's WSI probing warns without a runtime dir; the tests draw nothing on screen.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 
+# --- style gates (issue 16): formatting and lints are part of the test, not advice --------
+# rustup's default profile ships both; a minimal toolchain gets them added here.
+if ! cargo fmt --version >/dev/null 2>&1 || ! cargo clippy --version >/dev/null 2>&1; then
+    rustup component add rustfmt clippy
+fi
+lint_status=0
+cargo fmt --all --check || { echo "test.sh: cargo fmt --check failed (run: cargo fmt)"; lint_status=1; }
+cargo clippy --release --locked --workspace --all-targets -- -D warnings || {
+    echo "test.sh: cargo clippy found warnings"
+    lint_status=1
+}
+
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
 status=0
@@ -68,4 +80,5 @@ fi
 awk '/ (passed|failed|error)/ && / in [0-9.]+s/ { p = 0; f = 0; for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p = $i; if ($(i+1) ~ /^(failed|errors?)/) f += $i } }
      END { printf "python tests: %d passed, %d failed\n", p, f }' "$pylog"
 if [ "$py_status" -ne 0 ] && [ "$status" -eq 0 ]; then status=$py_status; fi
+if [ "$lint_status" -ne 0 ] && [ "$status" -eq 0 ]; then status=$lint_status; fi
 exit $status

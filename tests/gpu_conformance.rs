@@ -185,7 +185,7 @@ fn one_design_groups_of_a_calibration_run_as_one_dispatch() {
     let variants = calibration_variants(&base);
     let designs = sawtooth::model::sampling::random_valid_designs(&variants[0].1, 4, 21);
     let groups: Vec<(Scenario, Vec<Design>)> =
-        designs.iter().flat_map(|d| variants.iter().map(move |(_, s)| (s.clone(), vec![d.clone()]))).collect();
+        designs.iter().flat_map(|d| variants.iter().map(move |(_, s)| (s.clone(), vec![*d]))).collect();
     let before = g.dispatches();
     let merged = g.evaluate_groups(&groups);
     assert_eq!(g.dispatches() - before, 1, "{} one-design groups should be one dispatch", groups.len());
@@ -227,10 +227,10 @@ fn batch_wide_physics_splits_and_cpu_only_effects_leave_the_gpu() {
     sled.effects.sled_motion = Some(SledMotion { delay_s: 0.01, return_speed_m_s: 0.2, direction: Default::default() });
     let d = Design::lunar_solution_c();
     let groups = vec![
-        (lunar.clone(), vec![d.clone()]),
+        (lunar.clone(), vec![d]),
         (earth, vec![Design::earth_solution_c()]),
-        (sled.clone(), vec![d.clone()]),
-        (lunar, vec![d.clone()]),
+        (sled.clone(), vec![d]),
+        (lunar, vec![d]),
     ];
     let (before, cpu_before) = (g.dispatches(), g.cpu_only_designs());
     let out = g.evaluate_groups(&groups);

@@ -188,7 +188,8 @@ fn engine_kind(name: &str) -> PyResult<EngineKind> {
 /// GPU adapters take a while to open: one engine per kind per process. The CPU engines and
 /// the effect checks go through `make_engine_for` every call, as in the CLI.
 fn engine_for(kind: EngineKind, scenario: &sawtooth::model::Scenario) -> anyhow::Result<Arc<dyn Engine>> {
-    static CACHE: OnceLock<Mutex<Vec<(EngineKind, Arc<dyn Engine>)>>> = OnceLock::new();
+    type Cache = Mutex<Vec<(EngineKind, Arc<dyn Engine>)>>;
+    static CACHE: OnceLock<Cache> = OnceLock::new();
     if matches!(kind, EngineKind::Cpu | EngineKind::Listing) || !cpu_only_effects(&scenario.effects).is_empty() {
         return Ok(Arc::from(make_engine_for(kind, scenario)?));
     }

@@ -148,7 +148,8 @@ impl Target {
     /// counted as misfit), it stays right when the weighed teeth do not hold every grain.
     pub fn of_loaded_mass(runs: &MeasuredRuns, teeth: usize, resolution_g: f64) -> Option<Self> {
         let input: f64 = runs.runs.iter().map(|r| r.input_mass_g).sum::<Option<f64>>()?;
-        if !(input > 0.0) {
+        // NaN and non-positive totals both mean there is no loaded mass to normalise by
+        if input.is_nan() || input <= 0.0 {
             return None;
         }
         let mut bins = vec![0.0; teeth + 1];
