@@ -10,6 +10,7 @@ pub mod outcome;
 pub mod performance;
 pub mod prepare;
 pub mod real;
+pub mod requirements;
 pub mod rng;
 pub mod sampling;
 pub mod scenario;
