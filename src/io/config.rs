@@ -7,6 +7,7 @@ use std::path::Path;
 use anyhow::{bail, Context as _};
 use serde::Deserialize;
 
+use crate::model::requirements::{Requirements, PRESET_TABLE_2_2};
 use crate::model::scenario::{EnvPreset, Material, PhysicsMode, Scenario};
 use crate::model::Design;
 
@@ -29,6 +30,8 @@ pub struct ConfigFile {
     /// How a validation setup was measured (App. B, 4.3.2); descriptive only, it does not
     /// change the scenario.
     pub measurement: Option<MeasurementTable>,
+    /// What the design must meet (Table 2.2); read by `simulate` and `optimize`.
+    pub requirements: Option<RequirementsTable>,
 }
 
 /// The design in the units of Table 5.3.
@@ -93,6 +96,75 @@ pub struct PerformanceTable {
     pub sled_width_m: Option<f64>,
     pub downstroke_speed_m_s: Option<f64>,
     pub f_max_hz: Option<f64>,
+    /// The sled's plate thickness (3.4.3, 5.3.1: a 5 mm aluminium plate); the thesis names
+    /// the sled's mass as the lever for the power requirement (5.6).
+    pub sled_thickness_m: Option<f64>,
+    pub sled_density_kg_m3: Option<f64>,
+    /// SMA contraction ratio (3.4.3: 3-7 %, 5 % assumed); sets the wire length.
+    pub contraction_ratio: Option<f64>,
+}
+
+/// `[requirements]`: a whole set, or `preset = "table-2.2"` with the keys that differ.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RequirementsTable {
+    pub preset: Option<String>,
+    pub feed_rate_min_kg_h: Option<f64>,
+    pub feed_rate_target_kg_h: Option<f64>,
+    pub power_max_w: Option<f64>,
+    pub slope_min_deg: Option<f64>,
+    pub slope_max_deg: Option<f64>,
+    pub transport_length_m: Option<f64>,
+}
+
+impl RequirementsTable {
+    /// The requirement set, validated; `source` names where it came from.
+    pub fn requirements(&self, source: &str) -> anyhow::Result<Requirements> {
+        let base = match &self.preset {
+            Some(name) => Some(Requirements::preset(name).with_context(|| {
+                format!("requirements.preset: unknown preset `{name}` (known: {PRESET_TABLE_2_2})")
+            })?),
+            None => None,
+        };
+        let pick = |v: Option<f64>, from_base: Option<f64>, key: &str| {
+            v.or(from_base).with_context(|| {
+                format!("requirements.{key} is missing (give it, or start from preset = \"{PRESET_TABLE_2_2}\")")
+            })
+        };
+        let b = base.as_ref();
+        let r = Requirements {
+            source: source.to_string(),
+            feed_rate_min_kg_h: pick(self.feed_rate_min_kg_h, b.map(|b| b.feed_rate_min_kg_h), "feed_rate_min_kg_h")?,
+            feed_rate_target_kg_h: pick(
+                self.feed_rate_target_kg_h,
+                b.map(|b| b.feed_rate_target_kg_h),
+                "feed_rate_target_kg_h",
+            )?,
+            power_max_w: pick(self.power_max_w, b.map(|b| b.power_max_w), "power_max_w")?,
+            slope_min_deg: pick(self.slope_min_deg, b.map(|b| b.slope_min_deg), "slope_min_deg")?,
+            slope_max_deg: pick(self.slope_max_deg, b.map(|b| b.slope_max_deg), "slope_max_deg")?,
+            transport_length_m: pick(self.transport_length_m, b.map(|b| b.transport_length_m), "transport_length_m")?,
+        };
+        r.validate().map_err(anyhow::Error::msg)?;
+        Ok(r)
+    }
+}
+
+/// `--requirements NAME|FILE`: a preset by name, or the `[requirements]` table of a TOML file
+/// (a scenario config file may hold it beside its other tables).
+pub fn load_requirements(spec: &str) -> anyhow::Result<Requirements> {
+    if let Some(r) = Requirements::preset(spec) {
+        return Ok(r);
+    }
+    let path = Path::new(spec);
+    if !path.exists() {
+        bail!("--requirements {spec}: neither a preset (known: {PRESET_TABLE_2_2}) nor an existing file");
+    }
+    let file = ConfigFile::load(path)?;
+    let table = file
+        .requirements
+        .with_context(|| format!("--requirements {spec}: the file has no [requirements] table"))?;
+    table.requirements(&path.display().to_string()).with_context(|| format!("in {}", path.display()))
 }
 
 /// Metadata of a measured validation setup (`data/validation/testN.toml`).
@@ -214,6 +286,9 @@ impl ConfigFile {
             set(&mut s.performance.sled_width, p.sled_width_m);
             set(&mut s.performance.downstroke_speed, p.downstroke_speed_m_s);
             set(&mut s.performance.f_max, p.f_max_hz);
+            set(&mut s.performance.sled_thickness, p.sled_thickness_m);
+            set(&mut s.performance.sled_density, p.sled_density_kg_m3);
+            set(&mut s.performance.contraction_ratio, p.contraction_ratio);
         }
         Ok(s)
     }
@@ -300,5 +375,32 @@ mod tests {
             assert_eq!(m.motion_profile.as_deref(), Some(if n == 1 { "poc" } else { "delayed" }));
             assert_eq!(m.scale_resolution_g, Some(if n == 3 { 0.01 } else { 0.1 }));
         }
+    }
+
+    #[test]
+    fn requirements_start_from_the_preset_and_name_what_is_missing() {
+        let c = ConfigFile::parse("[requirements]\npreset = \"table-2.2\"\npower_max_w = 3.0\n").unwrap();
+        let r = c.requirements.unwrap().requirements("x.toml").unwrap();
+        assert_eq!(r.power_max_w, 3.0);
+        assert_eq!(r.feed_rate_min_kg_h, 6.0);
+        assert_eq!(r.source, "x.toml");
+        let c = ConfigFile::parse("[requirements]\npower_max_w = 3.0\n").unwrap();
+        let e = c.requirements.unwrap().requirements("x.toml").unwrap_err().to_string();
+        assert!(e.contains("requirements.feed_rate_min_kg_h is missing"), "{e}");
+        let c = ConfigFile::parse("[requirements]\npreset = \"table-9\"\n").unwrap();
+        let e = c.requirements.unwrap().requirements("x.toml").unwrap_err().to_string();
+        assert!(e.contains("requirements.preset") && e.contains("table-2.2"), "{e}");
+        let c = ConfigFile::parse("[requirements]\npreset = \"table-2.2\"\npower_max_w = -1\n").unwrap();
+        let e = c.requirements.unwrap().requirements("x.toml").unwrap_err().to_string();
+        assert!(e.contains("requirements.power_max_w must be a positive number"), "{e}");
+        assert!(load_requirements("table-2.2").is_ok());
+        let e = load_requirements("/nonexistent/req.toml").unwrap_err().to_string();
+        assert!(e.contains("neither a preset"), "{e}");
+    }
+
+    #[test]
+    fn the_sled_plate_is_a_setting() {
+        let c = ConfigFile::parse("[performance]\nsled_thickness_m = 0.002\n").unwrap();
+        assert_eq!(c.scenario().unwrap().performance.sled_thickness, 0.002);
     }
 }
