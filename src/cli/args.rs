@@ -6,7 +6,8 @@ use anyhow::{bail, Context as _};
 use clap::Args;
 
 use crate::engine::EngineKind;
-use crate::io::config::ConfigFile;
+use crate::io::config::{load_requirements, ConfigFile};
+use crate::model::requirements::Requirements;
 use crate::model::scenario::{EnvPreset, Material};
 use crate::model::{Design, Scenario};
 
@@ -141,6 +142,66 @@ pub struct EngineArgs {
     /// Evaluation engine.
     #[arg(long, value_enum, default_value = "cpu")]
     pub engine: EngineKind,
+}
+
+/// Most slopes `--alpha-points` may ask for: each is one more simulation per design.
+pub const MAX_ALPHA_POINTS: u32 = 41;
+
+impl ScenarioArgs {
+    /// Like [`Self::resolve`], but `--alpha FROM..TO` is allowed and gives `points` evenly
+    /// spaced slopes (default 5) at which every design is evaluated; one angle gives none
+    /// (the scenario's α is the only slope).
+    pub fn resolve_over_slopes(&self, points: Option<u32>) -> anyhow::Result<(Scenario, Option<Design>, Vec<f64>)> {
+        let Some((from, to)) = self.alpha.filter(|(a, b)| a != b) else {
+            if points.is_some() {
+                bail!("--alpha-points needs a slope range: --alpha FROM..TO (degrees)");
+            }
+            let (s, d) = self.resolve()?;
+            return Ok((s, d, Vec::new()));
+        };
+        let k = points.unwrap_or(5);
+        if !(2..=MAX_ALPHA_POINTS).contains(&k) {
+            bail!("--alpha-points must be between 2 and {MAX_ALPHA_POINTS}, got {k}");
+        }
+        let mut single = self.clone();
+        single.alpha = Some((from, from));
+        let (scenario, design) = single.resolve()?;
+        let slopes: Vec<f64> = (0..k).map(|i| from + (to - from) * i as f64 / (k - 1) as f64).collect();
+        for &alpha in &slopes {
+            let mut s = scenario.clone();
+            s.environment.alpha_deg = alpha;
+            s.validate().map_err(|e| anyhow::anyhow!("--alpha {from}..{to}: slope {alpha}: {e}"))?;
+        }
+        Ok((scenario, design, slopes))
+    }
+}
+
+/// Designing to requirements (issue 13): what a design must meet.
+#[derive(Debug, Clone, Args)]
+pub struct RequirementArgs {
+    /// Judge designs against requirements: `table-2.2` (the thesis's Table 2.2: feed rate
+    /// >= 6 kg/h with a 48 kg/h target, power <= 5 W, slopes 0-40 deg, wire within the 1.3054 m
+    /// sled) or a TOML file with a [requirements] table. Default: the --config file's
+    /// [requirements] table, if it has one.
+    #[arg(long, value_name = "table-2.2|FILE")]
+    pub requirements: Option<String>,
+    /// With --alpha FROM..TO: evaluate every design at this many evenly spaced slopes
+    /// (default 5) and judge its worst slope.
+    #[arg(long)]
+    pub alpha_points: Option<u32>,
+}
+
+impl RequirementArgs {
+    pub fn resolve(&self, scenario: &ScenarioArgs) -> anyhow::Result<Option<Requirements>> {
+        if let Some(spec) = &self.requirements {
+            return load_requirements(spec).map(Some);
+        }
+        let Some(path) = &scenario.config else { return Ok(None) };
+        match ConfigFile::load(path)?.requirements {
+            Some(t) => t.requirements(&path.display().to_string()).map(Some),
+            None => Ok(None),
+        }
+    }
 }
 
 /// `35` or `1..40` (degrees, inclusive range).

@@ -8,9 +8,10 @@ use anyhow::{bail, Context as _};
 use clap::Args;
 use serde_json::json;
 
-use super::args::{EngineArgs, ScenarioArgs};
+use super::args::{EngineArgs, RequirementArgs, ScenarioArgs};
 use crate::engine::{evaluate_detailed, make_engine_for, Detailed, EngineKind};
 use crate::model::outcome::centre_and_dispersion;
+use crate::model::requirements::{worst_over_slopes, Assessment, Requirements, MODEL_MIN_SLOPE_DEG, NOT_ASSESSED};
 use crate::model::{Design, PhysicsMode, Scenario};
 
 #[derive(Debug, Args)]
@@ -19,6 +20,8 @@ pub struct SimulateArgs {
     pub scenario: ScenarioArgs,
     #[command(flatten)]
     pub engine: EngineArgs,
+    #[command(flatten)]
+    pub requirements: RequirementArgs,
     /// Design `l_c,l_a,l_b,r,omega_deg,delta_deg,v0,a` in mm,mm,mm,mm,deg,deg,m/s,m/s^2.
     #[arg(long, allow_hyphen_values = true)]
     pub design: Option<String>,
@@ -34,7 +37,8 @@ pub struct SimulateArgs {
 }
 
 pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    let (scenario, file_design) = a.scenario.resolve()?;
+    let (scenario, file_design, slopes) = a.scenario.resolve_over_slopes(a.requirements.alpha_points)?;
+    let requirements = a.requirements.resolve(&a.scenario)?;
     let design = match (&a.design, file_design) {
         (Some(s), _) => Design::parse_cli(s).map_err(anyhow::Error::msg)?,
         (None, Some(d)) => d,
@@ -49,6 +53,9 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         }
     }
     let trace = a.trajectories.is_some() || a.plot.is_some();
+    if trace && !slopes.is_empty() {
+        bail!("--trajectories and --plot draw one slope: give --alpha a single angle");
+    }
     if trace && (scenario.effects.sled_motion.is_some() || scenario.effects.quadratic_drag.is_some()) {
         bail!("--trajectories and --plot redraw each flight as one closed-form arc; with the sled-motion or quadratic-drag effects that would be wrong, so they are not offered");
     }
@@ -58,6 +65,9 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         );
     }
     let engine = make_engine_for(a.engine.engine, &scenario)?;
+    if !slopes.is_empty() {
+        return over_slopes(out, &scenario, &design, engine.as_ref(), &slopes, requirements.as_ref(), a.json);
+    }
     let det = match evaluate_detailed(engine.as_ref(), &scenario, &design, trace) {
         Ok(d) => d,
         Err(invalid) => bail!("invalid design ({}): {invalid}", invalid.rule()),
@@ -70,13 +80,257 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         let title = format!("{} | {} engine | {:?} mode", describe(&design), engine.name(), scenario.mode);
         crate::io::plot::write_svg(p, &det, scenario.environment.g, k_drag, &title)?;
     }
+    let assessment = requirements.as_ref().map(|r| {
+        let e = &det.evaluation;
+        r.assess(&e.performance, &scenario.performance, e.sim.lost_fraction)
+    });
     if a.json {
-        let v = to_json(&scenario, &design, engine.name(), &det);
+        let mut v = to_json(&scenario, &design, engine.name(), &det);
+        if let (Some(r), Some(x)) = (&requirements, &assessment) {
+            v["requirements"] = requirements_json(r, &[(scenario.environment.alpha_deg, x.clone())]);
+        }
         writeln!(out, "{}", serde_json::to_string_pretty(&v)?).context("writing output")?;
     } else {
         write_table(out, &scenario, &design, engine.name(), &det).context("writing output")?;
+        if let (Some(r), Some(x)) = (&requirements, &assessment) {
+            write_verdicts(out, r, &[(scenario.environment.alpha_deg, x.clone())], &[]).context("writing output")?;
+        }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// `simulate --alpha FROM..TO`: the design's figures at every slope (req. 1.6.3), and with
+/// requirements their verdict at the worst slope.
+fn over_slopes(
+    out: &mut dyn Write,
+    scenario: &Scenario,
+    design: &Design,
+    engine: &dyn crate::engine::ParticleEngine,
+    slopes: &[f64],
+    requirements: Option<&Requirements>,
+    json: bool,
+) -> anyhow::Result<ExitCode> {
+    let mut rows = Vec::new();
+    for &alpha in slopes {
+        let mut s = scenario.clone();
+        s.environment.alpha_deg = alpha;
+        // a design the model rejects at one slope (e.g. the 5.3.1 spill check on a level
+        // conveyor) is reported there and fails the requirements there, not the whole command
+        let det = evaluate_detailed(engine, &s, design, false);
+        let assessment = requirements.map(|r| match &det {
+            Ok(det) => r.assess(&det.evaluation.performance, &s.performance, det.evaluation.sim.lost_fraction),
+            Err(_) => r.assess(&no_flow(&s, design), &s.performance, 1.0),
+        });
+        rows.push((alpha, det, assessment));
+    }
+    let assessed: Vec<(f64, Assessment)> =
+        rows.iter().filter_map(|(alpha, _, x)| x.clone().map(|x| (*alpha, x))).collect();
+    if json {
+        let per_slope: Vec<serde_json::Value> = rows
+            .iter()
+            .map(|(alpha, det, _)| match det {
+                Ok(det) => {
+                    let e = &det.evaluation;
+                    json!({
+                        "alpha_deg": alpha,
+                        "distribution": e.sim.distribution,
+                        "d_avg_m": e.sim.d_avg_m,
+                        "lost_fraction": e.sim.lost_fraction,
+                        "performance": e.performance,
+                    })
+                }
+                Err(invalid) => json!({"alpha_deg": alpha, "invalid": invalid.rule(), "reason": invalid.to_string()}),
+            })
+            .collect();
+        let mut v = json!({
+            "engine": engine.name(),
+            "mode": scenario.mode,
+            "scenario": scenario,
+            "design": design_json(design),
+            "slopes": per_slope,
+        });
+        if let Some(r) = requirements {
+            v["requirements"] = requirements_json(r, &assessed);
+        }
+        writeln!(out, "{}", serde_json::to_string_pretty(&v)?).context("writing output")?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    writeln!(out, "design     {}", describe(design))?;
+    writeln!(
+        out,
+        "scenario   g {} m/s2, drag {}, {} particles, seed {}, engine {}",
+        scenario.environment.g,
+        scenario.environment.k_drag.map_or("off".to_string(), |k| format!("{k} 1/s")),
+        scenario.sim.particles,
+        scenario.sim.seed,
+        engine.name()
+    )?;
+    writeln!(out)?;
+    writeln!(
+        out,
+        "{:>9} {:>12} {:>13} {:>10} {:>7} {:>10} {:>9}",
+        "alpha_deg", "m_dot_kg_h", "W_spec_J_kg", "P_avg_W", "n_wire", "f_stroke_Hz", "lost"
+    )?;
+    for (alpha, det, _) in &rows {
+        let det = match det {
+            Ok(det) => det,
+            Err(invalid) => {
+                writeln!(out, "{alpha:>9.2}  invalid here ({}): {invalid}", invalid.rule())?;
+                continue;
+            }
+        };
+        let (p, sim) = (&det.evaluation.performance, &det.evaluation.sim);
+        writeln!(
+            out,
+            "{:>9.2} {:>12.3} {:>13} {:>10.3} {:>7} {:>10.5} {:>9.3}",
+            alpha,
+            p.m_dot_kg_s * 3600.0,
+            p.w_spec_j_kg.map_or("n/a".to_string(), |w| format!("{w:.1}")),
+            p.p_avg_w,
+            p.n_wire,
+            p.f_stroke_hz,
+            sim.lost_fraction
+        )?;
+    }
+    if let Some(r) = requirements {
+        let rejected: Vec<(f64, &str)> =
+            rows.iter().filter_map(|(alpha, det, _)| det.as_ref().err().map(|e| (*alpha, e.rule()))).collect();
+        write_verdicts(out, r, &assessed, &rejected)?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// What a design the model rejects delivers: no mass flow (its stroke still sets the wire).
+fn no_flow(s: &Scenario, d: &Design) -> crate::model::Performance {
+    let mut p = crate::model::performance::performance(s, d, 0.0, 0.0);
+    p.m_dot_kg_s = 0.0;
+    p.w_spec_j_kg = None;
+    p
+}
+
+fn status(met: bool) -> &'static str {
+    if met {
+        "compliant"
+    } else {
+        "NOT compliant"
+    }
+}
+
+/// Req. 1.6.3 over the slopes evaluated: covered when they span the required range.
+fn slope_coverage(r: &Requirements, per_slope: &[(f64, Assessment)]) -> (bool, String) {
+    let lo = per_slope.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+    let hi = per_slope.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+    let covered = lo <= r.slope_min_deg.max(MODEL_MIN_SLOPE_DEG) + 1e-9 && hi >= r.slope_max_deg - 1e-9;
+    let what = if per_slope.len() == 1 {
+        format!("evaluated at {lo} deg only (give --alpha {}..{} to judge the range)", r.slope_min_deg, r.slope_max_deg)
+    } else {
+        format!("evaluated at {} slopes over {lo}..{hi} deg", per_slope.len())
+    };
+    let what = if covered && lo > r.slope_min_deg + 1e-9 {
+        format!("{what}; below {MODEL_MIN_SLOPE_DEG} deg the model judges no design (5.3.1 spill check)")
+    } else {
+        what
+    };
+    (covered, what)
+}
+
+/// The verdicts of Table 2.2 at the worst slope, each with its margin (like Table 5.5).
+fn write_verdicts(
+    out: &mut dyn Write,
+    r: &Requirements,
+    per_slope: &[(f64, Assessment)],
+    rejected: &[(f64, &str)],
+) -> std::io::Result<()> {
+    let Some((alpha, a)) = worst_over_slopes(per_slope) else { return Ok(()) };
+    let all_compliant = per_slope.iter().all(|(_, x)| x.compliant());
+    let (covered, coverage) = slope_coverage(r, per_slope);
+    let op = &a.operating_point;
+    writeln!(out)?;
+    writeln!(out, "requirements ({}), judged at the worst slope {alpha} deg", r.source)?;
+    writeln!(
+        out,
+        "operating point  {:.3} kg/h at {:.5} Hz drawing {:.3} W (set by: {}; full capacity {:.3} kg/h)",
+        op.m_dot_kg_h,
+        op.f_stroke_hz,
+        op.p_avg_w,
+        op.limit.as_str(),
+        a.m_dot_max_kg_h
+    )?;
+    writeln!(
+        out,
+        "1.1   feed rate >= {} kg/h     {:>10.3} kg/h  margin {:+.3} kg/h  {}",
+        r.feed_rate_min_kg_h,
+        op.m_dot_kg_h,
+        a.feed_rate.margin,
+        status(a.feed_rate.met())
+    )?;
+    writeln!(
+        out,
+        "1.1   target {} kg/h           {:>10.3} kg/h  {}",
+        r.feed_rate_target_kg_h,
+        op.m_dot_kg_h,
+        if a.feed_rate_target_met { "target met" } else { "below target" }
+    )?;
+    writeln!(
+        out,
+        "1.4   power <= {} W             {:>10.3} W     margin {:+.3} W     {}",
+        r.power_max_w,
+        op.p_avg_w,
+        a.power.margin,
+        status(a.power.met())
+    )?;
+    writeln!(
+        out,
+        "5.5   wire <= sled {:.4} m     {:>10.4} m     margin {:+.4} m     {}",
+        a.sled_length_m,
+        a.wire_length_m,
+        a.wire_length.margin,
+        status(a.wire_length.met())
+    )?;
+    writeln!(out, "1.2   material loss            {:>10.3}       reported (Table 2.2: minimised)", a.lost_fraction)?;
+    writeln!(
+        out,
+        "1.6.3 slopes {}..{} deg         {}: {}",
+        r.slope_min_deg,
+        r.slope_max_deg,
+        coverage,
+        if !covered { "not assessed over the range" } else { status(all_compliant) }
+    )?;
+    let names: Vec<String> = NOT_ASSESSED.iter().map(|(id, n)| format!("{id} {n}")).collect();
+    writeln!(out, "not assessed by the model: {}", names.join("; "))?;
+    let verdict = match (all_compliant, covered) {
+        (true, true) => "COMPLIANT with every assessed requirement".to_string(),
+        (true, false) => "compliant at the slopes evaluated; the slope range is not assessed".to_string(),
+        (false, _) if !rejected.is_empty() => {
+            let at: Vec<String> = rejected.iter().map(|(alpha, rule)| format!("{alpha} deg ({rule})")).collect();
+            format!("NOT compliant: the model rejects the design at {}", at.join(", "))
+        }
+        (false, _) => format!("NOT compliant: {} binds", a.binding().unwrap_or("a requirement")),
+    };
+    writeln!(out, "verdict          {verdict}")
+}
+
+fn requirements_json(r: &Requirements, per_slope: &[(f64, Assessment)]) -> serde_json::Value {
+    let worst = worst_over_slopes(per_slope);
+    let (covered, coverage) = slope_coverage(r, per_slope);
+    json!({
+        "requirements": r,
+        "compliant": per_slope.iter().all(|(_, x)| x.compliant()),
+        "slope_range_assessed": covered,
+        "slope_coverage": coverage,
+        "worst_alpha_deg": worst.as_ref().map(|w| w.0),
+        "worst": worst.as_ref().map(|w| &w.1),
+        "binding": worst.as_ref().and_then(|w| w.1.binding()),
+        "per_slope": per_slope.iter().map(|(alpha, x)| json!({"alpha_deg": alpha, "assessment": x})).collect::<Vec<_>>(),
+        "not_assessed": NOT_ASSESSED.iter().map(|(id, n)| json!({"id": id, "requirement": n})).collect::<Vec<_>>(),
+    })
+}
+
+fn design_json(d: &Design) -> serde_json::Value {
+    json!({
+        "l_c_mm": d.l_c * 1e3, "l_a_mm": d.l_a * 1e3, "l_b_mm": d.l_b * 1e3, "r_mm": d.r * 1e3,
+        "omega_deg": d.omega_deg, "delta_deg": d.delta_deg, "v0_m_s": d.v0, "a_m_s2": d.a,
+    })
 }
 
 fn describe(d: &Design) -> String {
@@ -93,10 +347,8 @@ pub fn to_json(s: &Scenario, d: &Design, engine: &str, det: &Detailed) -> serde_
     json!({
         "engine": engine,
         "mode": s.mode,
-        "design": {
-            "l_c_mm": d.l_c * 1e3, "l_a_mm": d.l_a * 1e3, "l_b_mm": d.l_b * 1e3, "r_mm": d.r * 1e3,
-            "omega_deg": d.omega_deg, "delta_deg": d.delta_deg, "v0_m_s": d.v0, "a_m_s2": d.a,
-        },
+        "scenario": s,
+        "design": design_json(d),
         "distribution": sim.distribution,
         "d_avg_m": sim.d_avg_m,
         "advance_m": sim.advance_m,
@@ -133,6 +385,8 @@ fn write_table(out: &mut dyn Write, s: &Scenario, d: &Design, engine: &str, det:
         s.sim.seed
     )?;
     writeln!(out, "engine     {engine}, mode {mode}")?;
+    let effects = s.effects.active();
+    writeln!(out, "effects    {}", if effects.is_empty() { "none (the thesis's model)".to_string() } else { effects.join(", ") })?;
     writeln!(out)?;
     writeln!(out, "tooth  fraction")?;
     for (j, f) in sim.distribution.iter().enumerate().filter(|(_, f)| **f > 0.0) {
