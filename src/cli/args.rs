@@ -179,10 +179,10 @@ impl ScenarioArgs {
 /// Designing to requirements (issue 13): what a design must meet.
 #[derive(Debug, Clone, Args)]
 pub struct RequirementArgs {
-    /// Judge designs against requirements: `table-2.2` (the thesis's Table 2.2: feed rate
-    /// >= 6 kg/h with a 48 kg/h target, power <= 5 W, slopes 0-40 deg, wire within the 1.3054 m
-    /// sled) or a TOML file with a [requirements] table. Default: the --config file's
-    /// [requirements] table, if it has one.
+    /// Judge designs against requirements: `table-2.2` (the thesis's Table 2.2: feed rate at
+    /// least 6 kg/h with a 48 kg/h target, power at most 5 W, slopes 0-40 deg, wire within the
+    /// 1.3054 m sled) or a TOML file with a [requirements] table. Default: the --config
+    /// file's [requirements] table, if it has one.
     #[arg(long, value_name = "table-2.2|FILE")]
     pub requirements: Option<String>,
     /// With --alpha FROM..TO: evaluate every design at this many evenly spaced slopes

@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use anyhow::bail;
 use clap::Args;
 
-use super::args::{EngineArgs, ScenarioArgs};
+use super::args::{EngineArgs, RequirementArgs, ScenarioArgs};
 use crate::engine::make_engine_for;
 use crate::optim::front::print_picks;
 use crate::optim::nsga2::{Config, Mode, Selection};
@@ -118,6 +118,8 @@ impl GaArgs {
             replicates: self.replicates,
             scenario,
             termination: None,
+            slopes_deg: Vec::new(),
+            requirements: None,
         })
     }
 
@@ -134,6 +136,9 @@ pub struct OptimizeArgs {
     pub engine: EngineArgs,
     #[command(flatten)]
     pub ga: GaArgs,
+    /// Requirements as constraints (Deb's rules) and the slopes a design must meet them at.
+    #[command(flatten)]
+    pub requirements: RequirementArgs,
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
@@ -147,8 +152,11 @@ pub fn run(a: OptimizeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         let m = read_manifest(&a.out)?;
         (None, m.engine, m.scenario)
     } else {
-        let (scenario, _) = a.scenario.resolve()?;
-        (Some(a.ga.manifest(scenario.clone(), a.engine.engine)?), a.engine.engine, scenario)
+        let (scenario, _, slopes_deg) = a.scenario.resolve_over_slopes(a.requirements.alpha_points)?;
+        let mut manifest = a.ga.manifest(scenario.clone(), a.engine.engine)?;
+        manifest.slopes_deg = slopes_deg;
+        manifest.requirements = a.requirements.resolve(&a.scenario)?;
+        (Some(manifest), a.engine.engine, scenario)
     };
     let engine = make_engine_for(kind, &scenario)?;
     let outcome = run_optimisation(&a.out, manifest, a.resume, &engine, &a.ga.options(""))?;

@@ -386,7 +386,11 @@ fn write_table(out: &mut dyn Write, s: &Scenario, d: &Design, engine: &str, det:
     )?;
     writeln!(out, "engine     {engine}, mode {mode}")?;
     let effects = s.effects.active();
-    writeln!(out, "effects    {}", if effects.is_empty() { "none (the thesis's model)".to_string() } else { effects.join(", ") })?;
+    writeln!(
+        out,
+        "effects    {}",
+        if effects.is_empty() { "none (the thesis's model)".to_string() } else { effects.join(", ") }
+    )?;
     writeln!(out)?;
     writeln!(out, "tooth  fraction")?;
     for (j, f) in sim.distribution.iter().enumerate().filter(|(_, f)| **f > 0.0) {

@@ -161,9 +161,8 @@ pub fn load_requirements(spec: &str) -> anyhow::Result<Requirements> {
         bail!("--requirements {spec}: neither a preset (known: {PRESET_TABLE_2_2}) nor an existing file");
     }
     let file = ConfigFile::load(path)?;
-    let table = file
-        .requirements
-        .with_context(|| format!("--requirements {spec}: the file has no [requirements] table"))?;
+    let table =
+        file.requirements.with_context(|| format!("--requirements {spec}: the file has no [requirements] table"))?;
     table.requirements(&path.display().to_string()).with_context(|| format!("in {}", path.display()))
 }
 

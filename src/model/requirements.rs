@@ -104,7 +104,9 @@ impl Requirements {
         }
         for (name, v) in [("slope_min_deg", self.slope_min_deg), ("slope_max_deg", self.slope_max_deg)] {
             if !(v.is_finite() && (0.0..=80.0).contains(&v)) {
-                return Err(format!("requirements.{name} must lie in 0..=80 degrees (environment.alpha_deg's range), got {v}"));
+                return Err(format!(
+                    "requirements.{name} must lie in 0..=80 degrees (environment.alpha_deg's range), got {v}"
+                ));
             }
         }
         if self.slope_min_deg > self.slope_max_deg {
@@ -215,8 +217,10 @@ impl Verdict {
     fn limit(margin: f64, scale: f64) -> Self {
         Verdict { margin, relative_margin: margin / scale }
     }
+    /// Met, allowing for rounding: at a power-limited operating point P = W_spec ṁ equals
+    /// the limit only to the last bit.
     pub fn met(&self) -> bool {
-        self.margin >= 0.0
+        self.relative_margin >= -1e-9
     }
 }
 
@@ -251,7 +255,8 @@ impl Assessment {
 
     /// The requirement that fails by the largest relative amount, if any.
     pub fn binding(&self) -> Option<&'static str> {
-        let named = [("1.1 feed rate", self.feed_rate), ("1.4 power", self.power), ("5.5 wire length", self.wire_length)];
+        let named =
+            [("1.1 feed rate", self.feed_rate), ("1.4 power", self.power), ("5.5 wire length", self.wire_length)];
         named
             .iter()
             .filter(|(_, v)| !v.met())

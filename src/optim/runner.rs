@@ -22,6 +22,7 @@ use super::sawtooth::{Logged, SawtoothProblem};
 use crate::engine::{BatchEvaluator, EngineKind};
 use crate::io::atomic::write_atomic;
 use crate::io::run_dir::{Access, RunDir};
+use crate::model::requirements::Requirements;
 use crate::model::Scenario;
 
 /// Hypervolume reference point (f_stroke Hz, W_spec J/kg): the 2 Hz limit and a specific
@@ -51,6 +52,13 @@ pub struct Manifest {
     pub replicates: u32,
     pub scenario: Scenario,
     pub termination: Option<String>,
+    /// Slopes every design is evaluated at (`--alpha FROM..TO --alpha-points K`), degrees;
+    /// empty: the scenario's α.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub slopes_deg: Vec<f64>,
+    /// Requirements the designs are constrained by (`optimize --requirements`, issue 13).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub requirements: Option<Requirements>,
 }
 
 /// How a run reports and checkpoints.
@@ -87,7 +95,7 @@ pub fn install_interrupt_handler() {
 }
 
 fn csv_header_evaluations() -> &'static str {
-    "generation,l_c_mm,l_a_mm,l_b_mm,r_mm,omega_deg,delta_deg,v0_m_s,a_m_s2,objective_1,objective_2,violation,f_stroke_hz,w_spec_j_kg,m_dot_kg_s,stroke_m,n_wire,d_avg_m,lost_fraction,invalid"
+    "generation,l_c_mm,l_a_mm,l_b_mm,r_mm,omega_deg,delta_deg,v0_m_s,a_m_s2,objective_1,objective_2,violation,f_stroke_hz,w_spec_j_kg,m_dot_kg_s,stroke_m,n_wire,d_avg_m,lost_fraction,invalid,alpha_deg,m_dot_op_kg_h,p_op_w,operating_limit,compliant"
 }
 
 fn evaluation_row(l: &Logged) -> String {
@@ -114,6 +122,18 @@ fn evaluation_row(l: &Logged) -> String {
             ",,,,,,,,{}",
             l.invalid.as_deref().unwrap_or(if l.violation > 0.0 { "infeasible" } else { "" })
         )),
+    }
+    // the slope shown (the worst one) and, with requirements, the verdict there
+    row.push_str(&format!(",{}", l.alpha_deg));
+    match &l.assessment {
+        Some(a) => row.push_str(&format!(
+            ",{:.6e},{:.6e},{},{}",
+            a.operating_point.m_dot_kg_h,
+            a.operating_point.p_avg_w,
+            a.operating_point.limit.as_str(),
+            a.compliant()
+        )),
+        None => row.push_str(",,,,"),
     }
     row
 }
@@ -247,6 +267,8 @@ pub fn run(
         engine,
         base_seed: manifest.seed,
         log: Some(Box::new(log)),
+        requirements: manifest.requirements.clone(),
+        slopes_deg: manifest.slopes_deg.clone(),
     };
     let ga = Nsga2 { config: manifest.config.clone() };
     install_interrupt_handler();

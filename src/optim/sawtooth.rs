@@ -10,6 +10,7 @@ use super::nsga2::{BatchProblem, Evaluation as GaEvaluation};
 use crate::engine::{BatchEvaluator, Evaluation};
 use crate::model::design::{Design, LOWER_BOUND_CLI, UPPER_BOUND_CLI};
 use crate::model::geometry::LocalTooth;
+use crate::model::requirements::{Assessment, Requirements};
 use crate::model::{Invalid, Scenario};
 
 /// MATLAB's default ConstraintTolerance (5.2).
@@ -79,8 +80,50 @@ pub struct Logged {
     pub x: [f64; 8],
     pub objectives: [f64; 2],
     pub violation: f64,
+    /// The evaluation shown: at the worst slope where the design is evaluated at several.
     pub evaluation: Option<Evaluation>,
     pub invalid: Option<String>,
+    /// The slope of `evaluation`, degrees.
+    pub alpha_deg: f64,
+    /// The requirements' verdict at that slope, when the run has requirements.
+    pub assessment: Option<Assessment>,
+}
+
+/// Req. 5.5: the SMA wire for this stroke (l_wire = l_stroke / ε) must fit along the sled
+/// (Eq. 3.1); a design-only check, judged before any simulation. Relative excess, c <= 0 met.
+pub fn wire_constraint(x: &[f64], scenario: &Scenario, r: &Requirements) -> f64 {
+    let d = design_of(x);
+    let wire = d.v0 * d.v0 / (2.0 * d.a) / scenario.performance.contraction_ratio;
+    (wire - r.sled_length_m()) / r.sled_length_m()
+}
+
+/// The requirements' verdict on one simulated (or rejected) design at one slope: a design the
+/// model rejects delivers nothing there.
+pub fn assess(r: &Requirements, scenario: &Scenario, x: &[f64], result: &Result<Evaluation, Invalid>) -> Assessment {
+    match result {
+        Ok(e) => r.assess(&e.performance, &scenario.performance, e.sim.lost_fraction),
+        Err(_) => {
+            let mut p = crate::model::performance::performance(scenario, &design_of(x), 0.0, 0.0);
+            p.m_dot_kg_s = 0.0;
+            p.w_spec_j_kg = None;
+            r.assess(&p, &scenario.performance, 1.0)
+        }
+    }
+}
+
+/// The scenarios a design is judged at: one per slope, or the scenario itself.
+pub fn slope_scenarios(scenario: &Scenario, slopes_deg: &[f64]) -> Vec<Scenario> {
+    if slopes_deg.is_empty() {
+        return vec![scenario.clone()];
+    }
+    slopes_deg
+        .iter()
+        .map(|&alpha| {
+            let mut s = scenario.clone();
+            s.environment.alpha_deg = alpha;
+            s
+        })
+        .collect()
 }
 
 /// A sink for every generation's evaluations (CSV logging, progress).
@@ -94,6 +137,12 @@ pub struct SawtoothProblem<'a> {
     pub engine: &'a dyn BatchEvaluator,
     pub base_seed: u64,
     pub log: Option<EvaluationLog<'a>>,
+    /// Requirements as constraints (issue 13): the relative shortfalls of the feed rate,
+    /// power and wire length (c <= 0 met) join the violation Deb's rules rank by.
+    pub requirements: Option<Requirements>,
+    /// Slopes every design is evaluated at in the same engine job (req. 1.6.3), degrees;
+    /// empty: the scenario's α only. The objectives and constraints are the worst over them.
+    pub slopes_deg: Vec<f64>,
 }
 
 impl SawtoothProblem<'_> {
@@ -123,42 +172,105 @@ impl BatchProblem for SawtoothProblem<'_> {
         x[2] = v[3].clamp(LOWER_BOUND_CLI[2], UPPER_BOUND_CLI[2]);
     }
     fn evaluate_batch(&mut self, xs: &[Vec<f64>], generation: u64) -> Vec<GaEvaluation> {
-        let mut s = self.scenario.clone();
-        s.sim.seed = self.seed_for(generation);
-        let violations: Vec<f64> = xs.iter().map(|x| violation(x)).collect();
+        let mut base = self.scenario.clone();
+        base.sim.seed = self.seed_for(generation);
+        let scenarios = slope_scenarios(&base, &self.slopes_deg);
+        let excess = |c: f64| (c - CONSTRAINT_TOLERANCE).max(0.0);
+        let violations: Vec<f64> = xs
+            .iter()
+            .map(|x| {
+                let wire = self.requirements.as_ref().map_or(0.0, |r| excess(wire_constraint(x, &base, r)));
+                violation(x) + wire
+            })
+            .collect();
         // Infeasible individuals are not simulated: Deb's rules rank them by violation alone.
         let to_eval: Vec<usize> = (0..xs.len()).filter(|&i| violations[i] == 0.0).collect();
         let designs: Vec<Design> = to_eval.iter().map(|&i| design_of(&xs[i])).collect();
-        let mut results = self.engine.evaluate(&s, &designs).into_iter();
+        // one engine job for every slope: the same particle streams at each (common random numbers)
+        let groups: Vec<(Scenario, Vec<Design>)> = scenarios.iter().map(|s| (s.clone(), designs.clone())).collect();
+        let results = match groups.as_slice() {
+            [(s, d)] => vec![self.engine.evaluate(s, d)],
+            _ => self.engine.evaluate_groups(&groups),
+        };
+        let mut per_slope: Vec<std::vec::IntoIter<Result<Evaluation, Invalid>>> =
+            results.into_iter().map(|g| g.into_iter()).collect();
         let mut logged = Vec::with_capacity(xs.len());
         let mut out = Vec::with_capacity(xs.len());
         for (i, x) in xs.iter().enumerate() {
-            let (objs, evaluation, invalid) = if violations[i] == 0.0 {
-                let r = results.next().expect("one result per design");
-                let o = objectives(&r);
-                match r {
-                    Ok(e) => (o, Some(e), None),
-                    Err(e) => (o, None, Some(e.rule().to_string())),
+            let mut violation = violations[i];
+            let (objs, evaluation, invalid, alpha_deg, assessment) = if violations[i] == 0.0 {
+                let results: Vec<Result<Evaluation, Invalid>> =
+                    per_slope.iter_mut().map(|g| g.next().expect("one result per design and slope")).collect();
+                let judged = judge(&scenarios, x, &results, self.requirements.as_ref());
+                violation += judged.constraints.iter().map(|&c| excess(c)).sum::<f64>();
+                let worst = results.into_iter().nth(judged.worst).expect("worst slope exists");
+                let alpha = scenarios[judged.worst].environment.alpha_deg;
+                match worst {
+                    Ok(e) => (judged.objectives, Some(e), None, alpha, judged.assessment),
+                    Err(e) => (judged.objectives, None, Some(e.rule().to_string()), alpha, judged.assessment),
                 }
             } else {
                 // finite so JSON checkpoints can hold it; Deb's rules rank by violation anyway
-                ([1e12, 1e12], None, None)
+                ([1e12, 1e12], None, None, base.environment.alpha_deg, None)
             };
             logged.push(Logged {
                 generation,
                 x: design_of(x).to_cli_units(),
                 objectives: objs,
-                violation: violations[i],
+                violation,
                 evaluation,
                 invalid,
+                alpha_deg,
+                assessment,
             });
-            out.push(GaEvaluation { objectives: objs.to_vec(), violation: violations[i] });
+            out.push(GaEvaluation { objectives: objs.to_vec(), violation });
         }
         if let Some(log) = self.log.as_mut() {
             log(&logged);
         }
         out
     }
+}
+
+/// One design judged over its slopes.
+pub struct Judged {
+    /// The worst objective values over the slopes (each minimised).
+    pub objectives: [f64; 2],
+    /// The worst relative shortfall of each requirement over the slopes (c <= 0 met).
+    pub constraints: [f64; 3],
+    /// Index of the slope shown: the one failing the requirements worst, else the highest W_spec.
+    pub worst: usize,
+    pub assessment: Option<Assessment>,
+}
+
+/// The worst case over the slopes: the objectives element-wise, the requirements each on
+/// its own (one conveyor must meet every one at every slope, req. 1.6.3).
+pub fn judge(
+    scenarios: &[Scenario],
+    x: &[f64],
+    results: &[Result<Evaluation, Invalid>],
+    requirements: Option<&Requirements>,
+) -> Judged {
+    let per: Vec<[f64; 2]> = results.iter().map(objectives).collect();
+    let objectives = per.iter().fold([f64::NEG_INFINITY; 2], |w, o| [w[0].max(o[0]), w[1].max(o[1])]);
+    let worst_w = (0..per.len()).max_by(|&a, &b| per[a][1].total_cmp(&per[b][1])).unwrap_or(0);
+    let Some(r) = requirements else {
+        return Judged { objectives, constraints: [f64::NEG_INFINITY; 3], worst: worst_w, assessment: None };
+    };
+    let assessments: Vec<Assessment> = scenarios.iter().zip(results).map(|(s, res)| assess(r, s, x, res)).collect();
+    let constraints = assessments.iter().fold([f64::NEG_INFINITY; 3], |w, a| {
+        let c = a.constraints();
+        [w[0].max(c[0]), w[1].max(c[1]), w[2].max(c[2])]
+    });
+    let worst_c = |a: &Assessment| a.constraints().into_iter().fold(f64::NEG_INFINITY, f64::max);
+    let worst = if constraints.iter().any(|&c| c > 0.0) {
+        (0..assessments.len())
+            .max_by(|&a, &b| worst_c(&assessments[a]).total_cmp(&worst_c(&assessments[b])))
+            .unwrap_or(0)
+    } else {
+        worst_w
+    };
+    Judged { objectives, constraints, worst, assessment: Some(assessments[worst].clone()) }
 }
 
 pub fn design_of(x: &[f64]) -> Design {
@@ -180,7 +292,14 @@ mod tests {
     #[test]
     fn chain_repair_restores_the_order() {
         let e = crate::engine::particle_engine(crate::engine::EngineKind::Cpu);
-        let p = SawtoothProblem { scenario: Scenario::lunar(), engine: &e, base_seed: 0, log: None };
+        let p = SawtoothProblem {
+            scenario: Scenario::lunar(),
+            engine: &e,
+            base_seed: 0,
+            log: None,
+            requirements: None,
+            slopes_deg: Vec::new(),
+        };
         let mut x = vec![10.0, 30.0, 20.0, 5.0, 60.0, 10.0, 1.0, 30.0];
         p.repair(&mut x);
         assert!(x[2] <= x[3] && x[3] <= x[1] && x[1] <= x[0], "{x:?}");
