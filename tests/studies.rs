@@ -63,9 +63,11 @@ fn sweep_needs_a_range_and_single_commands_refuse_one() {
     let (code, _, err) = run(&["gpu-sweep", "--out", "/tmp/x"]);
     assert_eq!(code, 2);
     assert!(err.contains("--alpha"), "{err}");
-    let (code, _, err) = run(&["simulate", "--alpha", "1..40", "--design", "47,46,32,43,94,11,0.84,32"]);
+    // a range means one run per angle (gpu-sweep) or one design over the slopes (simulate,
+    // optimize); a study of one angle refuses it
+    let (code, _, err) = run(&["study", "repeatability", "--alpha", "1..40", "--out", "/tmp/x"]);
     assert_eq!(code, 2);
-    assert!(err.contains("gpu-sweep"), "{err}");
+    assert!(err.contains("gpu-sweep") && err.contains("give one angle"), "{err}");
 }
 
 #[test]
@@ -78,7 +80,15 @@ fn repeatability_and_sensitivity_write_their_tables() {
     assert!(out.contains("CV"), "{out}");
     let summary = std::fs::read_to_string(rep.join("summary.csv")).unwrap();
     assert!(summary.contains("w_spec_j_kg"));
-    assert_eq!(std::fs::read_to_string(rep.join("runs.csv")).unwrap().lines().count(), 4);
+    let runs = std::fs::read_to_string(rep.join("runs.csv")).unwrap();
+    assert_eq!(runs.lines().count(), 4);
+    // each run's distance from the target is in the table, and the report calls the runs
+    // "at the target" only when every one of them is
+    let header: Vec<&str> = runs.lines().next().unwrap().split(',').collect();
+    let at = header.iter().position(|c| *c == "at_target").expect("at_target column");
+    assert!(header.contains(&"m_dot_from_target_rel"));
+    let all_at = runs.lines().skip(1).all(|l| l.split(',').nth(at) == Some("true"));
+    assert_eq!(out.contains("NOT at the target"), !all_at, "{out}\n{runs}");
 
     let sens = tmp("sens");
     let mut args = vec![

@@ -26,7 +26,8 @@ pub struct ScenarioArgs {
     /// Environment preset (listing D.5).
     #[arg(long, value_enum)]
     pub env: Option<EnvPreset>,
-    /// Conveyor angle α, degrees (`gpu-sweep` takes a range `FROM..TO`).
+    /// Conveyor angle α, degrees; `gpu-sweep`, `simulate` and `optimize` take a range
+    /// `FROM..TO` (the latter two with --alpha-points).
     #[arg(long, value_parser = parse_alpha)]
     pub alpha: Option<(f64, f64)>,
     /// Elastic normal coefficient of restitution.
@@ -93,7 +94,9 @@ impl ScenarioArgs {
         }
         if let Some((a, b)) = self.alpha {
             if a != b {
-                bail!("--alpha: a range ({a}..{b}) is only for gpu-sweep; give one angle here");
+                bail!(
+                    "--alpha: a range ({a}..{b}) is for gpu-sweep (one run per angle) and for simulate and optimize (one design over the slopes); give one angle here"
+                );
             }
             s.environment.alpha_deg = a;
         }

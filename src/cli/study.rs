@@ -143,6 +143,11 @@ fn repeatability(a: RepeatabilityArgs, out: &mut dyn Write) -> anyhow::Result<Ex
     plan_or_run(&c.out, &plan, c.plan, out)
 }
 
+/// How near the target mass flow a run's chosen point must lie to count as "at" it: runs
+/// whose fronts hold nothing nearer are still compared, but the report says they are not at
+/// the target (relative distance).
+pub const AT_TARGET_REL: f64 = 0.10;
+
 /// runs.csv, summary.csv, repeatability.svg and the table of a finished repeatability study.
 pub fn summarise_repeatability(
     root: &Path,
@@ -151,11 +156,24 @@ pub fn summarise_repeatability(
     fronts: &[Vec<FrontPoint>],
     out: &mut dyn Write,
 ) -> anyhow::Result<()> {
-    let mut csv = format!("run,seed,{POINT_HEADER}\n");
+    let mut csv = format!("run,seed,{POINT_HEADER},m_dot_from_target_rel,at_target\n");
     let (mut f, mut w, mut m) = (Vec::new(), Vec::new(), Vec::new());
+    let mut far = Vec::new();
     for (i, (member, front)) in plan.members.iter().zip(fronts).enumerate() {
         let p = closest_to_mass_flow(front, t);
-        csv.push_str(&format!("{i},{},{}\n", member.manifest.scenario.sim.seed, point_row(p)));
+        // a run's front may hold nothing near the target: say how far its chosen point is
+        let distance = p.map(|p| (p.m_dot_kg_s - t) / t);
+        let at_target = distance.map(|d| d.abs() <= AT_TARGET_REL);
+        if let (Some(p), Some(false)) = (p, at_target) {
+            far.push(format!("run {i} at {:.4} kg/s", p.m_dot_kg_s));
+        }
+        csv.push_str(&format!(
+            "{i},{},{},{},{}\n",
+            member.manifest.scenario.sim.seed,
+            point_row(p),
+            distance.map_or(String::new(), |d| d.to_string()),
+            at_target.map_or(String::new(), |a| a.to_string())
+        ));
         if let Some(p) = p {
             f.push(p.f_stroke_hz);
             w.push(p.w_spec_j_kg);
@@ -164,7 +182,23 @@ pub fn summarise_repeatability(
     }
     write_atomic(&root.join("runs.csv"), csv.as_bytes())?;
     let mut summary = String::from("metric,mean,sd,cv,ci95_half_width,n\n");
-    writeln!(out, "{} runs compared at {t} kg/s:", f.len())?;
+    if far.is_empty() {
+        writeln!(
+            out,
+            "{} runs compared at {t} kg/s (each at its front design within ±{:.0} % of it):",
+            f.len(),
+            AT_TARGET_REL * 100.0
+        )?;
+    } else {
+        writeln!(
+            out,
+            "{} runs compared at their front designs closest to {t} kg/s; NOT at the target for {} of them ({}; more than ±{:.0} % away), so the spread below mixes operating points:",
+            f.len(),
+            far.len(),
+            far.join(", "),
+            AT_TARGET_REL * 100.0
+        )?;
+    }
     for (name, v) in [("f_stroke_hz", &f), ("w_spec_j_kg", &w), ("m_dot_kg_s", &m)] {
         let (mean, sd, cv, ci) = stats(v);
         summary.push_str(&format!("{name},{mean:.6e},{sd:.6e},{cv:.6e},{ci:.6e},{}\n", v.len()));
