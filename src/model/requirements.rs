@@ -51,6 +51,10 @@ fn preset_name() -> String {
 /// an evaluation at this slope, and every report that relies on it says so.
 pub const MODEL_MIN_SLOPE_DEG: f64 = 1.0;
 
+/// Relative excess over a requirement that still counts as met: rounding only (a
+/// power-limited operating point meets its limit only to the last bit).
+pub const REQUIREMENT_TOLERANCE: f64 = 1e-9;
+
 /// The name of the built-in preset.
 pub const PRESET_TABLE_2_2: &str = "table-2.2";
 
@@ -220,7 +224,7 @@ impl Verdict {
     /// Met, allowing for rounding: at a power-limited operating point P = W_spec ṁ equals
     /// the limit only to the last bit.
     pub fn met(&self) -> bool {
-        self.relative_margin >= -1e-9
+        self.relative_margin >= -REQUIREMENT_TOLERANCE
     }
 }
 

@@ -10,7 +10,7 @@ use super::nsga2::{BatchProblem, Evaluation as GaEvaluation};
 use crate::engine::{BatchEvaluator, Evaluation};
 use crate::model::design::{Design, LOWER_BOUND_CLI, UPPER_BOUND_CLI};
 use crate::model::geometry::LocalTooth;
-use crate::model::requirements::{Assessment, Requirements};
+use crate::model::requirements::{Assessment, Requirements, REQUIREMENT_TOLERANCE};
 use crate::model::{Invalid, Scenario};
 
 /// MATLAB's default ConstraintTolerance (5.2).
@@ -175,7 +175,10 @@ impl BatchProblem for SawtoothProblem<'_> {
         let mut base = self.scenario.clone();
         base.sim.seed = self.seed_for(generation);
         let scenarios = slope_scenarios(&base, &self.slopes_deg);
-        let excess = |c: f64| (c - CONSTRAINT_TOLERANCE).max(0.0);
+        // the requirements are judged as the final verdict judges them (Verdict::met: exact
+        // but for rounding), not with MATLAB's 1e-3 tolerance of the geometric constraints,
+        // which would let designs 0.1 % past a limit onto the front
+        let excess = |c: f64| if c > REQUIREMENT_TOLERANCE { c } else { 0.0 };
         let violations: Vec<f64> = xs
             .iter()
             .map(|x| {
