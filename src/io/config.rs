@@ -233,6 +233,11 @@ impl ConfigFile {
         if let Some(m) = &c.measurement {
             m.validate()?;
         }
+        if let Some(d) = c.design() {
+            const KEYS: [&str; 8] =
+                ["l_c_mm", "l_a_mm", "l_b_mm", "r_mm", "omega_deg", "delta_deg", "v0_m_s", "a_m_s2"];
+            d.check_sensible(|i| format!("design.{}", KEYS[i])).map_err(anyhow::Error::msg)?;
+        }
         Ok(c)
     }
 

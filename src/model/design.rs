@@ -41,7 +41,29 @@ pub const VARIABLES: [(&str, &str); 8] = [
 pub const LOWER_BOUND_CLI: [f64; 8] = [5.0, 3.0, 2.0, 2.0, 0.0, 0.0, 0.8, 20.0];
 pub const UPPER_BOUND_CLI: [f64; 8] = [50.0, 50.0, 50.0, 50.0, 120.0, 45.0, 2.0, 80.0];
 
+/// Largest values a design may take in CLI units: far beyond the optimisation bounds (a user
+/// may explore outside them), but short of values no conveyor has, which would overflow the
+/// performance model (a = 1e300 m/s² asks for 4 294 967 295 wires): 1 m teeth, 100 m/s,
+/// 10 000 m/s² (about 1000 g).
+pub const SENSIBLE_MAX_CLI: [f64; 8] = [1000.0, 1000.0, 1000.0, 1000.0, 180.0, 90.0, 100.0, 10_000.0];
+
 impl Design {
+    /// Every variable finite and within [`SENSIBLE_MAX_CLI`]; `field` names a variable the way
+    /// the user wrote it (e.g. `--design a` or `design.a_m_s2`). Signs and the angle ranges
+    /// the model needs are judged later, with the geometry (`model::validity`).
+    pub fn check_sensible(&self, field: impl Fn(usize) -> String) -> Result<(), String> {
+        for (i, (v, max)) in self.to_cli_units().iter().zip(SENSIBLE_MAX_CLI).enumerate() {
+            let unit = VARIABLES[i].1;
+            if !v.is_finite() {
+                return Err(format!("{} must be a finite number, got {v}", field(i)));
+            }
+            if v.abs() > max {
+                return Err(format!("{} = {v:e} {unit} is beyond any conveyor (at most {max} {unit})", field(i)));
+            }
+        }
+        Ok(())
+    }
+
     /// From the CLI/Table 5.3 units: mm, mm, mm, mm, deg, deg, m/s, m/s².
     pub fn from_cli_units(v: [f64; 8]) -> Self {
         Design {
@@ -76,7 +98,9 @@ impl Design {
             let (name, unit) = VARIABLES[i];
             v[i] = p.parse::<f64>().map_err(|_| format!("design field `{name}` ({unit}): `{p}` is not a number"))?;
         }
-        Ok(Self::from_cli_units(v))
+        let d = Self::from_cli_units(v);
+        d.check_sensible(|i| format!("--design field `{}`", VARIABLES[i].0))?;
+        Ok(d)
     }
 
     /// True when every variable lies inside the optimisation bounds of listing D.5.
