@@ -242,6 +242,8 @@ fn write_verdicts(
     rejected: &[(f64, &str)],
 ) -> std::io::Result<()> {
     let Some((alpha, a)) = worst_over_slopes(per_slope) else { return Ok(()) };
+    // a power-limited point meets its limit to the last bit: no "-0.000 W" margins
+    let tidy = |m: f64| if m.abs() < 1e-9 { 0.0 } else { m };
     let all_compliant = per_slope.iter().all(|(_, x)| x.compliant());
     let (covered, coverage) = slope_coverage(r, per_slope);
     let op = &a.operating_point;
@@ -261,7 +263,7 @@ fn write_verdicts(
         "1.1   feed rate >= {} kg/h     {:>10.3} kg/h  margin {:+.3} kg/h  {}",
         r.feed_rate_min_kg_h,
         op.m_dot_kg_h,
-        a.feed_rate.margin,
+        tidy(a.feed_rate.margin),
         status(a.feed_rate.met())
     )?;
     writeln!(
@@ -276,7 +278,7 @@ fn write_verdicts(
         "1.4   power <= {} W             {:>10.3} W     margin {:+.3} W     {}",
         r.power_max_w,
         op.p_avg_w,
-        a.power.margin,
+        tidy(a.power.margin),
         status(a.power.met())
     )?;
     writeln!(
