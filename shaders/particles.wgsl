@@ -56,8 +56,8 @@ fn randomise_launch(d: Design, p: ptr<function, Particle>, index: u32, bounce: u
     var fa = 1.0;
     var fs = 1.0;
     if (apply) {
-        fa = 1.0 - ph.band + 2.0 * ph.band * uniform01(ph.seed, index, bounce, 0u);
-        fs = 1.0 - ph.band + 2.0 * ph.band * uniform01(ph.seed, index, bounce, 1u);
+        fa = 1.0 - ph.band + 2.0 * ph.band * uniform01(ph.seed, index, bounce, DRAW_ANGLE);
+        fs = 1.0 - ph.band + 2.0 * ph.band * uniform01(ph.seed, index, bounce, DRAW_SPEED);
     }
     let v = vec2<f32>((*p).vel_x, (*p).vel_y);
     var speed = sqrt(v.x * v.x + v.y * v.y) * fs;
@@ -66,8 +66,8 @@ fn randomise_launch(d: Design, p: ptr<function, Particle>, index: u32, bounce: u
         if (ang < 0.0) { ang += 2.0 * PI; }
         if (spread) {
             // launch-spread effect: earlier (slower) departures and a jittered direction
-            speed *= 1.0 - d.launch_speed_spread * uniform01(ph.seed, index, bounce, 4u);
-            ang += d.launch_angle_sigma * normal01(ph.seed, index, bounce, 5u);
+            speed *= 1.0 - d.launch_speed_spread * uniform01(ph.seed, index, bounce, DRAW_LAUNCH_SPEED);
+            ang += d.launch_angle_sigma * normal01(ph.seed, index, bounce, DRAW_LAUNCH_ANGLE);
         }
         let sc = ksin_cos(ang * fa);
         (*p).vel_x = speed * sc.y;
@@ -254,7 +254,7 @@ fn step_particle(d: Design, p: ptr<function, Particle>, index: u32, bounce: u32)
     if (d.scatter_sigma > 0.0) {
         // impact-scatter effect (CPU twin: kernel.rs step_particle): the tilt is admissible
         // when the grain arrives against the tilted facet and leaves the true surface
-        let sc = ksin_cos(d.scatter_sigma * normal01(ph.seed, index, bounce, 2u));
+        let sc = ksin_cos(d.scatter_sigma * normal01(ph.seed, index, bounce, DRAW_SCATTER));
         let tilted = vec2<f32>(sc.y * n_true.x - sc.x * n_true.y, sc.x * n_true.x + sc.y * n_true.y);
         if (dot(v_in, tilted) < 0.0) {
             let out = bounce_velocity(d, v_in, tilted);

@@ -15,19 +15,12 @@ use crate::model::rng::{
     PER_PARTICLE,
 };
 
-pub const SURFACE_NONE: u32 = 0;
-pub const SURFACE_BASE: u32 = 1;
-pub const SURFACE_RAMP: u32 = 2;
-pub const SURFACE_CATCH: u32 = 3;
-
-pub const STATE_FLYING: u32 = 0;
-pub const STATE_RESTING: u32 = 1;
-pub const STATE_LOST: u32 = 2;
-
-/// Randomisation schedule (4.2.4 vs listing D.3, erratum 5).
-pub const RANDOMISE_OFF: u32 = 0;
-pub const RANDOMISE_FIRST_LAUNCH: u32 = 1;
-pub const RANDOMISE_EVERY_LAUNCH: u32 = 2;
+/// The state, surface and randomisation codes, declared once for both sides (build.rs
+/// generates their WGSL twins from src/engine/shared.rs).
+pub use super::shared::{
+    RANDOMISE_EVERY_LAUNCH, RANDOMISE_FIRST_LAUNCH, RANDOMISE_OFF, STATE_FLYING, STATE_LOST, STATE_RESTING,
+    SURFACE_BASE, SURFACE_CATCH, SURFACE_NONE, SURFACE_RAMP,
+};
 
 /// One design's profile as the kernel sees it (offsets relative to a tooth's p1, global
 /// orientation).

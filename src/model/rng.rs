@@ -4,7 +4,8 @@
 //! and the WGSL kernels draw identical numbers in any order or thread layout. The mixer is
 //! the `pcg4d` hash (Jarzynski & Olano, "Hash Functions for GPU Rendering", JCGT 2020):
 //! 32-bit multiplies, adds, xors and shifts only, which WGSL has (it has no 64-bit integers).
-//! Keep in sync with `shaders/shared/rng.wgsl` once the GPU engine lands.
+//! Twin of `shaders/shared/rng.wgsl` (same function names and arguments; both must give
+//! identical bits, which tests/gpu_conformance.rs checks through the kernels).
 
 /// One round of pcg4d on a 4-vector of u32.
 #[inline(always)]
@@ -43,18 +44,12 @@ pub fn uniform(seed_word: u32, particle: u32, bounce: u32, draw: u32) -> f64 {
     (h[0] >> 8) as f64 * (1.0 / 16_777_216.0)
 }
 
-/// The draws a particle makes at each launch (4.2.4: one factor for the angle, one for the speed).
-pub const DRAW_ANGLE: u32 = 0;
-pub const DRAW_SPEED: u32 = 1;
-/// Effects (issue 5): a normal deviate for the impact tilt, the launch spread's speed and
-/// angle, and the grain size (keyed with bounce = `PER_PARTICLE`).
-pub const DRAW_SCATTER: u32 = 2; // and 3
-pub const DRAW_LAUNCH_SPEED: u32 = 4;
-pub const DRAW_LAUNCH_ANGLE: u32 = 5; // and 6
-pub const DRAW_SIZE: u32 = 7; // and 8
-/// Random launch points (`LaunchPoints::Random`): x and y of candidate i, keyed (i, PER_PARTICLE).
-pub const DRAW_LAUNCH_POINT: u32 = 9; // and 10
-pub const PER_PARTICLE: u32 = u32::MAX;
+/// The draw ids (which draw of a particle's launch or bounce a number is), declared once for
+/// the Rust and WGSL sides in src/engine/shared.rs (build.rs generates the WGSL twins).
+pub use crate::engine::shared::{
+    DRAW_ANGLE, DRAW_LAUNCH_ANGLE, DRAW_LAUNCH_POINT, DRAW_LAUNCH_SPEED, DRAW_SCATTER, DRAW_SIZE, DRAW_SPEED,
+    PER_PARTICLE,
+};
 
 /// Standard normal deviate from two keyed uniforms (Box-Muller).
 pub fn normal(seed_word: u32, particle: u32, bounce: u32, draw: u32) -> f64 {

@@ -1,7 +1,9 @@
 //! The `gpu` engine: WGSL kernels on wgpu.
 
+pub mod compose;
 pub mod layout;
 pub mod shaders;
+pub mod validate;
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -13,7 +15,7 @@ use wgpu::util::DeviceExt;
 
 use self::layout::{GpuDesign, GpuOutcome, GpuParticle, GpuPhysics};
 use super::cpu::{kernel_design, kernel_physics, CpuEngine, Precision};
-use super::kernel::init_particle;
+use super::kernel::{init_particle, STATE_LOST, STATE_RESTING};
 use super::{cpu_only_effects, finish_outcome, BatchEvaluator, Context, Evaluation, FlightRecord, ParticleEngine, Run};
 use crate::model::outcome::{from_counts, ParticleEnd, ParticleState, SimOutcome};
 use crate::model::{prepare, Design, Invalid, Prepared, Scenario};
@@ -458,8 +460,8 @@ fn run_on_cpu(jobs: &[(&Context, &Prepared)], which: &[usize], want_particles: b
 
 fn particle_end(prep: &Prepared, p: &GpuParticle) -> ParticleEnd {
     let state = match p.state {
-        1 => ParticleState::Resting,
-        2 => ParticleState::Lost,
+        STATE_RESTING => ParticleState::Resting,
+        STATE_LOST => ParticleState::Lost,
         _ => ParticleState::Flying,
     };
     let pitch = prep.profile.pitch;
