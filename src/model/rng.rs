@@ -4,8 +4,8 @@
 //! and the WGSL kernels draw identical numbers in any order or thread layout. The mixer is
 //! the `pcg4d` hash (Jarzynski & Olano, "Hash Functions for GPU Rendering", JCGT 2020):
 //! 32-bit multiplies, adds, xors and shifts only, which WGSL has (it has no 64-bit integers).
-//! Twin of `shaders/shared/rng.wgsl` (same function names and arguments; both must give
-//! identical bits, which tests/gpu_conformance.rs checks through the kernels).
+//! Twin of `shaders/shared/rng.wgsl`: same function names and arguments; `pcg4d` and
+//! `uniform01` give identical bits on both sides, `normal01` agrees to rounding.
 
 /// One round of pcg4d on a 4-vector of u32.
 #[inline(always)]
@@ -36,9 +36,9 @@ pub fn seed_word(seed: u64) -> u32 {
 }
 
 /// Uniform number in [0, 1) with 24 random bits: exactly representable in f32 and f64,
-/// so both precisions see the same value.
+/// so both precisions see the same value. WGSL twin: `uniform01` (same bits, as f32).
 #[inline(always)]
-pub fn uniform(seed_word: u32, particle: u32, bounce: u32, draw: u32) -> f64 {
+pub fn uniform01(seed_word: u32, particle: u32, bounce: u32, draw: u32) -> f64 {
     // Two rounds: one round of pcg4d leaves visible structure for small consecutive keys.
     let h = pcg4d(pcg4d([particle, bounce, draw, seed_word]));
     (h[0] >> 8) as f64 * (1.0 / 16_777_216.0)
@@ -51,10 +51,11 @@ pub use crate::engine::shared::{
     PER_PARTICLE,
 };
 
-/// Standard normal deviate from two keyed uniforms (Box-Muller).
-pub fn normal(seed_word: u32, particle: u32, bounce: u32, draw: u32) -> f64 {
-    let u1 = 1.0 - uniform(seed_word, particle, bounce, draw); // (0, 1]
-    let u2 = uniform(seed_word, particle, bounce, draw + 1);
+/// Standard normal deviate from two keyed uniforms (Box-Muller). WGSL twin: `normal01`, which
+/// is this in f32 with the kernel's `ksin_cos` for the cosine (so equal to rounding, not bits).
+pub fn normal01(seed_word: u32, particle: u32, bounce: u32, draw: u32) -> f64 {
+    let u1 = 1.0 - uniform01(seed_word, particle, bounce, draw); // (0, 1]
+    let u2 = uniform01(seed_word, particle, bounce, draw + 1);
     (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
 }
 
@@ -68,7 +69,7 @@ mod tests {
         let mut bins = [0u32; 10];
         let n = 100_000u32;
         for i in 0..n {
-            let u = uniform(s, i, i % 7, i % 2);
+            let u = uniform01(s, i, i % 7, i % 2);
             assert!((0.0..1.0).contains(&u));
             bins[(u * 10.0) as usize] += 1;
         }
@@ -81,19 +82,19 @@ mod tests {
     #[test]
     fn keys_change_the_value() {
         let s = seed_word(1);
-        let a = uniform(s, 3, 4, 0);
-        assert_ne!(a, uniform(s, 3, 4, 1));
-        assert_ne!(a, uniform(s, 3, 5, 0));
-        assert_ne!(a, uniform(s, 4, 4, 0));
-        assert_ne!(a, uniform(seed_word(2), 3, 4, 0));
-        assert_eq!(a, uniform(s, 3, 4, 0));
+        let a = uniform01(s, 3, 4, 0);
+        assert_ne!(a, uniform01(s, 3, 4, 1));
+        assert_ne!(a, uniform01(s, 3, 5, 0));
+        assert_ne!(a, uniform01(s, 4, 4, 0));
+        assert_ne!(a, uniform01(seed_word(2), 3, 4, 0));
+        assert_eq!(a, uniform01(s, 3, 4, 0));
     }
 
     #[test]
     fn normal_deviates_have_unit_variance() {
         let s = seed_word(9);
         let n = 50_000u32;
-        let z: Vec<f64> = (0..n).map(|i| normal(s, i, 0, DRAW_SCATTER)).collect();
+        let z: Vec<f64> = (0..n).map(|i| normal01(s, i, 0, DRAW_SCATTER)).collect();
         let m = z.iter().sum::<f64>() / n as f64;
         let v = z.iter().map(|x| (x - m).powi(2)).sum::<f64>() / n as f64;
         assert!(m.abs() < 0.02 && (v - 1.0).abs() < 0.03, "{m} {v}");
