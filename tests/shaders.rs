@@ -164,3 +164,55 @@ fn shared_records_match_their_rust_twins_field_by_field() {
         assert_eq!(rust_size % 16, 0, "{name}: pad to a multiple of 16 bytes");
     }
 }
+
+/// Every WGSL function has a Rust twin (issue 16): a `fn` of the same name in the Rust twin
+/// files, or the named stand-in where the Rust form differs (a method, a field, std).
+#[test]
+fn every_wgsl_function_has_a_rust_twin() {
+    let src = compose("particles.wgsl").unwrap();
+    let module = validate_wgsl("particles.wgsl", &src).unwrap();
+    let root = env!("CARGO_MANIFEST_DIR");
+    let rust: String = [
+        "src/engine/kernel.rs",
+        "src/engine/cpu.rs",
+        "src/model/flight.rs",
+        "src/model/rng.rs",
+        "src/model/real.rs",
+        "src/model/collision.rs",
+    ]
+    .iter()
+    .map(|p| std::fs::read_to_string(format!("{root}/{p}")).unwrap())
+    .collect();
+    // WGSL name -> what the Rust side has instead of `fn <same name>`
+    let stand_ins = [
+        ("flight_pos", "fn pos("),             // Flight::pos
+        ("flight_vel", "fn vel("),             // Flight::vel
+        ("expm1_", ".exp_m1()"),               // num_traits::Float::exp_m1 (WGSL has none)
+        ("log1p_", ".ln_1p()"),                // num_traits::Float::ln_1p (WGSL has none)
+        ("bounce_velocity", "fn bounce("),     // Restitution::bounce
+        ("ksin_cos", "fn sin_cos("),           // ktrig::sin_cos
+        ("katan_unit", "fn atan_unit("),       // ktrig::atan_unit
+        ("katan2", "fn atan2("),               // ktrig::atan2
+        ("pitch", "pub pitch: [T; 2]"),        // KDesign::pitch (a field)
+        ("simulate", "pub fn run_particles<"), // its bounce loop; the reduction is `reduce`
+    ];
+    let names = module.functions.iter().filter_map(|(_, f)| f.name.clone());
+    let entries = module.entry_points.iter().map(|e| e.name.clone());
+    let mut missing = Vec::new();
+    for name in names.chain(entries) {
+        let needle = match stand_ins.iter().find(|(w, _)| *w == name) {
+            Some((_, r)) => r.to_string(),
+            None => format!("fn {name}"),
+        };
+        let found = rust.match_indices(&needle).any(|(i, _)| {
+            // `fn name(` or `fn name<`, not a longer name
+            stand_ins.iter().any(|(w, _)| *w == name)
+                || matches!(rust[i + needle.len()..].chars().next(), Some('(') | Some('<'))
+        });
+        if !found {
+            missing.push(name);
+        }
+    }
+    assert!(missing.is_empty(), "WGSL functions without a Rust twin: {missing:?}");
+    assert!(rust.contains("pub fn reduce<"), "the reduction's twin");
+}
