@@ -189,6 +189,20 @@ impl GpuEngine {
         (self.limits.max_compute_workgroups_per_dimension as u64).min(by_storage).max(1) as usize
     }
 
+    /// One dispatch, its records returned raw: per design its outcome and `teeth_hist`
+    /// histogram bins, and every particle as the kernel left it. For tests of the Rust twins
+    /// (tests/gpu_conformance.rs runs `kernel::reduce` on the particles and compares).
+    #[doc(hidden)]
+    pub fn dispatch_raw(
+        &self,
+        phys: &GpuPhysics,
+        designs: &[GpuDesign],
+        particles: &[GpuParticle],
+    ) -> anyhow::Result<(Vec<GpuOutcome>, Vec<u32>, Vec<GpuParticle>)> {
+        let r = self.run_chunk(phys, designs, particles, true)?;
+        Ok((r.outcomes, r.histogram, r.particles.unwrap_or_default()))
+    }
+
     fn run_chunk(
         &self,
         phys: &GpuPhysics,
