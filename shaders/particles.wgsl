@@ -1,7 +1,8 @@
 // The particle kernel: one workgroup per design, its threads striding over the design's
 // particles, bounce by bounce (4.2.4), then the per-design reduction (Eq. 4.56-4.57).
-// CPU twin: src/engine/kernel.rs (same function names and structure) driven by
-// src/engine/cpu.rs. Positions are relative to a tooth's p1 so f32 suffices.
+// CPU twin: src/engine/kernel.rs (same function names and arguments; its header lists the
+// pairs), driven by src/engine/cpu.rs `run_particles` (the bounce loop of `simulate`) and
+// `kernel::reduce` (the reduction of `simulate`). Positions are relative to a tooth's p1 so f32 suffices.
 // The uniform `ph` holds what the whole dispatch shares; each design's own physics
 // (restitution, effect parameters) is read from its `Design` record, so one dispatch may
 // carry designs of different physics (e.g. a calibration's candidates).
@@ -17,7 +18,7 @@
 @group(0) @binding(3) var<storage, read_write> outcomes: array<Outcome>;
 @group(0) @binding(4) var<storage, read_write> histogram: array<atomic<u32>>;
 
-const WG: u32 = 64u;
+const WG: u32 = 64u; // Rust twin: kernel.rs `WG` (the reduction's lanes)
 
 var<workgroup> wg_flying: atomic<u32>;
 var<workgroup> wg_hop_n: atomic<u32>;
@@ -56,8 +57,8 @@ fn randomise_launch(d: Design, p: ptr<function, Particle>, index: u32, bounce: u
     var fa = 1.0;
     var fs = 1.0;
     if (apply) {
-        fa = 1.0 - ph.band + 2.0 * ph.band * uniform01(ph.seed, index, bounce, 0u);
-        fs = 1.0 - ph.band + 2.0 * ph.band * uniform01(ph.seed, index, bounce, 1u);
+        fa = 1.0 - ph.band + 2.0 * ph.band * uniform01(ph.seed, index, bounce, DRAW_ANGLE);
+        fs = 1.0 - ph.band + 2.0 * ph.band * uniform01(ph.seed, index, bounce, DRAW_SPEED);
     }
     let v = vec2<f32>((*p).vel_x, (*p).vel_y);
     var speed = sqrt(v.x * v.x + v.y * v.y) * fs;
@@ -66,8 +67,8 @@ fn randomise_launch(d: Design, p: ptr<function, Particle>, index: u32, bounce: u
         if (ang < 0.0) { ang += 2.0 * PI; }
         if (spread) {
             // launch-spread effect: earlier (slower) departures and a jittered direction
-            speed *= 1.0 - d.launch_speed_spread * uniform01(ph.seed, index, bounce, 4u);
-            ang += d.launch_angle_sigma * normal01(ph.seed, index, bounce, 5u);
+            speed *= 1.0 - d.launch_speed_spread * uniform01(ph.seed, index, bounce, DRAW_LAUNCH_SPEED);
+            ang += d.launch_angle_sigma * normal01(ph.seed, index, bounce, DRAW_LAUNCH_ANGLE);
         }
         let sc = ksin_cos(ang * fa);
         (*p).vel_x = speed * sc.y;
@@ -254,7 +255,7 @@ fn step_particle(d: Design, p: ptr<function, Particle>, index: u32, bounce: u32)
     if (d.scatter_sigma > 0.0) {
         // impact-scatter effect (CPU twin: kernel.rs step_particle): the tilt is admissible
         // when the grain arrives against the tilted facet and leaves the true surface
-        let sc = ksin_cos(d.scatter_sigma * normal01(ph.seed, index, bounce, 2u));
+        let sc = ksin_cos(d.scatter_sigma * normal01(ph.seed, index, bounce, DRAW_SCATTER));
         let tilted = vec2<f32>(sc.y * n_true.x - sc.x * n_true.y, sc.x * n_true.x + sc.y * n_true.y);
         if (dot(v_in, tilted) < 0.0) {
             let out = bounce_velocity(d, v_in, tilted);
@@ -280,7 +281,7 @@ fn step_particle(d: Design, p: ptr<function, Particle>, index: u32, bounce: u32)
     }
 }
 
-// Eq. 4.56 (1-based tooth, clamped) for a final position.
+// Eq. 4.56 (1-based tooth, clamped) for a final position. Rust twin: kernel.rs `end_tooth`.
 fn end_tooth(d: Design, p: Particle) -> i32 {
     let j = p.tooth + to_index(floor((p.pos_x - d.p2_x) / d.pitch_x)) + 1;
     return clamp(j, 1, d.teeth);
@@ -330,6 +331,7 @@ fn simulate(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_ind
     }
 
     // Reduction: tooth histogram, lost and still-flying counts, impacts, distances.
+    // Rust twin: kernel.rs `reduce` (same lanes, same order of the distance sums).
     if (lid == 0u) {
         atomicStore(&wg_flying, 0u);
         atomicStore(&wg_lost, 0u);

@@ -242,3 +242,65 @@ fn batch_wide_physics_splits_and_cpu_only_effects_leave_the_gpu() {
     assert!((got.d_avg_m - want.d_avg_m).abs() < 1e-12);
     assert_eq!(out[0][0].as_ref().unwrap().sim.distribution, out[3][0].as_ref().unwrap().sim.distribution);
 }
+
+/// The Rust twin of the kernel's reduction (`kernel::reduce`: same lanes, same order of the
+/// distance sums) run on the particles the kernel left gives the kernel's own outcome and
+/// histogram: counts exactly, the distance sum to f32 rounding (a driver may fuse the
+/// kernel's multiply-add).
+#[test]
+fn the_rust_reduction_twin_reproduces_the_kernel_s() {
+    use sawtooth::engine::cpu::{kernel_design, kernel_physics};
+    use sawtooth::engine::gpu::layout::{GpuDesign, GpuParticle, GpuPhysics};
+    use sawtooth::engine::kernel::{init_particle, reduce, KParticle};
+    use sawtooth::engine::Context;
+    use sawtooth::model::prepare::prepare;
+    use sawtooth::model::sampling::random_valid_designs;
+    let Some(g) = gpu() else { return };
+    let (mut exact_distance, mut designs) = (0, 0);
+    for (k, mut s) in [Scenario::lunar(), Scenario::earth().into_listing_compat()].into_iter().enumerate() {
+        s.sim.particles = 150; // several particles per lane (WG = 64)
+        let ctx = Context::new(&s);
+        for design in random_valid_designs(&s, 8, 70 + k as u64) {
+            let prep = prepare(&s, &design).unwrap();
+            let (kd, kp) = (kernel_design::<f32>(&prep), kernel_physics::<f32>(&ctx));
+            let n = prep.launches.len() as u32;
+            let teeth = prep.profile.teeth;
+            let phys = GpuPhysics::from_kernel(&kp, ctx.max_bounces, n, 1, teeth);
+            let parts: Vec<GpuParticle> = (prep.launches.iter().enumerate())
+                .map(|(j, l)| GpuParticle::from(&init_particle(&kd, &kp, [l[0] as f32, l[1] as f32], j as u32)))
+                .collect();
+            let (outcomes, hist, after) = g.dispatch_raw(&phys, &[GpuDesign::new(&kd, &kp)], &parts).unwrap();
+            let mut twin_parts: Vec<KParticle<f32>> = after
+                .iter()
+                .map(|p| KParticle {
+                    tooth: p.tooth,
+                    pos: p.pos,
+                    vel: p.vel,
+                    surface: p.surface,
+                    state: p.state,
+                    bounces: p.bounces,
+                    hop: p.hop,
+                    first: p.first,
+                    k_drag: p.k_drag,
+                    clock: 0.0,
+                })
+                .collect();
+            let mut twin_hist = vec![0u32; teeth as usize];
+            let o = &outcomes[0];
+            let t = reduce(&kd, &kp, &mut twin_parts, o.iterations, &mut twin_hist);
+            assert_eq!(twin_hist, hist, "histogram");
+            assert_eq!(
+                (t.iterations, t.lost, t.flying, t.bounce_sum, t.advance_teeth),
+                (o.iterations, o.lost, o.flying, o.bounce_sum, o.advance_teeth)
+            );
+            let tol = 1e-6 * o.distance_sum.abs().max(1e-3);
+            assert!((t.distance_sum - o.distance_sum).abs() <= tol, "{} vs {}", t.distance_sum, o.distance_sum);
+            exact_distance += (t.distance_sum.to_bits() == o.distance_sum.to_bits()) as usize;
+            designs += 1;
+        }
+    }
+    eprintln!(
+        "{}: reduce's distance sum bit-identical to the kernel's on {exact_distance}/{designs} designs",
+        g.describe()
+    );
+}

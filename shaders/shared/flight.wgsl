@@ -1,4 +1,9 @@
-// Closed-form flights and their line crossings. Twin of src/model/flight.rs (f32).
+// Closed-form flights and their line crossings. Twin of src/model/flight.rs (f32): each
+// function here has a Rust function of the same name and arguments there (`relax`,
+// `push_root`, `quadratic_roots`, `stokes_f`, `bracketed_newton`, `stokes_horizon`) or a
+// `Flight` method (`flight_pos` = Flight::pos, `flight_vel` = Flight::vel, `time_at_x`,
+// `y_at_x`, `line_crossings`); `expm1_`/`log1p_` stand in for Rust's exp_m1/ln_1p.
+// `Roots` is Rust's `Roots<T>` = [Option<T>; 2].
 
 struct Flight {
     p0: vec2<f32>,

@@ -1,6 +1,11 @@
 // Records shared by the Rust host and the kernels.
 // Keep in sync with src/engine/gpu/layout.rs (field order, scalar types; no vec3, no padding
-// surprises: every field is a 4-byte scalar so the WGSL and #[repr(C)] layouts coincide).
+// surprises: every field is a 4-byte scalar so the WGSL and #[repr(C)] layouts coincide;
+// tests/shaders.rs checks every field's offset and size against naga's layout).
+// The SURFACE_*, STATE_*, RANDOMISE_*, DRAW_* and PER_PARTICLE codes are not written here:
+// build.rs generates them from src/engine/shared.rs (their one declaration).
+
+#import shared/constants.wgsl
 
 // Batch-wide constants: one uniform per dispatch. Everything a calibration varies between
 // candidates (restitution, the effects' parameters) lives in `Design` instead, so groups
@@ -74,15 +79,6 @@ struct Outcome {
     _pad0: u32, _pad1: u32,
 }
 
-const SURFACE_NONE: u32 = 0u;
-const SURFACE_BASE: u32 = 1u;
-const SURFACE_RAMP: u32 = 2u;
-const SURFACE_CATCH: u32 = 3u;
-const STATE_FLYING: u32 = 0u;
-const STATE_RESTING: u32 = 1u;
-const STATE_LOST: u32 = 2u;
-const RANDOMISE_FIRST_LAUNCH: u32 = 1u;
-const RANDOMISE_EVERY_LAUNCH: u32 = 2u;
 const INF: f32 = 3.0e38;
 const PI: f32 = 3.14159265358979;
 const EPS: f32 = 1.1920929e-7;

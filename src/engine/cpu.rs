@@ -96,8 +96,14 @@ fn state_of(code: u32) -> ParticleState {
     }
 }
 
-/// The bounce loop (4.2.4) over one design, generic over precision.
-pub fn run_design<T: Real>(prep: &Prepared, ctx: &Context, mut trace: Option<&mut Vec<FlightRecord>>) -> Run {
+/// The bounce loop (4.2.4) over one design, generic over precision: every particle as the
+/// kernel leaves it, and the iterations run. The twin of the bounce loop of WGSL `simulate`
+/// (its reduction's twin is `kernel::reduce`).
+pub fn run_particles<T: Real>(
+    prep: &Prepared,
+    ctx: &Context,
+    mut trace: Option<&mut Vec<FlightRecord>>,
+) -> (Vec<KParticle<T>>, u32) {
     let d = kernel_design::<T>(prep);
     let ph = kernel_physics::<T>(ctx);
     let mut parts: Vec<KParticle<T>> = prep
@@ -143,6 +149,13 @@ pub fn run_design<T: Real>(prep: &Prepared, ctx: &Context, mut trace: Option<&mu
             break;
         }
     }
+    (parts, iterations)
+}
+
+/// [`run_particles`] with each particle's end state, in f64.
+pub fn run_design<T: Real>(prep: &Prepared, ctx: &Context, trace: Option<&mut Vec<FlightRecord>>) -> Run {
+    let d = kernel_design::<T>(prep);
+    let (parts, iterations) = run_particles::<T>(prep, ctx, trace);
     let particles = parts
         .iter()
         .map(|p| {

@@ -1,6 +1,23 @@
-//! The particle kernel of the `cpu` engine, written as the CPU twin of the WGSL kernel to
-//! come: flat `Copy` data, no allocation, and one function per shader function
-//! (`init_particle`, `randomise_launch`, `first_hit`, `step_particle`).
+//! The particle kernel of the `cpu` engine, the CPU twin of the WGSL kernel
+//! (shaders/particles.wgsl): flat `Copy` data, no allocation, and for each WGSL function a
+//! Rust function of the same name and arguments (the design and physics records first):
+//!
+//! | WGSL (particles.wgsl)             | Rust                                              |
+//! |-----------------------------------|---------------------------------------------------|
+//! | `offset`, `normal_of`, `to_index` | same names here                                   |
+//! | `randomise_launch`, `hop_ok`      | same names here                                   |
+//! | `contact`, `flies_over`           | same names here                                   |
+//! | `first_hit`, `step_particle`      | same names here (plus the cpu-only effects)       |
+//! | `end_tooth`                       | [`end_tooth`]                                     |
+//! | `bounce_velocity`                 | `Restitution::bounce` (src/model/collision.rs)    |
+//! | `simulate`: bounce loop           | `run_particles` (src/engine/cpu.rs)               |
+//! | `simulate`: reduction             | [`reduce`]                                        |
+//! | `pitch(d)`                        | the field `d.pitch`                               |
+//!
+//! `init_particle` runs on the host for both engines. The shared files have their own twins:
+//! shared/flight.wgsl in src/model/flight.rs, shared/rng.wgsl in src/model/rng.rs,
+//! shared/trig.wgsl in src/model/real.rs (`ktrig`), shared/types.wgsl in
+//! src/engine/gpu/layout.rs, and the integer codes come from src/engine/shared.rs.
 //!
 //! Precision strategy: a particle's position is kept relative to the p1 of the tooth it last
 //! touched (`tooth`), and segments are built as `(j - tooth) * pitch + offset`, so every
@@ -11,23 +28,16 @@ use crate::model::collision::Restitution;
 use crate::model::flight::Flight;
 use crate::model::real::Real;
 use crate::model::rng::{
-    normal, uniform, DRAW_ANGLE, DRAW_LAUNCH_ANGLE, DRAW_LAUNCH_SPEED, DRAW_SCATTER, DRAW_SIZE, DRAW_SPEED,
+    normal01, uniform01, DRAW_ANGLE, DRAW_LAUNCH_ANGLE, DRAW_LAUNCH_SPEED, DRAW_SCATTER, DRAW_SIZE, DRAW_SPEED,
     PER_PARTICLE,
 };
 
-pub const SURFACE_NONE: u32 = 0;
-pub const SURFACE_BASE: u32 = 1;
-pub const SURFACE_RAMP: u32 = 2;
-pub const SURFACE_CATCH: u32 = 3;
-
-pub const STATE_FLYING: u32 = 0;
-pub const STATE_RESTING: u32 = 1;
-pub const STATE_LOST: u32 = 2;
-
-/// Randomisation schedule (4.2.4 vs listing D.3, erratum 5).
-pub const RANDOMISE_OFF: u32 = 0;
-pub const RANDOMISE_FIRST_LAUNCH: u32 = 1;
-pub const RANDOMISE_EVERY_LAUNCH: u32 = 2;
+/// The state, surface and randomisation codes, declared once for both sides (build.rs
+/// generates their WGSL twins from src/engine/shared.rs).
+pub use super::shared::{
+    RANDOMISE_EVERY_LAUNCH, RANDOMISE_FIRST_LAUNCH, RANDOMISE_OFF, STATE_FLYING, STATE_LOST, STATE_RESTING,
+    SURFACE_BASE, SURFACE_CATCH, SURFACE_NONE, SURFACE_RAMP,
+};
 
 /// One design's profile as the kernel sees it (offsets relative to a tooth's p1, global
 /// orientation).
@@ -140,7 +150,7 @@ fn dot<T: Real>(a: [T; 2], b: [T; 2]) -> T {
 }
 
 #[inline(always)]
-fn offset<T: Real>(d: &KDesign<T>, dj: i32, p: [T; 2]) -> [T; 2] {
+pub fn offset<T: Real>(d: &KDesign<T>, dj: i32, p: [T; 2]) -> [T; 2] {
     let f = T::c(dj as f64);
     [f * d.pitch[0] + p[0], f * d.pitch[1] + p[1]]
 }
@@ -161,11 +171,11 @@ pub fn init_particle<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, launch: [T; 2], 
     let k_drag = if ph.size_sigma_ln > T::zero() && ph.size_uniform {
         let half = T::c(3f64.sqrt()) * ph.size_sigma_ln;
         let (a4, b4) = ((T::c(-4.0) * half).exp(), (T::c(4.0) * half).exp());
-        let u = T::c(uniform(ph.seed, index, PER_PARTICLE, DRAW_SIZE));
+        let u = T::c(uniform01(ph.seed, index, PER_PARTICLE, DRAW_SIZE));
         // k_ref / d² with d = (a⁴ + u (b⁴ − a⁴))^{1/4}
         ph.k_drag / (a4 + u * (b4 - a4)).sqrt()
     } else if ph.size_sigma_ln > T::zero() {
-        ph.k_drag * (T::c(-2.0) * ph.size_sigma_ln * T::c(normal(ph.seed, index, PER_PARTICLE, DRAW_SIZE))).exp()
+        ph.k_drag * (T::c(-2.0) * ph.size_sigma_ln * T::c(normal01(ph.seed, index, PER_PARTICLE, DRAW_SIZE))).exp()
     } else {
         ph.k_drag
     };
@@ -201,8 +211,8 @@ pub fn randomise_launch<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KPart
     let two = T::c(2.0);
     let (fa, fs) = if apply {
         (
-            T::one() - ph.band + two * ph.band * T::c(uniform(ph.seed, index, bounce, DRAW_ANGLE)),
-            T::one() - ph.band + two * ph.band * T::c(uniform(ph.seed, index, bounce, DRAW_SPEED)),
+            T::one() - ph.band + two * ph.band * T::c(uniform01(ph.seed, index, bounce, DRAW_ANGLE)),
+            T::one() - ph.band + two * ph.band * T::c(uniform01(ph.seed, index, bounce, DRAW_SPEED)),
         )
     } else {
         (T::one(), T::one())
@@ -215,9 +225,9 @@ pub fn randomise_launch<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KPart
         }
         if spread {
             // launch-spread effect: earlier (slower) departures and a jittered direction
-            speed =
-                speed * (T::one() - ph.launch_speed_spread * T::c(uniform(ph.seed, index, bounce, DRAW_LAUNCH_SPEED)));
-            ang = ang + ph.launch_angle_sigma * T::c(normal(ph.seed, index, bounce, DRAW_LAUNCH_ANGLE));
+            speed = speed
+                * (T::one() - ph.launch_speed_spread * T::c(uniform01(ph.seed, index, bounce, DRAW_LAUNCH_SPEED)));
+            ang = ang + ph.launch_angle_sigma * T::c(normal01(ph.seed, index, bounce, DRAW_LAUNCH_ANGLE));
         }
         let (s, c) = (ang * fa).ksin_cos();
         p.vel = [speed * c, speed * s];
@@ -311,7 +321,7 @@ pub fn first_hit_in<T: Real>(
         let s = dot(q, d.t_base); // along the base from this frame's p1
         let s_global_lo = -kf * d.pitch_len;
         if s >= s_global_lo && s <= d.base_length + s_global_lo {
-            let j = ((s / d.pitch_len).floor().to_i64().unwrap_or(0) as i32 + k).clamp(0, d.teeth - 1);
+            let j = (to_index((s / d.pitch_len).floor()) + k).clamp(0, d.teeth - 1);
             best = Hit { found: true, t, pos: q, tooth: j, surface: SURFACE_BASE };
         }
         break;
@@ -537,9 +547,9 @@ pub fn step_particle<T: Real>(
         // ~1 % of the grains where they first landed.
         let z = if ph.scatter_uniform {
             // uniform on [-√3, √3]: unit variance, like the normal draw
-            T::c(3f64.sqrt() * (2.0 * uniform(ph.seed, index, bounce, DRAW_SCATTER) - 1.0))
+            T::c(3f64.sqrt() * (2.0 * uniform01(ph.seed, index, bounce, DRAW_SCATTER) - 1.0))
         } else {
-            T::c(normal(ph.seed, index, bounce, DRAW_SCATTER))
+            T::c(normal01(ph.seed, index, bounce, DRAW_SCATTER))
         };
         let (s, c) = (ph.scatter_sigma * z).ksin_cos();
         let tilted = [c * n_true[0] - s * n_true[1], s * n_true[0] + c * n_true[1]];
@@ -566,4 +576,77 @@ pub fn step_particle<T: Real>(
         p.state = STATE_RESTING;
     }
     Flown { t: hit.t, ..flown }
+}
+
+/// Threads per workgroup of the WGSL kernel (`WG` in particles.wgsl): the reduction's lanes.
+pub const WG: usize = 64;
+
+/// A position's index as i32, clamped to ±1e9 first. WGSL twin: `to_index`.
+#[inline(always)]
+pub fn to_index<T: Real>(x: T) -> i32 {
+    x.max(T::c(-1e9)).min(T::c(1e9)).to_i64().unwrap_or(0) as i32
+}
+
+/// Eq. 4.56: the 1-based tooth (clamped to the conveyor) of a final position. WGSL twin:
+/// `end_tooth`.
+#[inline(always)]
+pub fn end_tooth<T: Real>(d: &KDesign<T>, p: &KParticle<T>) -> i32 {
+    let j = p.tooth + to_index(((p.pos[0] - d.p2[0]) / d.pitch[0]).floor()) + 1;
+    j.clamp(1, d.teeth)
+}
+
+/// What the kernel reduces one design to: the twin of WGSL `Outcome` (less its padding).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct KOutcome<T> {
+    pub iterations: u32,
+    pub lost: u32,
+    pub flying: u32,
+    pub bounce_sum: u32,
+    /// Sum over binned particles of (tooth - 1).
+    pub advance_teeth: u32,
+    /// Sum of credited distances, m (listing semantics).
+    pub distance_sum: T,
+}
+
+/// The reduction at the end of WGSL `simulate`, done the way the workgroup does it: lane
+/// `l` of [`WG`] takes particles l, l + WG, ... and sums its own distances, then the lanes'
+/// sums are added in lane order. Particles still flying with a hop below the rest threshold
+/// are marked resting (listing mode: the loop stopped on the mean hop), as the kernel
+/// writes them back. `histogram` (one bin per tooth) is added to.
+pub fn reduce<T: Real>(
+    d: &KDesign<T>,
+    ph: &KPhysics<T>,
+    particles: &mut [KParticle<T>],
+    iterations: u32,
+    histogram: &mut [u32],
+) -> KOutcome<T> {
+    let mut out = KOutcome { iterations, distance_sum: T::zero(), ..Default::default() };
+    let mut lane_sums = [T::zero(); WG];
+    for (lid, lane_sum) in lane_sums.iter_mut().enumerate() {
+        let mut dist = T::zero();
+        for p in particles.iter_mut().skip(lid).step_by(WG) {
+            out.bounce_sum = out.bounce_sum.wrapping_add(p.bounces);
+            if p.state == STATE_LOST {
+                out.lost += 1;
+                continue;
+            }
+            if p.state == STATE_FLYING && p.bounces > 0 && p.hop < ph.rest_threshold {
+                p.state = STATE_RESTING;
+            }
+            if p.state == STATE_FLYING {
+                out.flying += 1;
+            }
+            let j = end_tooth(d, p);
+            histogram[(j - 1) as usize] += 1;
+            out.advance_teeth = out.advance_teeth.wrapping_add((j - 1) as u32);
+            if j > 1 {
+                dist = dist + (d.pitch[0] * T::c((j - 1) as f64) + d.p4[0]); // listing D.1 l.347-351
+            }
+        }
+        *lane_sum = dist;
+    }
+    for s in lane_sums {
+        out.distance_sum = out.distance_sum + s;
+    }
+    out
 }

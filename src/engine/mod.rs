@@ -10,6 +10,7 @@ pub mod cpu;
 pub mod gpu;
 pub mod kernel;
 pub mod listing;
+pub mod shared;
 
 use rayon::prelude::*;
 use serde::Serialize;

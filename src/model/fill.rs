@@ -3,7 +3,7 @@
 
 use super::design::Design;
 use super::geometry::{Profile, V2};
-use super::rng::{seed_word, uniform, DRAW_LAUNCH_POINT, PER_PARTICLE};
+use super::rng::{seed_word, uniform01, DRAW_LAUNCH_POINT, PER_PARTICLE};
 use super::scenario::{LaunchPoints, PhysicsMode};
 use super::validity::Invalid;
 
@@ -330,8 +330,8 @@ pub fn launch_points(
             LaunchPoints::Random => {
                 let w = seed_word(seed);
                 (
-                    uniform(w, i as u32, PER_PARTICLE, DRAW_LAUNCH_POINT),
-                    uniform(w, i as u32, PER_PARTICLE, DRAW_LAUNCH_POINT + 1),
+                    uniform01(w, i as u32, PER_PARTICLE, DRAW_LAUNCH_POINT),
+                    uniform01(w, i as u32, PER_PARTICLE, DRAW_LAUNCH_POINT + 1),
                 )
             }
         };

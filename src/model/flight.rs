@@ -7,6 +7,14 @@
 //! - Stokes drag (Eq. 4.42-4.45, 4.53-4.55): c0 + a t + b (1 - e^{-kt})/k, whose derivative
 //!   a + b e^{-kt} changes sign at most once, so f has at most two roots, each bracketed on
 //!   a monotone interval and polished by safeguarded Newton.
+//!
+//! Twin of shaders/shared/flight.wgsl: each WGSL function has a Rust function of the same
+//! name and arguments here (`relax`, `quadratic_roots`, `push_root`, `stokes_f`,
+//! `bracketed_newton`, `stokes_horizon`), or a method of [`Flight`] where the WGSL function
+//! takes the flight first (`flight_pos` = [`Flight::pos`], `flight_vel` = [`Flight::vel`],
+//! `time_at_x`, `y_at_x`, `line_crossings`); WGSL `expm1_`/`log1p_` stand in for the
+//! [`Real`] methods `exp_m1`/`ln_1p`, which WGSL lacks. The Rust side adds only the
+//! sled-motion `drift` (cpu-only effect).
 
 use super::real::Real;
 
@@ -24,7 +32,7 @@ pub struct Flight<T> {
     pub drift: [T; 2],
 }
 
-/// (1 - e^{-kt}) / k, accurate for small kt.
+/// (1 - e^{-kt}) / k, accurate for small kt. WGSL twin: `relax`.
 #[inline(always)]
 fn relax<T: Real>(k: T, t: T) -> T {
     -(-k * t).exp_m1() / k
@@ -127,29 +135,23 @@ impl<T: Real> Flight<T> {
         let c0 = if departing { T::zero() } else { n[0] * (self.p0[0] - a[0]) + n[1] * (self.p0[1] - a[1]) };
         let nv = n[0] * self.v0[0] + n[1] * self.v0[1];
         let nw = n[0] * self.drift[0] + n[1] * self.drift[1]; // drift adds to the linear term
-        let keep = |t: T| if t > T::zero() && t >= t_min && t <= t_max { Some(t) } else { None };
+        let mut r: Roots<T> = [None, None];
         if !self.drag() {
             let c1 = nv + nw;
             let c2 = -T::c(0.5) * self.g * n[1];
             if departing {
                 // f(t) = t (c1 + c2 t)
-                if c2 == T::zero() {
-                    return [None, None];
+                if c2 != T::zero() {
+                    push_root(&mut r, -c1 / c2, t_min, t_max);
                 }
-                return [keep(-c1 / c2), None];
+                return r;
             }
-            return sorted(quadratic_roots(c2, c1, c0), keep);
+            return quadratic_roots(c2, c1, c0, t_min, t_max);
         }
         // Stokes: f(t) = c0 + a t + b E(t), E = (1 - e^{-kt})/k, f'(t) = a + b e^{-kt}.
         let k = self.k;
         let vinf_n = -self.g / k * n[1];
         let (ca, cb) = (vinf_n + nw, nv - vinf_n);
-        let f = |t: T| c0 + ca * t + cb * relax(k, t);
-        // f and f' share e^{-kt}: one expm1 per Newton step.
-        let fdf = |t: T| {
-            let m = (-k * t).exp_m1();
-            (c0 + ca * t - cb * m / k, ca + cb * (T::one() + m))
-        };
         // Extremum where e^{-kt} = -a/b, i.e. t* = ln(b/(-a))/k = ln(1 + x)/k with
         // x = n·v/(-a) (b + a = n·v); it exists for x > 0. log1p keeps t* accurate when a
         // flight leaves a surface almost tangentially (x tiny), where ln(-a/b) rounds to 0.
@@ -157,44 +159,59 @@ impl<T: Real> Flight<T> {
         let t_star = if x > T::zero() && x.is_finite() { Some(x.ln_1p() / k) } else { None };
         // Since 0 <= E < 1/k, f lies between two lines; where the bounding line reaches zero
         // f has its final sign, so the search needs no loop to find an upper end.
-        let t_end = t_max.min(horizon(c0, ca, cb, k));
-        let mut out = [None, None];
-        let mut found = 0;
+        let t_end = t_max.min(stokes_horizon(c0, ca, cb, k));
         if t_min > t_end {
-            return out;
+            return r;
         }
         let mut lo = t_min.max(T::zero());
-        let mut f_lo = if lo == T::zero() { c0 } else { f(lo) };
+        let mut f_lo = if lo == T::zero() { c0 } else { stokes_f(c0, ca, cb, k, lo) };
         for hi in [t_star, Some(t_end)].into_iter().flatten() {
             if hi <= lo {
                 continue;
             }
             let hi = hi.min(t_end);
-            let f_hi = f(hi);
+            let f_hi = stokes_f(c0, ca, cb, k, hi);
             let starts_on_line = lo == T::zero() && (departing || f_lo == T::zero());
-            if departing && lo > T::zero() && f_lo <= T::zero() && found == 0 {
+            if departing && lo > T::zero() && f_lo <= T::zero() && r[0].is_none() {
                 // lift-off below rounding: the flight is back on its surface at t*
-                if let Some(t) = keep(lo) {
-                    out[found] = Some(t);
-                    found += 1;
-                }
+                push_root(&mut r, lo, t_min, t_max);
             } else if !starts_on_line && (f_lo > T::zero()) != (f_hi > T::zero()) {
-                let t = bracketed_newton(&fdf, lo, hi, f_lo, f_hi);
-                if let Some(t) = keep(t) {
-                    out[found] = Some(t);
-                    found += 1;
-                }
+                let t = bracketed_newton(c0, ca, cb, k, lo, hi, f_lo, f_hi);
+                push_root(&mut r, t, t_min, t_max);
             }
             lo = hi;
             f_lo = f_hi;
         }
-        out
+        r
     }
 }
 
-/// A time by which f(t) = c0 + a t + b E(t) has its final sign (E in [0, 1/k)).
+/// Up to two crossing times, ascending, the found ones first: the twin of WGSL
+/// `struct Roots { n, t0, t1 }` (`n` = how many are `Some`).
+pub type Roots<T> = [Option<T>; 2];
+
+/// Append `t` to `r` when it lies in (0, ∞) ∩ [t_min, t_max]. WGSL twin: `push_root`.
 #[inline(always)]
-fn horizon<T: Real>(c0: T, a: T, b: T, k: T) -> T {
+pub fn push_root<T: Real>(r: &mut Roots<T>, t: T, t_min: T, t_max: T) {
+    if t > T::zero() && t >= t_min && t <= t_max {
+        if r[0].is_none() {
+            r[0] = Some(t);
+        } else {
+            r[1] = Some(t);
+        }
+    }
+}
+
+/// f(t) = c0 + a t + b E(t) of a Stokes flight against a line. WGSL twin: `stokes_f`.
+#[inline(always)]
+pub fn stokes_f<T: Real>(c0: T, ca: T, cb: T, k: T, t: T) -> T {
+    c0 + ca * t + cb * relax(k, t)
+}
+
+/// A time by which f(t) = c0 + a t + b E(t) has its final sign (E in [0, 1/k)). WGSL twin:
+/// `stokes_horizon`.
+#[inline(always)]
+pub fn stokes_horizon<T: Real>(c0: T, a: T, b: T, k: T) -> T {
     let span = T::c(40.0) / k; // e^-40: E has converged
     if a < T::zero() {
         // f <= c0 + a t + max(b, 0)/k
@@ -207,48 +224,50 @@ fn horizon<T: Real>(c0: T, a: T, b: T, k: T) -> T {
     }
 }
 
-/// Real roots of c2 t² + c1 t + c0 (numerically stable form).
+/// Real roots of c2 t² + c1 t + c0 (numerically stable form) in (0, ∞) ∩ [t_min, t_max],
+/// ascending. WGSL twin: `quadratic_roots`.
 #[inline(always)]
-pub fn quadratic_roots<T: Real>(c2: T, c1: T, c0: T) -> [Option<T>; 2] {
+pub fn quadratic_roots<T: Real>(c2: T, c1: T, c0: T, t_min: T, t_max: T) -> Roots<T> {
+    let mut r: Roots<T> = [None, None];
     if c2 == T::zero() {
-        if c1 == T::zero() {
-            return [None, None];
+        if c1 != T::zero() {
+            push_root(&mut r, -c0 / c1, t_min, t_max);
         }
-        return [Some(-c0 / c1), None];
+        return r;
     }
     let disc = c1 * c1 - T::c(4.0) * c2 * c0;
     if disc < T::zero() {
-        return [None, None];
+        return r;
     }
     let sq = disc.sqrt();
     let q = if c1 >= T::zero() { -T::c(0.5) * (c1 + sq) } else { -T::c(0.5) * (c1 - sq) };
     if q == T::zero() {
-        return [Some(T::zero()), None];
+        return r; // the double root t = 0, never kept
     }
-    [Some(q / c2), Some(c0 / q)]
+    let (mut a, mut b) = (q / c2, c0 / q);
+    if b < a {
+        std::mem::swap(&mut a, &mut b);
+    }
+    push_root(&mut r, a, t_min, t_max);
+    push_root(&mut r, b, t_min, t_max);
+    r
 }
 
-fn sorted<T: Real>(r: [Option<T>; 2], keep: impl Fn(T) -> Option<T>) -> [Option<T>; 2] {
-    let a = r[0].and_then(&keep);
-    let b = r[1].and_then(&keep);
-    match (a, b) {
-        (Some(x), Some(y)) if y < x => [Some(y), Some(x)],
-        (None, Some(y)) => [Some(y), None],
-        _ => [a, b],
-    }
-}
-
-/// Root of a monotone f on [lo, hi] with a sign change: Newton steps kept inside the bracket,
-/// bisection when a step leaves it (rtsafe), started at the regula-falsi point. Fixed
-/// maximum iteration count, as a shader needs.
-pub fn bracketed_newton<T: Real>(fdf: &impl Fn(T) -> (T, T), mut lo: T, mut hi: T, f_lo: T, f_hi: T) -> T {
+/// Root of the monotone f = [`stokes_f`] on [lo, hi] with a sign change: Newton steps kept
+/// inside the bracket, bisection when a step leaves it (rtsafe), started at the regula-falsi
+/// point. Fixed maximum iteration count, as a shader needs. WGSL twin: `bracketed_newton`.
+#[allow(clippy::too_many_arguments)]
+pub fn bracketed_newton<T: Real>(c0: T, ca: T, cb: T, k: T, mut lo: T, mut hi: T, f_lo: T, f_hi: T) -> T {
     let lo_positive = f_lo > T::zero();
     let mut t = if f_hi != f_lo { lo - f_lo * (hi - lo) / (f_hi - f_lo) } else { T::c(0.5) * (lo + hi) };
     if !(t > lo && t < hi) {
         t = T::c(0.5) * (lo + hi);
     }
     for _ in 0..48 {
-        let (ft, d) = fdf(t);
+        // f and f' share e^{-kt}: one expm1 per Newton step
+        let m = (-k * t).exp_m1();
+        let ft = c0 + ca * t - cb * m / k;
+        let d = ca + cb * (T::one() + m);
         if ft == T::zero() {
             return t;
         }

@@ -4,7 +4,8 @@
 //! and the WGSL kernels draw identical numbers in any order or thread layout. The mixer is
 //! the `pcg4d` hash (Jarzynski & Olano, "Hash Functions for GPU Rendering", JCGT 2020):
 //! 32-bit multiplies, adds, xors and shifts only, which WGSL has (it has no 64-bit integers).
-//! Keep in sync with `shaders/shared/rng.wgsl` once the GPU engine lands.
+//! Twin of `shaders/shared/rng.wgsl`: same function names and arguments; `pcg4d` and
+//! `uniform01` give identical bits on both sides, `normal01` agrees to rounding.
 
 /// One round of pcg4d on a 4-vector of u32.
 #[inline(always)]
@@ -35,31 +36,26 @@ pub fn seed_word(seed: u64) -> u32 {
 }
 
 /// Uniform number in [0, 1) with 24 random bits: exactly representable in f32 and f64,
-/// so both precisions see the same value.
+/// so both precisions see the same value. WGSL twin: `uniform01` (same bits, as f32).
 #[inline(always)]
-pub fn uniform(seed_word: u32, particle: u32, bounce: u32, draw: u32) -> f64 {
+pub fn uniform01(seed_word: u32, particle: u32, bounce: u32, draw: u32) -> f64 {
     // Two rounds: one round of pcg4d leaves visible structure for small consecutive keys.
     let h = pcg4d(pcg4d([particle, bounce, draw, seed_word]));
     (h[0] >> 8) as f64 * (1.0 / 16_777_216.0)
 }
 
-/// The draws a particle makes at each launch (4.2.4: one factor for the angle, one for the speed).
-pub const DRAW_ANGLE: u32 = 0;
-pub const DRAW_SPEED: u32 = 1;
-/// Effects (issue 5): a normal deviate for the impact tilt, the launch spread's speed and
-/// angle, and the grain size (keyed with bounce = `PER_PARTICLE`).
-pub const DRAW_SCATTER: u32 = 2; // and 3
-pub const DRAW_LAUNCH_SPEED: u32 = 4;
-pub const DRAW_LAUNCH_ANGLE: u32 = 5; // and 6
-pub const DRAW_SIZE: u32 = 7; // and 8
-/// Random launch points (`LaunchPoints::Random`): x and y of candidate i, keyed (i, PER_PARTICLE).
-pub const DRAW_LAUNCH_POINT: u32 = 9; // and 10
-pub const PER_PARTICLE: u32 = u32::MAX;
+/// The draw ids (which draw of a particle's launch or bounce a number is), declared once for
+/// the Rust and WGSL sides in src/engine/shared.rs (build.rs generates the WGSL twins).
+pub use crate::engine::shared::{
+    DRAW_ANGLE, DRAW_LAUNCH_ANGLE, DRAW_LAUNCH_POINT, DRAW_LAUNCH_SPEED, DRAW_SCATTER, DRAW_SIZE, DRAW_SPEED,
+    PER_PARTICLE,
+};
 
-/// Standard normal deviate from two keyed uniforms (Box-Muller).
-pub fn normal(seed_word: u32, particle: u32, bounce: u32, draw: u32) -> f64 {
-    let u1 = 1.0 - uniform(seed_word, particle, bounce, draw); // (0, 1]
-    let u2 = uniform(seed_word, particle, bounce, draw + 1);
+/// Standard normal deviate from two keyed uniforms (Box-Muller). WGSL twin: `normal01`, which
+/// is this in f32 with the kernel's `ksin_cos` for the cosine (so equal to rounding, not bits).
+pub fn normal01(seed_word: u32, particle: u32, bounce: u32, draw: u32) -> f64 {
+    let u1 = 1.0 - uniform01(seed_word, particle, bounce, draw); // (0, 1]
+    let u2 = uniform01(seed_word, particle, bounce, draw + 1);
     (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
 }
 
@@ -73,7 +69,7 @@ mod tests {
         let mut bins = [0u32; 10];
         let n = 100_000u32;
         for i in 0..n {
-            let u = uniform(s, i, i % 7, i % 2);
+            let u = uniform01(s, i, i % 7, i % 2);
             assert!((0.0..1.0).contains(&u));
             bins[(u * 10.0) as usize] += 1;
         }
@@ -86,19 +82,19 @@ mod tests {
     #[test]
     fn keys_change_the_value() {
         let s = seed_word(1);
-        let a = uniform(s, 3, 4, 0);
-        assert_ne!(a, uniform(s, 3, 4, 1));
-        assert_ne!(a, uniform(s, 3, 5, 0));
-        assert_ne!(a, uniform(s, 4, 4, 0));
-        assert_ne!(a, uniform(seed_word(2), 3, 4, 0));
-        assert_eq!(a, uniform(s, 3, 4, 0));
+        let a = uniform01(s, 3, 4, 0);
+        assert_ne!(a, uniform01(s, 3, 4, 1));
+        assert_ne!(a, uniform01(s, 3, 5, 0));
+        assert_ne!(a, uniform01(s, 4, 4, 0));
+        assert_ne!(a, uniform01(seed_word(2), 3, 4, 0));
+        assert_eq!(a, uniform01(s, 3, 4, 0));
     }
 
     #[test]
     fn normal_deviates_have_unit_variance() {
         let s = seed_word(9);
         let n = 50_000u32;
-        let z: Vec<f64> = (0..n).map(|i| normal(s, i, 0, DRAW_SCATTER)).collect();
+        let z: Vec<f64> = (0..n).map(|i| normal01(s, i, 0, DRAW_SCATTER)).collect();
         let m = z.iter().sum::<f64>() / n as f64;
         let v = z.iter().map(|x| (x - m).powi(2)).sum::<f64>() / n as f64;
         assert!(m.abs() < 0.02 && (v - 1.0).abs() < 0.03, "{m} {v}");

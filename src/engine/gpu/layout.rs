@@ -1,4 +1,5 @@
-//! Records shared with the kernels. Keep in sync with shaders/shared/types.wgsl: the same
+//! Records shared with the kernels. Keep in sync with shaders/shared/types.wgsl (checked field
+//! by field against naga's layout of the WGSL by tests/shaders.rs): the same
 //! field order, every field a 4-byte scalar (so #[repr(C)] and WGSL layouts coincide), and
 //! each record a multiple of 16 bytes with any padding spelled out as fields, so no implicit
 //! rounding of a struct's size (or array stride) can make the two sides differ.
@@ -162,7 +163,7 @@ mod tests {
     #[test]
     fn sizes_match_the_wgsl_structs() {
         // 12, 32, 12 and 8 four-byte fields in shaders/shared/types.wgsl (tests/shaders.rs
-        // checks these sizes against naga's layout of the WGSL structs)
+        // checks every field's offset and size against naga's layout of the WGSL structs)
         assert_eq!(std::mem::size_of::<GpuPhysics>(), 48);
         assert_eq!(std::mem::size_of::<GpuDesign>(), 128);
         assert_eq!(std::mem::size_of::<GpuParticle>(), 48);

@@ -1,7 +1,9 @@
 //! The `gpu` engine: WGSL kernels on wgpu.
 
+pub mod compose;
 pub mod layout;
 pub mod shaders;
+pub mod validate;
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -13,7 +15,7 @@ use wgpu::util::DeviceExt;
 
 use self::layout::{GpuDesign, GpuOutcome, GpuParticle, GpuPhysics};
 use super::cpu::{kernel_design, kernel_physics, CpuEngine, Precision};
-use super::kernel::init_particle;
+use super::kernel::{init_particle, STATE_LOST, STATE_RESTING};
 use super::{cpu_only_effects, finish_outcome, BatchEvaluator, Context, Evaluation, FlightRecord, ParticleEngine, Run};
 use crate::model::outcome::{from_counts, ParticleEnd, ParticleState, SimOutcome};
 use crate::model::{prepare, Design, Invalid, Prepared, Scenario};
@@ -185,6 +187,20 @@ impl GpuEngine {
         let binding = self.limits.max_storage_buffer_binding_size.min(self.limits.max_buffer_size);
         let by_storage = (binding / per_design_particles.max(per_design_hist).max(1)).max(1);
         (self.limits.max_compute_workgroups_per_dimension as u64).min(by_storage).max(1) as usize
+    }
+
+    /// One dispatch, its records returned raw: per design its outcome and `teeth_hist`
+    /// histogram bins, and every particle as the kernel left it. For tests of the Rust twins
+    /// (tests/gpu_conformance.rs runs `kernel::reduce` on the particles and compares).
+    #[doc(hidden)]
+    pub fn dispatch_raw(
+        &self,
+        phys: &GpuPhysics,
+        designs: &[GpuDesign],
+        particles: &[GpuParticle],
+    ) -> anyhow::Result<(Vec<GpuOutcome>, Vec<u32>, Vec<GpuParticle>)> {
+        let r = self.run_chunk(phys, designs, particles, true)?;
+        Ok((r.outcomes, r.histogram, r.particles.unwrap_or_default()))
     }
 
     fn run_chunk(
@@ -458,8 +474,8 @@ fn run_on_cpu(jobs: &[(&Context, &Prepared)], which: &[usize], want_particles: b
 
 fn particle_end(prep: &Prepared, p: &GpuParticle) -> ParticleEnd {
     let state = match p.state {
-        1 => ParticleState::Resting,
-        2 => ParticleState::Lost,
+        STATE_RESTING => ParticleState::Resting,
+        STATE_LOST => ParticleState::Lost,
         _ => ParticleState::Flying,
     };
     let pitch = prep.profile.pitch;
