@@ -161,9 +161,13 @@ impl Requirements {
         if m_at_power < m {
             (m, limit) = (m_at_power, Limit::Power);
         }
-        let floor = self.feed_rate_min_kg_h.min(m_max);
-        if m < floor {
-            (m, limit) = (floor, Limit::Minimum);
+        if m < self.feed_rate_min_kg_h {
+            // back up to the minimum feed rate, or to all the design delivers
+            (m, limit) = if m_max < self.feed_rate_min_kg_h {
+                (m_max, Limit::Capacity)
+            } else {
+                (self.feed_rate_min_kg_h, Limit::Minimum)
+            };
         }
         let share = m / m_max;
         OperatingPoint {
@@ -347,6 +351,18 @@ mod tests {
         assert!((a.feed_rate.relative_margin + 1.0 / 3.0).abs() < 1e-12);
         assert!(a.power.met());
         assert_eq!(a.binding(), Some("1.1 feed rate"));
+    }
+
+    #[test]
+    fn a_slow_expensive_design_fails_both_at_capacity() {
+        // 4 kg/h at 6000 J/kg: flat out it draws 6.667 W and still misses 6 kg/h
+        let a = Requirements::table_2_2().assess(&perf(4.0, 6000.0, 0.02, 0.01), &PerformanceParams::default(), 0.0);
+        assert_eq!(a.operating_point.limit, Limit::Capacity);
+        assert!((a.operating_point.p_avg_w - 20.0 / 3.0).abs() < 1e-9);
+        assert!(!a.feed_rate.met() && !a.power.met());
+        // -1/3 of the feed rate against -1/3 of the power: both fail by the same share
+        assert!((a.feed_rate.relative_margin + 1.0 / 3.0).abs() < 1e-12);
+        assert!((a.power.relative_margin + 1.0 / 3.0).abs() < 1e-12);
     }
 
     #[test]

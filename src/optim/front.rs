@@ -9,7 +9,7 @@ use anyhow::Context as _;
 
 use super::nsga2::{Nsga2, State};
 use super::runner::Manifest;
-use super::sawtooth::{design_of, slope_scenarios};
+use super::sawtooth::{design_of, slope_scenarios, violation};
 use crate::engine::BatchEvaluator;
 use crate::io::atomic::write_atomic;
 use crate::model::requirements::{Assessment, Limit};
@@ -195,7 +195,11 @@ fn mean_se(v: &[f64]) -> (f64, f64) {
 pub fn final_front(engine: &dyn BatchEvaluator, m: &Manifest, state: &State) -> anyhow::Result<Vec<FrontPoint>> {
     let mut designs: Vec<Design> = Vec::new();
     for ind in Nsga2::pareto_front(state) {
-        if ind.eval.violation > 0.0 {
+        // Under Deb's rules the first front holds infeasible designs only when no design met
+        // the constraints: with requirements those are still reported, with what binds (they
+        // must pass the geometric constraints to be simulated at all)
+        let reportable = m.requirements.is_some() && violation(&ind.x) == 0.0;
+        if ind.eval.violation > 0.0 && !reportable {
             continue;
         }
         let d = design_of(&ind.x);

@@ -17,6 +17,9 @@ use crate::model::{Invalid, Scenario};
 pub const CONSTRAINT_TOLERANCE: f64 = 1e-3;
 /// f_limit of 5.3.1, Hz.
 pub const F_LIMIT: f64 = 2.0;
+/// Added to the violation of a design that fails the geometric constraints when the run has
+/// requirements: far above any relative requirement shortfall a simulated design can have.
+pub const UNSIMULATED_VIOLATION: f64 = 1e6;
 /// Penalty weights w_pen,1 and w_pen,2 of Eq. 5.17-5.18.
 pub const PENALTY_WEIGHTS: [f64; 2] = [1000.0, 1_000_000.0];
 
@@ -87,14 +90,6 @@ pub struct Logged {
     pub alpha_deg: f64,
     /// The requirements' verdict at that slope, when the run has requirements.
     pub assessment: Option<Assessment>,
-}
-
-/// Req. 5.5: the SMA wire for this stroke (l_wire = l_stroke / ε) must fit along the sled
-/// (Eq. 3.1); a design-only check, judged before any simulation. Relative excess, c <= 0 met.
-pub fn wire_constraint(x: &[f64], scenario: &Scenario, r: &Requirements) -> f64 {
-    let d = design_of(x);
-    let wire = d.v0 * d.v0 / (2.0 * d.a) / scenario.performance.contraction_ratio;
-    (wire - r.sled_length_m()) / r.sled_length_m()
 }
 
 /// The requirements' verdict on one simulated (or rejected) design at one slope: a design the
@@ -179,13 +174,15 @@ impl BatchProblem for SawtoothProblem<'_> {
         // but for rounding), not with MATLAB's 1e-3 tolerance of the geometric constraints,
         // which would let designs 0.1 % past a limit onto the front
         let excess = |c: f64| if c > REQUIREMENT_TOLERANCE { c } else { 0.0 };
-        let violations: Vec<f64> = xs
-            .iter()
-            .map(|x| {
-                let wire = self.requirements.as_ref().map_or(0.0, |r| excess(wire_constraint(x, &base, r)));
-                violation(x) + wire
-            })
-            .collect();
+        // only the geometric constraints keep a design from being simulated; the requirements
+        // (the wire's length included) are judged on the simulation, so that a design is never
+        // ranked by half of its shortfalls
+        let violations: Vec<f64> = xs.iter().map(|x| violation(x)).collect();
+        // A design that cannot be simulated has unknown requirement shortfalls: with
+        // requirements it ranks behind every simulated design (its geometric violation, in
+        // mm, would otherwise undercut relative shortfalls and pull the population into
+        // designs the model cannot judge). The offset keeps their order among themselves.
+        let unsimulated_offset = if self.requirements.is_some() { UNSIMULATED_VIOLATION } else { 0.0 };
         // Infeasible individuals are not simulated: Deb's rules rank them by violation alone.
         let to_eval: Vec<usize> = (0..xs.len()).filter(|&i| violations[i] == 0.0).collect();
         let designs: Vec<Design> = to_eval.iter().map(|&i| design_of(&xs[i])).collect();
@@ -213,6 +210,7 @@ impl BatchProblem for SawtoothProblem<'_> {
                     Err(e) => (judged.objectives, None, Some(e.rule().to_string()), alpha, judged.assessment),
                 }
             } else {
+                violation += unsimulated_offset;
                 // finite so JSON checkpoints can hold it; Deb's rules rank by violation anyway
                 ([1e12, 1e12], None, None, base.environment.alpha_deg, None)
             };
