@@ -274,11 +274,25 @@ impl Assessment {
 }
 
 /// The worst case over the slopes a design was evaluated at (req. 1.6.3): compliant only if
-/// compliant at every slope; the assessment shown is the one at the slope that fails worst
-/// (or, when all pass, the one with the smallest margin).
+/// compliant at every slope; the assessment shown is the one at the slope that fails worst,
+/// or, when all pass, the one with the lowest feed rate at its operating point (the slope
+/// that limits the conveyor; margins alone tie where every slope is power-limited).
 pub fn worst_over_slopes(per_slope: &[(f64, Assessment)]) -> Option<(f64, Assessment)> {
-    let worst_margin = |a: &Assessment| a.constraints().into_iter().fold(f64::NEG_INFINITY, f64::max);
-    per_slope.iter().max_by(|a, b| worst_margin(&a.1).total_cmp(&worst_margin(&b.1))).cloned()
+    let key = |a: &Assessment| {
+        let c = a.constraints().into_iter().fold(f64::NEG_INFINITY, f64::max);
+        if c > REQUIREMENT_TOLERANCE {
+            (1.0_f64, c)
+        } else {
+            (0.0, -a.operating_point.m_dot_kg_h)
+        }
+    };
+    per_slope
+        .iter()
+        .max_by(|a, b| {
+            let (ka, kb) = (key(&a.1), key(&b.1));
+            ka.0.total_cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
+        })
+        .cloned()
 }
 
 #[cfg(test)]
@@ -401,9 +415,15 @@ mod tests {
         let pp = PerformanceParams::default();
         let ok = r.assess(&perf(60.0, 300.0, 0.1, 0.01), &pp, 0.0);
         let bad = r.assess(&perf(5.0, 300.0, 0.1, 0.01), &pp, 0.0);
-        let (alpha, worst) = worst_over_slopes(&[(0.0, ok.clone()), (40.0, bad.clone()), (20.0, ok)]).unwrap();
+        let (alpha, worst) = worst_over_slopes(&[(0.0, ok.clone()), (40.0, bad.clone()), (20.0, ok.clone())]).unwrap();
         assert_eq!(alpha, 40.0);
         assert_eq!(worst, bad);
+        // all compliant and power-limited (margins tie at 0): the slope with the lowest feed rate
+        let fast = r.assess(&perf(90.0, 300.0, 0.1, 0.01), &pp, 0.0);
+        let slow = r.assess(&perf(90.0, 400.0, 0.1, 0.01), &pp, 0.0);
+        assert!(fast.compliant() && slow.compliant());
+        let (alpha, _) = worst_over_slopes(&[(1.0, fast.clone()), (40.0, slow), (20.0, fast)]).unwrap();
+        assert_eq!(alpha, 40.0);
     }
 
     #[test]
