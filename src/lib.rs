@@ -2,7 +2,8 @@
 //!
 //! - [`model`]: the thesis's physics (geometry, fill area, flights, restitution, performance).
 //! - [`engine`]: batch evaluators behind one interface (`listing` port, fast `cpu` reference).
-//! - [`io`]: configuration files, trajectory CSV, SVG plots.
+//! - [`io`]: configuration files, trajectory CSV, the flight plot.
+//! - [`plot`]: the one plotting layer every figure goes through (SVG or PNG).
 //! - [`cli`]: the thin command-line layer.
 
 pub mod calibrate;
@@ -13,3 +14,4 @@ pub mod fit;
 pub mod io;
 pub mod model;
 pub mod optim;
+pub mod plot;

@@ -67,7 +67,21 @@ fn trajectories_and_plot_are_written() {
     let text = std::fs::read_to_string(&csv).unwrap();
     assert!(text.starts_with("particle,bounce,x_m,y_m,state"));
     assert!(text.lines().count() > 8);
-    assert!(std::fs::read_to_string(&svg).unwrap().starts_with("<svg"));
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.starts_with("<svg") && text.contains("x [mm]") && text.contains("y [mm]"));
+    // --plot x.png writes a real PNG (it used to be refused)
+    let png = dir.join("t.png");
+    let (code, _, err) =
+        sawtooth(&["simulate", "--design", LUNAR_C, "--particles", "8", "--plot", png.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let bytes = std::fs::read(&png).unwrap();
+    assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n"), "PNG signature");
+    let mut reader = png::Decoder::new(&bytes[..]).read_info().unwrap();
+    let mut rgb = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut rgb).unwrap();
+    assert_eq!(info.width, 1200);
+    let colours: std::collections::HashSet<&[u8]> = rgb[..info.buffer_size()].chunks(3).collect();
+    assert!(colours.len() > 20, "a blank PNG: {} colours", colours.len());
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -94,12 +108,12 @@ fn bad_input_names_the_field_and_exits_2() {
     assert_bad_input(&["simulate", "--design", LUNAR_C, "--particles", "0"], "sim.particles");
     assert_bad_input(&["simulate", "--design", LUNAR_C, "--env", "mars"], "mars");
     assert_bad_input(&["simulate", "--design", LUNAR_C, "--material", "cheese"], "cheese");
-    // the figure is SVG: a .png name is refused rather than filled with SVG bytes
+    // the figure is SVG or PNG by the extension: any other name is refused before simulating
     assert_bad_input(
-        &["simulate", "--design", LUNAR_C, "--particles", "8", "--plot", "/tmp/sawtooth-never-written.png"],
-        ".svg",
+        &["simulate", "--design", LUNAR_C, "--particles", "8", "--plot", "/tmp/sawtooth-never-written.pdf"],
+        "--plot /tmp/sawtooth-never-written.pdf: the figure's format follows the file name's extension: .svg or .png",
     );
-    assert!(!std::path::Path::new("/tmp/sawtooth-never-written.png").exists());
+    assert!(!std::path::Path::new("/tmp/sawtooth-never-written.pdf").exists());
     assert_bad_input(&["simulate"], "no design");
     assert_bad_input(&["simulate", "--config", "/nonexistent/x.toml"], "/nonexistent/x.toml");
 }

@@ -64,6 +64,14 @@ fn diagnose(pairs: &[(&Path, &str)], out: &Path) -> Value {
             assert!(text.starts_with("<svg") && text.trim_end().ends_with("</svg>"), "{f}");
         }
     }
+    let read = |f: &str| std::fs::read_to_string(out.join(f)).unwrap();
+    assert_figure(&read("residuals.svg"), 5, &["simulated − measured [pp]", "residual"]);
+    assert_figure(&read("distributions.svg"), 5, &["share of mass [%]", "tooth", "measured", "baseline"]);
+    // the ranking plots the score that orders it, each model by rank, and a footer naming the best
+    let ranking = read("ranking.svg");
+    assert_figure(&ranking, 4, &["baseline", "score (orders the ranking)", "held-out gap with its bootstrap interval"]);
+    assert!(svg_texts(&ranking).iter().any(|t| t.starts_with("1. ")), "ranked rows");
+    assert!(svg_texts(&ranking).iter().any(|t| t.contains("best = ")), "footer");
     let keys: Vec<&String> = v.as_object().unwrap().keys().collect();
     assert_eq!(keys.len(), 7, "{keys:?}");
     for k in ["gap", "ranking", "best", "indistinguishable", "combined", "baseline", "where"] {
@@ -358,4 +366,21 @@ fn bad_input_is_named_with_exit_2() {
         assert!(!err.contains("panicked"), "{err}");
     }
     std::fs::remove_dir_all(&out).ok();
+}
+
+/// The `<text>` contents of an SVG document (trimmed).
+fn svg_texts(svg: &str) -> Vec<String> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| Some(t[t.find('>')? + 1..t.find("</text>")?].trim().to_string()))
+        .collect()
+}
+
+/// The figure has real axes: at least `n` numeric tick labels, and every `label`.
+fn assert_figure(svg: &str, n: usize, labels: &[&str]) {
+    let texts = svg_texts(svg);
+    assert!(texts.iter().filter(|t| t.parse::<f64>().is_ok()).count() >= n, "too few tick labels: {texts:?}");
+    for l in labels {
+        assert!(texts.iter().any(|t| t == l), "`{l}` missing: {texts:?}");
+    }
 }

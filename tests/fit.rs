@@ -211,6 +211,8 @@ fn json_on_test3_has_the_documented_keys_and_files_are_written() {
     assert_eq!(csv.lines().count(), 1 + 20);
     let svg = std::fs::read_to_string(dir.join("fit.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    // axes with tick numbers and units, tooth categories, the legend
+    assert_figure(&svg, 5, &["tooth", "particle fraction [%]", "1", "2", "measured mean", "fitted simulation"]);
     assert!(!std::fs::read_dir(&dir).unwrap().any(|e| e.unwrap().file_name().to_string_lossy().contains(".tmp")));
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -361,4 +363,21 @@ fn bad_input_exits_2_naming_the_field() {
         &["k_drag", "vacuum"],
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The `<text>` contents of an SVG document (trimmed).
+fn svg_texts(svg: &str) -> Vec<String> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| Some(t[t.find('>')? + 1..t.find("</text>")?].trim().to_string()))
+        .collect()
+}
+
+/// The figure has real axes: at least `n` numeric tick labels, and every `label`.
+fn assert_figure(svg: &str, n: usize, labels: &[&str]) {
+    let texts = svg_texts(svg);
+    assert!(texts.iter().filter(|t| t.parse::<f64>().is_ok()).count() >= n, "too few tick labels: {texts:?}");
+    for l in labels {
+        assert!(texts.iter().any(|t| t == l), "`{l}` missing: {texts:?}");
+    }
 }

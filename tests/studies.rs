@@ -48,7 +48,13 @@ fn sweep_writes_a_summary_per_angle_and_reruns_from_disk() {
     }
     let summary = std::fs::read_to_string(out.join("summary.csv")).unwrap();
     assert!(summary.lines().count() >= 4);
-    assert!(std::fs::read_to_string(out.join("sweep.svg")).unwrap().starts_with("<svg"));
+    let svg = std::fs::read_to_string(out.join("sweep.svg")).unwrap();
+    assert!(svg.starts_with("<svg"));
+    assert_figure(
+        &svg,
+        10,
+        &["conveyor angle alpha [deg]", "W_spec [J/kg]", "lowest W_spec (C)", "±1 standard error (re-evaluation)"],
+    );
     // finished angles are read back, not rerun: same table, no new evaluations
     let before = std::fs::metadata(out.join("alpha_030.00/evaluations.csv")).unwrap().len();
     let (code, second, _) = run(&args);
@@ -108,4 +114,21 @@ fn repeatability_and_sensitivity_write_their_tables() {
     assert_eq!(std::fs::read_to_string(sens.join("grid.csv")).unwrap().lines().count(), 26);
     let _ = std::fs::remove_dir_all(&rep);
     let _ = std::fs::remove_dir_all(&sens);
+}
+
+/// The `<text>` contents of an SVG document (trimmed).
+fn svg_texts(svg: &str) -> Vec<String> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| Some(t[t.find('>')? + 1..t.find("</text>")?].trim().to_string()))
+        .collect()
+}
+
+/// The figure has real axes: at least `n` numeric tick labels, and every `label`.
+fn assert_figure(svg: &str, n: usize, labels: &[&str]) {
+    let texts = svg_texts(svg);
+    assert!(texts.iter().filter(|t| t.parse::<f64>().is_ok()).count() >= n, "too few tick labels: {texts:?}");
+    for l in labels {
+        assert!(texts.iter().any(|t| t == l), "`{l}` missing: {texts:?}");
+    }
 }

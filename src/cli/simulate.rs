@@ -31,7 +31,8 @@ pub struct SimulateArgs {
     /// Write every launch and impact point as CSV (particle,bounce,x_m,y_m,state).
     #[arg(long)]
     pub trajectories: Option<PathBuf>,
-    /// Draw the profile, fill area and trajectories as SVG (like Figure 5.7).
+    /// Draw the profile, fill area and trajectories (like Figure 5.7): SVG or PNG by the
+    /// file's extension (.svg or .png).
     #[arg(long)]
     pub plot: Option<PathBuf>,
 }
@@ -47,10 +48,8 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         }
     };
     if let Some(p) = &a.plot {
-        // the figure is SVG; a .png name would get SVG bytes under the wrong extension
-        if !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg")) {
-            bail!("--plot {}: the figure is written as SVG; give a file name ending in .svg", p.display());
-        }
+        // checked before simulating: a wrong name should not cost a run
+        crate::plot::Format::of(p, "--plot")?;
     }
     let trace = a.trajectories.is_some() || a.plot.is_some();
     if trace && !slopes.is_empty() {
@@ -78,7 +77,7 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     }
     if let Some(p) = &a.plot {
         let title = format!("{} | {} engine | {:?} mode", describe(&design), engine.name(), scenario.mode);
-        crate::io::plot::write_svg(p, &det, scenario.environment.g, k_drag, &title)?;
+        crate::io::plot::write_plot(p, "--plot", &det, scenario.environment.g, k_drag, &title)?;
     }
     let assessment = requirements.as_ref().map(|r| {
         let e = &det.evaluation;

@@ -10,12 +10,13 @@ use anyhow::{bail, Context as _};
 use clap::{Args, Subcommand};
 
 use super::args::{EngineArgs, ScenarioArgs};
-use super::multi::{panels_svg, plan_or_run, Member, Plan, Study};
+use super::multi::{plan_or_run, Member, Panel, PanelsPlot, Plan, Series, Study};
 use super::optimize::GaArgs;
 use crate::engine::EngineKind;
 use crate::io::atomic::write_atomic;
 use crate::model::Scenario;
 use crate::optim::front::{closest_to_mass_flow, FrontPoint};
+use crate::plot;
 
 #[derive(Debug, Subcommand)]
 pub enum StudyCommand {
@@ -205,18 +206,24 @@ pub fn summarise_repeatability(
         writeln!(out, "  {name:<12} mean {mean:.5e}  sd {sd:.3e}  CV {:.3} %  95% CI ± {ci:.3e}", cv * 100.0)?;
     }
     write_atomic(&root.join("summary.csv"), summary.as_bytes())?;
-    let idx: Vec<f64> = (0..f.len()).map(|i| i as f64).collect();
-    let svg = panels_svg(
-        &format!("repeatability: {} runs at {t} kg/s", f.len()),
-        "run",
-        &idx,
-        &[
-            ("f_stroke [Hz]", vec![("run", f)]),
-            ("W_spec [J/kg]", vec![("run", w)]),
-            ("mass flow [kg/s]", vec![("run", m)]),
-        ],
-    );
-    write_atomic(&root.join("repeatability.svg"), svg.as_bytes())?;
+    // independent runs: each a point, with the mean and its 95 % interval as a band
+    let panel = |y_desc: &str, v: Vec<f64>| {
+        let (mean, _, _, ci) = stats(&v);
+        Panel {
+            y_desc: y_desc.into(),
+            series: vec![Series { label: "run (closest to the target mass flow)".into(), y: v, se: None }],
+            band: Some((mean, ci, "mean ± 95 % confidence interval".into())),
+        }
+    };
+    let figure = PanelsPlot {
+        title: format!("Repeatability: {} runs at {t} kg/s", f.len()),
+        x_desc: "run".into(),
+        x: (0..f.len()).map(|i| i as f64).collect(),
+        x_categories: Some((0..f.len()).map(|i| i.to_string()).collect()),
+        panels: vec![panel("f_stroke [Hz]", f), panel("W_spec [J/kg]", w), panel("mass flow [kg/s]", m)],
+        joined: false,
+    };
+    plot::write_figure(&root.join("repeatability.svg"), "repeatability.svg", &figure)?;
     Ok(())
 }
 
@@ -322,13 +329,18 @@ pub fn summarise_sensitivity(
         )?;
     }
     write_atomic(&root.join("grid.csv"), csv.as_bytes())?;
-    let idx: Vec<f64> = (0..w.len()).map(|i| i as f64).collect();
-    let svg = panels_svg(
-        &format!("sensitivity at {t} kg/s"),
-        "grid point (see grid.csv)",
-        &idx,
-        &[("W_spec [J/kg]", vec![("grid", w)])],
-    );
-    write_atomic(&root.join("sensitivity.svg"), svg.as_bytes())?;
+    let figure = PanelsPlot {
+        title: format!("Sensitivity at {t} kg/s"),
+        x_desc: "grid point (see grid.csv)".into(),
+        x: (0..w.len()).map(|i| i as f64).collect(),
+        x_categories: Some((0..w.len()).map(|i| i.to_string()).collect()),
+        panels: vec![Panel {
+            y_desc: "W_spec [J/kg]".into(),
+            series: vec![Series { label: "grid point (closest to the target mass flow)".into(), y: w, se: None }],
+            band: ci.map(|(mean, half)| (mean, half, "repeatability: mean ± 95 % confidence interval".into())),
+        }],
+        joined: false,
+    };
+    plot::write_figure(&root.join("sensitivity.svg"), "sensitivity.svg", &figure)?;
     Ok(())
 }

@@ -11,11 +11,12 @@ use anyhow::bail;
 use clap::Args;
 
 use super::args::{EngineArgs, ScenarioArgs};
-use super::multi::{panels_svg, plan_or_run, Member, Plan, Study};
+use super::multi::{plan_or_run, Member, Panel, PanelsPlot, Plan, Series, Study};
 use super::optimize::GaArgs;
 use crate::io::atomic::write_atomic;
 use crate::optim::front::FrontPoint;
 use crate::optim::front::{closest_to_mass_flow, picks, TARGET_MASS_FLOW_KG_S};
+use crate::plot;
 
 #[derive(Debug, Args)]
 pub struct SweepArgs {
@@ -73,7 +74,8 @@ pub fn summarise(root: &Path, plan: &Plan, fronts: &[Vec<FrontPoint>], out: &mut
     let angles: Vec<f64> = plan.members.iter().map(|m| m.manifest.scenario.environment.alpha_deg).collect();
     let mode = plan.members.first().map(|m| m.manifest.scenario.mode);
     let mut csv = String::from("alpha_deg,pick,f_stroke_hz,w_spec_j_kg,w_spec_se_j_kg,m_dot_kg_s,m_dot_se_kg_s,d_avg_m,n_wire,l_c_mm,l_a_mm,l_b_mm,r_mm,omega_deg,delta_deg,v0_m_s,a_m_s2\n");
-    let mut series: [Vec<f64>; 6] = Default::default();
+    // per pick (C, then closest to the target): f_stroke, W_spec ± se, mass flow ± se
+    let mut series: [Vec<f64>; 10] = Default::default();
     writeln!(out, "{:>6} {:>4} {:>12} {:>14} {:>12}", "alpha", "pick", "f [Hz e-2]", "W_spec [J/kg]", "m_dot [kg/h]")?;
     for (alpha, front) in angles.iter().zip(fronts) {
         let ps = picks(front);
@@ -94,24 +96,34 @@ pub fn summarise(root: &Path, plan: &Plan, fronts: &[Vec<FrontPoint>], out: &mut
         let c = ps.iter().find(|(n, _)| *n == "C").map(|(_, p)| *p);
         let t = closest_to_mass_flow(front, TARGET_MASS_FLOW_KG_S);
         for (k, p) in [c, t].into_iter().enumerate() {
-            series[3 * k].push(p.map_or(f64::NAN, |p| p.f_stroke_hz));
-            series[3 * k + 1].push(p.map_or(f64::NAN, |p| p.w_spec_j_kg));
-            series[3 * k + 2].push(p.map_or(f64::NAN, |p| p.m_dot_kg_s * 3600.0));
+            series[5 * k].push(p.map_or(f64::NAN, |p| p.f_stroke_hz));
+            series[5 * k + 1].push(p.map_or(f64::NAN, |p| p.w_spec_j_kg));
+            series[5 * k + 2].push(p.map_or(f64::NAN, |p| p.w_spec_se));
+            series[5 * k + 3].push(p.map_or(f64::NAN, |p| p.m_dot_kg_s * 3600.0));
+            series[5 * k + 4].push(p.map_or(f64::NAN, |p| p.m_dot_se * 3600.0));
         }
     }
     write_atomic(&root.join("summary.csv"), csv.as_bytes())?;
-    let [f_c, w_c, m_c, f_a, w_a, m_a] = series;
-    let svg = panels_svg(
-        &format!("conveyor-angle sweep ({:?} mode)", mode.unwrap_or_default()),
-        "conveyor angle alpha [deg]",
-        &angles,
-        &[
-            ("f_stroke [Hz]", vec![("lowest W_spec (C)", f_c), ("closest to 48 kg/h (A)", f_a)]),
-            ("W_spec [J/kg]", vec![("lowest W_spec (C)", w_c), ("closest to 48 kg/h (A)", w_a)]),
-            ("mass flow [kg/h]", vec![("lowest W_spec (C)", m_c), ("closest to 48 kg/h (A)", m_a)]),
+    let [f_c, w_c, w_c_se, m_c, m_c_se, f_a, w_a, w_a_se, m_a, m_a_se] = series;
+    let (c, a) = ("lowest W_spec (C)", "closest to 48 kg/h (A)");
+    let pair = |y_desc: &str, yc: Vec<f64>, sc: Option<Vec<f64>>, ya: Vec<f64>, sa: Option<Vec<f64>>| Panel {
+        y_desc: y_desc.into(),
+        series: vec![Series { label: c.into(), y: yc, se: sc }, Series { label: a.into(), y: ya, se: sa }],
+        band: None,
+    };
+    let figure = PanelsPlot {
+        title: format!("Conveyor-angle sweep ({:?} mode)", mode.unwrap_or_default()),
+        x_desc: "conveyor angle alpha [deg]".into(),
+        x: angles,
+        x_categories: None,
+        panels: vec![
+            pair("f_stroke [Hz]", f_c, None, f_a, None),
+            pair("W_spec [J/kg]", w_c, Some(w_c_se), w_a, Some(w_a_se)),
+            pair("mass flow [kg/h]", m_c, Some(m_c_se), m_a, Some(m_a_se)),
         ],
-    );
-    write_atomic(&root.join("sweep.svg"), svg.as_bytes())?;
+        joined: true,
+    };
+    plot::write_figure(&root.join("sweep.svg"), "sweep.svg", &figure)?;
     writeln!(out, "wrote {} and {}", root.join("summary.csv").display(), root.join("sweep.svg").display())?;
     Ok(())
 }

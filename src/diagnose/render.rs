@@ -1,6 +1,6 @@
-//! Outputs of `diagnose`: report.md, diagnosis.json and three hand-written SVG plots
-//! (residuals with error bars, the effect ranking with intervals, fitted vs measured
-//! distributions), every file written atomically.
+//! Outputs of `diagnose`: report.md, diagnosis.json and three figures drawn through
+//! `crate::plot` (residuals with error bars, the effect ranking by score with the gaps'
+//! intervals, fitted vs measured distributions), every file written atomically.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -8,8 +8,13 @@ use std::path::Path;
 use anyhow::Context as _;
 use serde_json::Value;
 
-use super::diagnose::{Diagnosis, ModelResult, Residual, INTERVAL, Z_FLAG};
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use super::diagnose::{Diagnosis, ModelResult, Residual, INTERVAL, RANKING_RULE, Z_FLAG};
 use crate::io::atomic::write_atomic;
+use crate::plot::{self, Drawn as _, Figure, Mark};
 
 fn f(v: f64, d: usize) -> String {
     if v.is_finite() {
@@ -335,310 +340,307 @@ pub fn to_markdown(d: &Diagnosis) -> String {
     s
 }
 
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+const BLUE: RGBColor = RGBColor(0x2c, 0x6f, 0xbb);
+const RED: RGBColor = RGBColor(0xc0, 0x39, 0x2b);
+const GREEN: RGBColor = RGBColor(0x1e, 0x84, 0x49);
+const ORANGE: RGBColor = RGBColor(0xd6, 0x89, 0x10);
+const GREY: RGBColor = RGBColor(0x99, 0x99, 0x99);
+const DARK_GREY: RGBColor = RGBColor(0x55, 0x55, 0x55);
+/// Width of every diagnose figure and height of one condition's panel, in pixels.
+const WIDTH_PX: u32 = 900;
+const PANEL_PX: u32 = 330;
+
+/// A chart of categories (teeth) against a linear y range, with tick labels and units.
+fn category_chart<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    caption: &str,
+    labels: &'a [String],
+    y: std::ops::Range<f64>,
+    x_desc: &str,
+    y_desc: &str,
+) -> anyhow::Result<ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>> {
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, plot::text_style(plot::LABEL_SIZE))
+        .margin(12)
+        .x_label_area_size(48)
+        .y_label_area_size(75)
+        .build_cartesian_2d(plot::category_range(labels.len()), y)
+        .drawn()?;
+    let x_label = plot::category_label(labels);
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(labels.len() + 1)
+        .x_label_formatter(&x_label)
+        .y_label_formatter(&plot::tick)
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .label_style(plot::text_style(plot::SMALL_SIZE))
+        .axis_desc_style(plot::text_style(plot::SMALL_SIZE))
+        .bold_line_style(plot::GRID)
+        .max_light_lines(1)
+        .draw()
+        .drawn()?;
+    Ok(chart)
 }
 
-fn nice_step(range: f64) -> f64 {
-    let raw = (range / 5.0).max(1e-9);
-    let mag = 10f64.powf(raw.log10().floor());
-    [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * mag).find(|s| *s >= raw).unwrap_or(10.0 * mag)
+/// A vertical interval from `lo` to `hi` at `x`, `width` pixels wide.
+fn interval(x: f64, lo: f64, hi: f64, colour: RGBColor, width: u32) -> PathElement<(f64, f64)> {
+    PathElement::new(vec![(x, lo), (x, hi)], colour.stroke_width(width))
 }
 
-/// A plot frame: pixel box and data ranges, with y ticks and grid.
-struct Frame {
-    x0: f64,
-    y0: f64,
-    w: f64,
-    h: f64,
-    lo: f64,
-    hi: f64,
+fn range_of(values: impl Iterator<Item = f64>, pad: f64, include_zero: bool) -> std::ops::Range<f64> {
+    let (lo, hi) = plot::extent(values).unwrap_or((0.0, 1.0));
+    let (lo, hi) = if include_zero { (lo.min(0.0), hi.max(0.0)) } else { (lo, hi) };
+    plot::padded(lo, hi, pad)
 }
 
-impl Frame {
-    fn y(&self, v: f64) -> f64 {
-        self.y0 + self.h - (v.clamp(self.lo, self.hi) - self.lo) / (self.hi - self.lo) * self.h
+/// residuals.svg: per condition, the baseline's residual (simulated − measured, pp) per tooth
+/// with ±1 (thick) and ±2 (thin) uncertainty bars, red where |z| > Z_FLAG.
+pub struct ResidualsPlot<'a>(pub &'a Diagnosis);
+
+impl ResidualsPlot<'_> {
+    fn legend() -> [(Mark, String); 4] {
+        [
+            (Mark::Point(BLUE), "residual".to_string()),
+            (Mark::Line(BLUE), "±1 uncertainty (thick), ±2 (thin)".to_string()),
+            (Mark::Point(RED), format!("flagged: |z| > {Z_FLAG}")),
+            (Mark::Line(BLACK), "zero".to_string()),
+        ]
     }
-    fn axes(&self, s: &mut String, title: &str, ylabel: &str) {
-        let _ = writeln!(
-            s,
-            r##"<rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="none" stroke="#444"/>"##,
-            self.x0, self.y0, self.w, self.h
-        );
-        let step = nice_step(self.hi - self.lo);
-        let mut t = (self.lo / step).ceil() * step;
-        while t <= self.hi + 1e-9 {
-            let y = self.y(t);
-            let _ = writeln!(
-                s,
-                r##"<line x1="{:.1}" y1="{y:.1}" x2="{:.1}" y2="{y:.1}" stroke="#ddd"/>"##,
-                self.x0,
-                self.x0 + self.w
+}
+
+impl Figure for ResidualsPlot<'_> {
+    fn size(&self) -> (u32, u32) {
+        let legend = Self::legend();
+        let entries: Vec<(Mark, &str)> = legend.iter().map(|(m, t)| (*m, t.as_str())).collect();
+        let title = (plot::TITLE_SIZE * 1.6) as u32;
+        (WIDTH_PX, title + PANEL_PX * self.0.conditions.len() as u32 + plot::legend_height(WIDTH_PX, &entries))
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
+        let d = self.0;
+        let area = plot::title(root, "Where: the baseline's residual per tooth")?;
+        let (_, h) = area.dim_in_pixel();
+        let (panels, key) = area.split_vertically(PANEL_PX * d.conditions.len() as u32);
+        let panels = panels.split_evenly((d.conditions.len().max(1), 1));
+        for ((c, w), panel) in d.conditions.iter().zip(&d.where_).zip(&panels) {
+            let rs = &w.teeth_residuals;
+            let y = range_of(
+                rs.iter().flat_map(|r| [r.residual - 2.0 * r.uncertainty, r.residual + 2.0 * r.uncertainty]),
+                0.08,
+                true,
             );
-            let _ = writeln!(
-                s,
-                r##"<text x="{:.1}" y="{:.1}" font-size="11" text-anchor="end">{}</text>"##,
-                self.x0 - 4.0,
-                y + 4.0,
-                fmt_tick(t)
+            let labels: Vec<String> =
+                (0..rs.len()).map(|j| tooth_label(j, w.shown_teeth, c.last_bin_label())).collect();
+            let x_desc = format!(
+                "tooth (E_x residual {:+.3}, z {:+.1}; σ_x residual {:+.3}, z {:+.1})",
+                w.centre.residual, w.centre.z, w.dispersion.residual, w.dispersion.z
             );
-            t += step;
+            let mut chart = category_chart(panel, &c.name, &labels, y, &x_desc, "simulated − measured [pp]")?;
+            let n = labels.len() as f64;
+            chart.draw_series(std::iter::once(PathElement::new(vec![(-0.5, 0.0), (n - 0.5, 0.0)], BLACK))).drawn()?;
+            for (j, r) in rs.iter().enumerate() {
+                let (x, colour) = (j as f64, if r.flagged() { RED } else { BLUE });
+                let (v, u) = (r.residual, r.uncertainty);
+                if u.is_finite() {
+                    chart.draw_series([interval(x, v - 2.0 * u, v + 2.0 * u, colour, 1)]).drawn()?;
+                    chart.draw_series([interval(x, v - u, v + u, colour, 4)]).drawn()?;
+                }
+                if v.is_finite() {
+                    chart.draw_series([Circle::new((x, v), 5, colour.filled())]).drawn()?;
+                }
+            }
         }
-        let _ = writeln!(
-            s,
-            r##"<text x="{:.1}" y="{:.1}" font-size="13" font-weight="bold">{}</text>"##,
-            self.x0,
-            self.y0 - 8.0,
-            esc(title)
-        );
-        let _ = writeln!(
-            s,
-            r##"<text x="{:.1}" y="{:.1}" font-size="11" transform="rotate(-90 {:.1} {:.1})" text-anchor="middle">{}</text>"##,
-            self.x0 - 40.0,
-            self.y0 + self.h / 2.0,
-            self.x0 - 40.0,
-            self.y0 + self.h / 2.0,
-            esc(ylabel)
-        );
+        let _ = h;
+        let legend = Self::legend();
+        let entries: Vec<(Mark, &str)> = legend.iter().map(|(m, t)| (*m, t.as_str())).collect();
+        plot::legend(&key, &entries)
     }
 }
 
-fn fmt_tick(v: f64) -> String {
-    let r = (v * 1e6).round() / 1e6;
-    if r == r.trunc() {
-        format!("{r:.0}")
-    } else {
-        format!("{r}")
-    }
-}
+/// ranking.svg: every model's held-out gap with its bootstrap interval and the score that
+/// orders the ranking (gap + the penalty for extra parameters), baseline first, then by rank.
+pub struct RankingPlot<'a>(pub &'a Diagnosis);
 
-fn svg_open(w: f64, h: f64) -> String {
-    format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w:.0}\" height=\"{h:.0}\" viewBox=\"0 0 {w:.0} {h:.0}\" font-family=\"sans-serif\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
-    )
-}
+const RANKING_LEGEND: [(Mark, &str); 3] = [
+    (Mark::Point(BLUE), "held-out gap with its bootstrap interval"),
+    (Mark::Diamond(BLACK), "score (orders the ranking)"),
+    (Mark::Line(GREY), "baseline's gap"),
+];
+const RANKING_ROW_PX: u32 = 44;
 
-fn range_of(values: impl Iterator<Item = f64>, pad: f64, include_zero: bool) -> (f64, f64) {
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for v in values.filter(|v| v.is_finite()) {
-        lo = lo.min(v);
-        hi = hi.max(v);
+impl RankingPlot<'_> {
+    fn models(&self) -> Vec<&ModelResult> {
+        std::iter::once(&self.0.baseline).chain(self.0.ranking.iter()).collect()
     }
-    if include_zero {
-        lo = lo.min(0.0);
-        hi = hi.max(0.0);
-    }
-    if !(lo.is_finite() && hi.is_finite()) {
-        return (0.0, 1.0);
-    }
-    if hi - lo < 1e-9 {
-        hi = lo + 1.0;
-    }
-    let p = (hi - lo) * pad;
-    (lo - p, hi + p)
-}
 
-/// Residuals (simulated − measured, pp) per tooth with ±uncertainty and ±2 uncertainty bars.
-pub fn residuals_svg(d: &Diagnosis) -> String {
-    let (pw, ph) = (560.0, 240.0);
-    let n = d.conditions.len();
-    let mut s = svg_open(pw + 100.0, (ph + 80.0) * n as f64 + 30.0);
-    for (i, (c, w)) in d.conditions.iter().zip(&d.where_).enumerate() {
-        let rs = &w.teeth_residuals;
-        let (lo, hi) = range_of(
-            rs.iter().flat_map(|r| [r.residual - 2.0 * r.uncertainty, r.residual + 2.0 * r.uncertainty]),
-            0.08,
-            true,
-        );
-        let fr = Frame { x0: 70.0, y0: 40.0 + i as f64 * (ph + 80.0), w: pw, h: ph, lo, hi };
-        fr.axes(
-            &mut s,
-            &format!("{}: baseline residual per tooth (bars ±1 and ±2 uncertainty; red |z| > {Z_FLAG})", c.name),
-            "simulated − measured (pp)",
-        );
-        let y0 = fr.y(0.0);
-        let _ = writeln!(
-            s,
-            r##"<line x1="{:.1}" y1="{y0:.1}" x2="{:.1}" y2="{y0:.1}" stroke="#000"/>"##,
-            fr.x0,
-            fr.x0 + fr.w
-        );
-        let step = fr.w / rs.len() as f64;
-        for (j, r) in rs.iter().enumerate() {
-            let x = fr.x0 + step * (j as f64 + 0.5);
-            let colour = if r.flagged() { "#c0392b" } else { "#2c6fbb" };
-            let (a2, b2) = (fr.y(r.residual - 2.0 * r.uncertainty), fr.y(r.residual + 2.0 * r.uncertainty));
-            let (a1, b1) = (fr.y(r.residual - r.uncertainty), fr.y(r.residual + r.uncertainty));
-            let _ = writeln!(
-                s,
-                r##"<line x1="{x:.1}" y1="{a2:.1}" x2="{x:.1}" y2="{b2:.1}" stroke="{colour}" stroke-width="1"/>"##
-            );
-            let _ = writeln!(
-                s,
-                r##"<line x1="{x:.1}" y1="{a1:.1}" x2="{x:.1}" y2="{b1:.1}" stroke="{colour}" stroke-width="4"/>"##
-            );
-            let _ = writeln!(s, r##"<circle cx="{x:.1}" cy="{:.1}" r="4" fill="{colour}"/>"##, fr.y(r.residual));
-            let _ = writeln!(
-                s,
-                r##"<text x="{x:.1}" y="{:.1}" font-size="11" text-anchor="middle">{}</text>"##,
-                fr.y0 + fr.h + 16.0,
-                tooth_label(j, w.shown_teeth, c.last_bin_label())
-            );
-        }
-        let _ = writeln!(
-            s,
-            r##"<text x="{:.1}" y="{:.1}" font-size="11" text-anchor="middle">tooth (E_x residual {:+.3}, z {:+.1}; σ_x residual {:+.3}, z {:+.1})</text>"##,
-            fr.x0 + fr.w / 2.0,
-            fr.y0 + fr.h + 34.0,
-            w.centre.residual,
-            w.centre.z,
-            w.dispersion.residual,
-            w.dispersion.z
-        );
+    /// The row labels: "baseline", then "1. name", "2. name", ...
+    fn labels(&self) -> Vec<String> {
+        std::iter::once("baseline".to_string())
+            .chain(self.0.ranking.iter().enumerate().map(|(i, m)| format!("{}. {}", i + 1, m.name())))
+            .collect()
     }
-    s.push_str("</svg>\n");
-    s
-}
 
-/// Held-out gap of every model with its bootstrap interval, best score first.
-pub fn ranking_svg(d: &Diagnosis) -> String {
-    let mut models: Vec<&ModelResult> = vec![&d.baseline];
-    models.extend(d.ranking.iter());
-    let row = 34.0;
-    let (x0, w) = (150.0, 440.0);
-    let h = row * models.len() as f64;
-    let mut s = svg_open(x0 + w + 60.0, h + 110.0);
-    let (lo, hi) = range_of(models.iter().flat_map(|m| [m.interval[0], m.interval[1], m.gap]), 0.08, true);
-    let xp = |v: f64| x0 + (v.clamp(lo, hi) - lo) / (hi - lo) * w;
-    let y0 = 40.0;
-    let _ = writeln!(
-        s,
-        r##"<text x="{x0:.1}" y="24" font-size="13" font-weight="bold">Held-out gap (SSE %², {:.0}-{:.0} % bootstrap intervals)</text>"##,
-        100.0 * INTERVAL.0,
-        100.0 * INTERVAL.1
-    );
-    let _ =
-        writeln!(s, r##"<rect x="{x0:.1}" y="{y0:.1}" width="{w:.1}" height="{h:.1}" fill="none" stroke="#444"/>"##);
-    let step = nice_step(hi - lo);
-    let mut t = (lo / step).ceil() * step;
-    while t <= hi + 1e-9 {
-        let x = xp(t);
-        let _ = writeln!(s, r##"<line x1="{x:.1}" y1="{y0:.1}" x2="{x:.1}" y2="{:.1}" stroke="#ddd"/>"##, y0 + h);
-        let _ = writeln!(
-            s,
-            r##"<text x="{x:.1}" y="{:.1}" font-size="11" text-anchor="middle">{}</text>"##,
-            y0 + h + 15.0,
-            fmt_tick(t)
-        );
-        t += step;
+    fn footer(&self) -> String {
+        format!(
+            "{RANKING_RULE}. Colours: green best, orange indistinguishable from the top-ranked effect, blue other effects, grey baseline. Intervals {:.0}-{:.0} % bootstrap percentiles. best = {}",
+            100.0 * INTERVAL.0,
+            100.0 * INTERVAL.1,
+            self.0.best.map_or("none", |e| e.name())
+        )
     }
-    let bx = xp(d.baseline.gap);
-    let _ = writeln!(
-        s,
-        r##"<line x1="{bx:.1}" y1="{y0:.1}" x2="{bx:.1}" y2="{:.1}" stroke="#888" stroke-dasharray="4 3"/>"##,
-        y0 + h
-    );
-    for (i, m) in models.iter().enumerate() {
-        let y = y0 + row * (i as f64 + 0.5);
-        let best = m.single().is_some() && m.single() == d.best;
-        let colour = if m.effects.is_empty() {
-            "#555"
-        } else if best {
-            "#1e8449"
+
+    fn colour(&self, m: &ModelResult) -> RGBColor {
+        let d = self.0;
+        if m.effects.is_empty() {
+            DARK_GREY
+        } else if m.single().is_some() && m.single() == d.best {
+            GREEN
         } else if m.single().is_some_and(|e| d.indistinguishable.contains(&e)) {
-            "#d68910"
+            ORANGE
         } else {
-            "#2c6fbb"
-        };
-        let _ = writeln!(
-            s,
-            r##"<text x="{:.1}" y="{:.1}" font-size="12" text-anchor="end">{}</text>"##,
-            x0 - 8.0,
-            y + 4.0,
-            esc(&m.name())
-        );
-        let _ = writeln!(
-            s,
-            r##"<line x1="{:.1}" y1="{y:.1}" x2="{:.1}" y2="{y:.1}" stroke="{colour}" stroke-width="3"/>"##,
-            xp(m.interval[0]),
-            xp(m.interval[1])
-        );
-        let _ = writeln!(s, r##"<circle cx="{:.1}" cy="{y:.1}" r="5" fill="{colour}"/>"##, xp(m.gap));
+            BLUE
+        }
     }
-    let _ = writeln!(
-        s,
-        r##"<text x="{x0:.1}" y="{:.1}" font-size="11">dashed: baseline; green: best; orange: indistinguishable from the top-ranked effect. best = {}</text>"##,
-        y0 + h + 36.0,
-        d.best.map_or("none", |e| e.name())
-    );
-    s.push_str("</svg>\n");
-    s
+
+    fn heights(&self) -> (u32, u32, u32) {
+        let chart = RANKING_ROW_PX * self.models().len() as u32 + 110;
+        let key = plot::legend_height(WIDTH_PX, &RANKING_LEGEND);
+        let footer = plot::wrapped_height(WIDTH_PX, &self.footer(), plot::SMALL_SIZE);
+        (chart, key, footer)
+    }
 }
 
-/// Measured (with the runs' min-max), baseline and top-ranked effect distributions.
-pub fn distributions_svg(d: &Diagnosis) -> String {
-    let (pw, ph) = (560.0, 240.0);
-    let n = d.conditions.len();
-    let mut s = svg_open(pw + 100.0, (ph + 80.0) * n as f64 + 30.0);
-    let effect = d.gap_model().map_or("effect".to_string(), |m| m.name());
-    for (i, ((c, g), w)) in d.conditions.iter().zip(&d.gap).zip(&d.where_).enumerate() {
-        let teeth = c.teeth();
-        let idx: Vec<usize> = (0..w.shown_teeth).chain(std::iter::once(teeth)).collect();
-        let sum = &w.measured_summary;
-        let hi = idx
-            .iter()
-            .flat_map(|&j| [g.measured[j], g.before[j], g.after[j], sum.max.get(j).copied().unwrap_or(0.0)])
-            .filter(|v| v.is_finite())
-            .fold(0.0f64, f64::max)
-            * 100.0
-            * 1.1;
-        let fr = Frame { x0: 70.0, y0: 40.0 + i as f64 * (ph + 80.0), w: pw, h: ph, lo: 0.0, hi: hi.max(1.0) };
-        fr.axes(
-            &mut s,
-            &format!("{}: measured (grey, runs' min-max), baseline (blue), {effect} (green)", c.name),
-            "share of mass (%)",
-        );
-        let step = fr.w / idx.len() as f64;
-        let bw = step / 4.0;
-        for (k, &j) in idx.iter().enumerate() {
-            let xc = fr.x0 + step * (k as f64 + 0.5);
-            for (m, (v, colour)) in
-                [(g.measured[j], "#999"), (g.before[j], "#2c6fbb"), (g.after[j], "#1e8449")].into_iter().enumerate()
-            {
-                let x = xc + (m as f64 - 1.5) * bw;
-                let y = fr.y(100.0 * v);
-                let _ = writeln!(
-                    s,
-                    r##"<rect x="{x:.1}" y="{y:.1}" width="{bw:.1}" height="{:.1}" fill="{colour}"/>"##,
-                    fr.y0 + fr.h - y
-                );
-            }
-            // the runs' spread, the last bin's too (what each run did not recover)
-            if j < sum.min.len() && sum.min[j].is_finite() && sum.max[j].is_finite() {
-                let x = xc - bw;
-                let _ = writeln!(
-                    s,
-                    r##"<line x1="{x:.1}" y1="{:.1}" x2="{x:.1}" y2="{:.1}" stroke="#000"/>"##,
-                    fr.y(100.0 * sum.min[j]),
-                    fr.y(100.0 * sum.max[j])
-                );
-            }
-            let label = if j < teeth { format!("{}", j + 1) } else { c.last_bin_label().into() };
-            let _ = writeln!(
-                s,
-                r##"<text x="{xc:.1}" y="{:.1}" font-size="11" text-anchor="middle">{label}</text>"##,
-                fr.y0 + fr.h + 16.0
-            );
-        }
-        let _ = writeln!(
-            s,
-            r##"<text x="{:.1}" y="{:.1}" font-size="11" text-anchor="middle">tooth</text>"##,
-            fr.x0 + fr.w / 2.0,
-            fr.y0 + fr.h + 32.0
-        );
+impl Figure for RankingPlot<'_> {
+    fn size(&self) -> (u32, u32) {
+        let (chart, key, footer) = self.heights();
+        (WIDTH_PX, (plot::TITLE_SIZE * 1.6) as u32 + chart + key + footer)
     }
-    s.push_str("</svg>\n");
-    s
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
+        let area = plot::title(root, "Which: candidate effects ranked by score")?;
+        let (chart_h, key_h, _) = self.heights();
+        let (chart_area, rest) = area.split_vertically(chart_h);
+        let (key, footer) = rest.split_vertically(key_h);
+        let models = self.models();
+        let n = models.len();
+        // the first row (baseline) at the top: row i sits at y = n - 1 - i
+        let labels: Vec<String> = self.labels().into_iter().rev().collect();
+        let longest = labels.iter().map(|l| l.chars().count()).max().unwrap_or(8) as f64;
+        let x = range_of(models.iter().flat_map(|m| [m.interval[0], m.interval[1], m.gap, m.score]), 0.06, true);
+        let mut chart = ChartBuilder::on(&chart_area)
+            .margin(15)
+            .margin_right(30)
+            .x_label_area_size(55)
+            .y_label_area_size((0.62 * plot::LABEL_SIZE * longest + 25.0) as u32)
+            .build_cartesian_2d(x, plot::category_range(n))
+            .drawn()?;
+        let y_label = plot::category_label(&labels);
+        chart
+            .configure_mesh()
+            .disable_y_mesh()
+            .y_labels(n + 1)
+            .y_label_formatter(&y_label)
+            .x_label_formatter(&plot::tick)
+            .x_desc("held-out gap and score: SSE summed over conditions [%²]")
+            .label_style(plot::text_style(plot::LABEL_SIZE))
+            .axis_desc_style(plot::text_style(plot::LABEL_SIZE))
+            .bold_line_style(plot::GRID)
+            .max_light_lines(1)
+            .draw()
+            .drawn()?;
+        let base = self.0.baseline.gap;
+        let top = n as f64 - 0.5;
+        chart.draw_series([PathElement::new(vec![(base, -0.5), (base, top)], GREY.stroke_width(2))]).drawn()?;
+        for (i, m) in models.iter().enumerate() {
+            let y = (n - 1 - i) as f64;
+            let colour = self.colour(m);
+            if m.interval.iter().all(|v| v.is_finite()) {
+                let line = vec![(m.interval[0], y), (m.interval[1], y)];
+                chart.draw_series([PathElement::new(line, colour.stroke_width(3))]).drawn()?;
+            }
+            if m.gap.is_finite() {
+                chart.draw_series([Circle::new((m.gap, y), 6, colour.filled())]).drawn()?;
+            }
+            if m.score.is_finite() {
+                chart
+                    .draw_series([EmptyElement::at((m.score, y))
+                        + Polygon::new(vec![(-7, -14), (0, -21), (7, -14), (0, -7)], BLACK.filled())])
+                    .drawn()?;
+            }
+        }
+        plot::legend(&key, &RANKING_LEGEND)?;
+        plot::draw_wrapped(&footer, &self.footer(), plot::SMALL_SIZE)
+    }
+}
+
+/// distributions.svg: per condition, measured (with the runs' min-max), baseline and the
+/// top-ranked effect's share of mass per tooth.
+pub struct DistributionsPlot<'a>(pub &'a Diagnosis);
+
+impl DistributionsPlot<'_> {
+    fn legend(&self) -> [(Mark, String); 4] {
+        let effect = self.0.gap_model().map_or("effect".to_string(), |m| m.name());
+        [
+            (Mark::Block(GREY), "measured".to_string()),
+            (Mark::Line(BLACK), "runs' min-max".to_string()),
+            (Mark::Block(BLUE), "baseline".to_string()),
+            (Mark::Block(GREEN), effect),
+        ]
+    }
+}
+
+impl Figure for DistributionsPlot<'_> {
+    fn size(&self) -> (u32, u32) {
+        let legend = self.legend();
+        let entries: Vec<(Mark, &str)> = legend.iter().map(|(m, t)| (*m, t.as_str())).collect();
+        let title = (plot::TITLE_SIZE * 1.6) as u32;
+        (WIDTH_PX, title + PANEL_PX * self.0.conditions.len() as u32 + plot::legend_height(WIDTH_PX, &entries))
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
+        let d = self.0;
+        let area = plot::title(root, "How far: measured, baseline and top-ranked effect per tooth")?;
+        let (panels, key) = area.split_vertically(PANEL_PX * d.conditions.len() as u32);
+        let panels = panels.split_evenly((d.conditions.len().max(1), 1));
+        for (((c, g), w), panel) in d.conditions.iter().zip(&d.gap).zip(&d.where_).zip(&panels) {
+            let teeth = c.teeth();
+            let idx: Vec<usize> = (0..w.shown_teeth).chain(std::iter::once(teeth)).collect();
+            let sum = &w.measured_summary;
+            let hi = idx
+                .iter()
+                .flat_map(|&j| [g.measured[j], g.before[j], g.after[j], sum.max.get(j).copied().unwrap_or(0.0)])
+                .filter(|v| v.is_finite())
+                .fold(0.0f64, f64::max);
+            let labels: Vec<String> =
+                idx.iter().map(|&j| if j < teeth { format!("{}", j + 1) } else { c.last_bin_label().into() }).collect();
+            let y = 0.0..(100.0 * hi * 1.08).max(1.0);
+            let mut chart = category_chart(panel, &c.name, &labels, y, "tooth", "share of mass [%]")?;
+            const BAR: f64 = 0.25;
+            for (k, &j) in idx.iter().enumerate() {
+                let xc = k as f64;
+                for (m, (v, colour)) in
+                    [(g.measured[j], GREY), (g.before[j], BLUE), (g.after[j], GREEN)].into_iter().enumerate()
+                {
+                    let x = xc + (m as f64 - 1.5) * BAR;
+                    if v.is_finite() {
+                        chart
+                            .draw_series([Rectangle::new([(x, 0.0), (x + BAR, 100.0 * v)], colour.filled())])
+                            .drawn()?;
+                    }
+                }
+                // the runs' spread, the last bin's too (what each run did not recover)
+                if j < sum.min.len() && sum.min[j].is_finite() && sum.max[j].is_finite() {
+                    let x = xc - BAR;
+                    chart.draw_series([interval(x, 100.0 * sum.min[j], 100.0 * sum.max[j], BLACK, 2)]).drawn()?;
+                }
+            }
+        }
+        let legend = self.legend();
+        let entries: Vec<(Mark, &str)> = legend.iter().map(|(m, t)| (*m, t.as_str())).collect();
+        plot::legend(&key, &entries)
+    }
 }
 
 /// Write report.md, diagnosis.json and the SVGs into `dir` (created if missing).
@@ -646,7 +648,7 @@ pub fn write_dir(dir: &Path, d: &Diagnosis, json: &Value) -> anyhow::Result<()> 
     std::fs::create_dir_all(dir).with_context(|| format!("--out: cannot create directory {}", dir.display()))?;
     write_atomic(&dir.join("diagnosis.json"), format!("{}\n", serde_json::to_string_pretty(json)?).as_bytes())?;
     write_atomic(&dir.join("report.md"), to_markdown(d).as_bytes())?;
-    write_atomic(&dir.join("residuals.svg"), residuals_svg(d).as_bytes())?;
-    write_atomic(&dir.join("ranking.svg"), ranking_svg(d).as_bytes())?;
-    write_atomic(&dir.join("distributions.svg"), distributions_svg(d).as_bytes())
+    plot::write_figure(&dir.join("residuals.svg"), "residuals.svg", &ResidualsPlot(d))?;
+    plot::write_figure(&dir.join("ranking.svg"), "ranking.svg", &RankingPlot(d))?;
+    plot::write_figure(&dir.join("distributions.svg"), "distributions.svg", &DistributionsPlot(d))
 }

@@ -1,16 +1,19 @@
 //! Outputs of `fit`: the JSON object, the stdout table, fit.csv and fit.svg (a bar chart like
-//! the thesis's Figure 4.14), files written atomically.
+//! the thesis's Figure 4.14, drawn through `crate::plot`), files written atomically.
 
 use std::fmt::Write as _;
 use std::io::Write;
 use std::path::Path;
 
 use anyhow::Context as _;
+use plotters::coord::Shift;
+use plotters::prelude::*;
 use serde_json::{json, Map, Value};
 
 use super::{FitReport, ObjectiveKind};
 use crate::io::atomic::write_atomic;
 use crate::model::outcome::centre_and_dispersion;
+use crate::plot::{self, Drawn as _, Figure, Mark};
 
 /// Where the numbers came from.
 #[derive(Clone, Debug)]
@@ -314,187 +317,122 @@ pub fn to_csv(r: &FitReport, meta: &Meta) -> String {
     s
 }
 
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+/// fit.svg: measured mean per tooth as bars, ±1 sd as a light band, min/max as error bars,
+/// the fitted distribution as red diamonds (like Figure 4.14), plus the last bin (lost or not
+/// recovered) when either side holds anything there.
+pub struct FitPlot {
+    title: String,
+    subtitle: String,
+    /// Per category: label, measured mean, sd, min, max, fitted (fractions).
+    categories: Vec<(String, f64, f64, f64, f64, f64)>,
 }
 
-/// fit.svg: measured mean per tooth as bars, ±1 sd as a light band, min/max as error bars,
-/// the fitted distribution as red diamonds (like Figure 4.14), plus the last bin (lost or
-/// not recovered) when either side holds anything there.
-pub fn to_svg(r: &FitReport, meta: &Meta) -> String {
-    let shown = shown_teeth(r, meta);
-    let m = &r.measured;
-    let cat = |label: String, j: usize| (label, m.mean[j], m.sd[j], m.min[j], m.max[j], r.fitted[j]);
-    let mut cats: Vec<(String, f64, f64, f64, f64, f64)> = (0..shown).map(|j| cat(format!("{}", j + 1), j)).collect();
-    let t = meta.teeth;
-    if r.fitted[t] > 0.0 || m.max[t] > 0.0 {
-        cats.push(cat(r.last_bin.to_string(), t));
-    }
-    let (w, h) = (880.0, 440.0);
-    // the legend sits in the right margin, clear of the data
-    let (left, right, top, bottom) = (70.0, 190.0, 50.0, 60.0);
-    let (pw, ph) = (w - left - right, h - top - bottom);
-    let ymax_data =
-        cats.iter().map(|c| c.4.max(c.5).max(c.1 + if c.2.is_finite() { c.2 } else { 0.0 })).fold(0.0, f64::max);
-    let step = if ymax_data > 0.5 {
-        0.2
-    } else if ymax_data > 0.2 {
-        0.1
-    } else {
-        0.05
-    };
-    let ymax = ((ymax_data / step).ceil() * step).max(step);
-    let y = |v: f64| top + ph * (1.0 - v / ymax);
-    let slot = pw / cats.len() as f64;
-    let bar = slot * 0.5;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="12">"#
-    );
-    let _ = writeln!(s, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
-    let params: Vec<String> = r.params.iter().zip(&r.x).map(|(p, v)| format!("{} {:.3}", p.name(), v)).collect();
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="20" text-anchor="middle" font-size="14">{}</text>"#,
-        left + pw / 2.0,
-        esc(&format!("Measured vs fitted distribution ({} runs) — {}", r.runs, meta.data))
-    );
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="38" text-anchor="middle">{}</text>"#,
-        left + pw / 2.0,
-        esc(&format!(
-            "fitted ({}): {}; SSE {:.1} %²",
-            match r.objective {
-                ObjectiveKind::Sse => "SSE",
-                ObjectiveKind::Likelihood => "likelihood",
-            },
-            params.join(", "),
-            r.sse_percent2
-        ))
-    );
-    // grid and y axis
-    let mut v = 0.0;
-    while v <= ymax + 1e-9 {
-        let yy = y(v);
-        let _ = writeln!(s, r##"<line x1="{left}" y1="{yy:.1}" x2="{:.1}" y2="{yy:.1}" stroke="#ddd"/>"##, left + pw);
-        let _ =
-            writeln!(s, r#"<text x="{:.1}" y="{:.1}" text-anchor="end">{:.0}</text>"#, left - 6.0, yy + 4.0, 100.0 * v);
-        v += step;
-    }
-    let _ = writeln!(
-        s,
-        r#"<text x="18" y="{:.1}" text-anchor="middle" transform="rotate(-90 18 {:.1})">particle fraction (%)</text>"#,
-        top + ph / 2.0,
-        top + ph / 2.0
-    );
-    let _ = writeln!(s, r#"<line x1="{left}" y1="{top}" x2="{left}" y2="{:.1}" stroke="black"/>"#, top + ph);
-    let _ = writeln!(
-        s,
-        r#"<line x1="{left}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="black"/>"#,
-        top + ph,
-        left + pw,
-        top + ph
-    );
-    for (i, (label, mean, sd, min, max, fitted)) in cats.iter().enumerate() {
-        let cx = left + slot * (i as f64 + 0.5);
-        if *mean > 0.0 {
-            let _ = writeln!(
-                s,
-                r##"<rect x="{:.1}" y="{:.1}" width="{bar:.1}" height="{:.1}" fill="#1f5fa8"><title>measured {:.2} %</title></rect>"##,
-                cx - bar / 2.0,
-                y(*mean),
-                y(0.0) - y(*mean),
-                100.0 * mean
-            );
+const FIT_SIZE: (u32, u32) = (900, 520);
+const MEAN_COLOUR: RGBColor = RGBColor(0x1f, 0x5f, 0xa8);
+const SD_COLOUR: RGBColor = RGBColor(0x8c, 0xc4, 0xf0);
+const FITTED_COLOUR: RGBColor = RGBColor(0xd6, 0x27, 0x28);
+const FIT_LEGEND: [(Mark, &str); 4] = [
+    (Mark::Block(MEAN_COLOUR), "measured mean"),
+    (Mark::Block(SD_COLOUR), "±1 sd of the runs"),
+    (Mark::Interval(BLACK), "min / max of the runs"),
+    (Mark::Diamond(FITTED_COLOUR), "fitted simulation"),
+];
+
+impl FitPlot {
+    pub fn new(r: &FitReport, meta: &Meta) -> FitPlot {
+        let shown = shown_teeth(r, meta);
+        let m = &r.measured;
+        let cat = |label: String, j: usize| (label, m.mean[j], m.sd[j], m.min[j], m.max[j], r.fitted[j]);
+        let mut categories: Vec<_> = (0..shown).map(|j| cat(format!("{}", j + 1), j)).collect();
+        let t = meta.teeth;
+        if r.fitted[t] > 0.0 || m.max[t] > 0.0 {
+            categories.push(cat(r.last_bin.to_string(), t));
         }
-        if sd.is_finite() && *sd > 0.0 {
-            let (a, b) = ((mean - sd).max(0.0), mean + sd);
-            let _ = writeln!(
-                s,
-                r##"<rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="#8cc4f0" fill-opacity="0.7"><title>±1 sd {:.2} %</title></rect>"##,
-                cx - bar * 0.3,
-                y(b),
-                bar * 0.6,
-                y(a) - y(b),
-                100.0 * sd
-            );
+        let params: Vec<String> = r.params.iter().zip(&r.x).map(|(p, v)| format!("{} {:.3}", p.name(), v)).collect();
+        let kind = match r.objective {
+            ObjectiveKind::Sse => "SSE",
+            ObjectiveKind::Likelihood => "likelihood",
+        };
+        FitPlot {
+            title: format!("Measured vs fitted distribution ({} runs) — {}", r.runs, meta.data),
+            subtitle: format!("fitted ({kind}): {}; SSE {:.1} %²", params.join(", "), r.sse_percent2),
+            categories,
         }
-        if *max > 0.0 {
-            let _ = writeln!(
-                s,
-                r#"<line x1="{cx:.1}" y1="{:.1}" x2="{cx:.1}" y2="{:.1}" stroke="black"/>"#,
-                y(*min),
-                y(*max)
-            );
-            for e in [min, max] {
-                let _ = writeln!(
-                    s,
-                    r#"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="black"/>"#,
-                    cx - 6.0,
-                    y(*e),
-                    cx + 6.0,
-                    y(*e)
-                );
-            }
-        }
-        let (fx, fy) = (cx, y(*fitted));
-        let _ = writeln!(
-            s,
-            r##"<path d="M {:.1} {fy:.1} L {fx:.1} {:.1} L {:.1} {fy:.1} L {fx:.1} {:.1} Z" fill="#d62728" stroke="black" stroke-width="0.5"><title>fitted {:.2} %</title></path>"##,
-            fx - 6.0,
-            fy - 6.0,
-            fx + 6.0,
-            fy + 6.0,
-            100.0 * fitted
-        );
-        let _ =
-            writeln!(s, r#"<text x="{cx:.1}" y="{:.1}" text-anchor="middle">{}</text>"#, top + ph + 18.0, esc(label));
     }
-    let _ = writeln!(s, r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">tooth</text>"#, left + pw / 2.0, h - 18.0);
-    // legend
-    let lx = left + pw + 20.0;
-    let _ = writeln!(
-        s,
-        r##"<rect x="{lx:.1}" y="{}" width="14" height="10" fill="#1f5fa8"/><text x="{:.1}" y="{}">measured mean</text>"##,
-        top + 4.0,
-        lx + 20.0,
-        top + 13.0
-    );
-    let _ = writeln!(
-        s,
-        r##"<rect x="{lx:.1}" y="{}" width="14" height="10" fill="#8cc4f0"/><text x="{:.1}" y="{}">±1 sd of the runs</text>"##,
-        top + 20.0,
-        lx + 20.0,
-        top + 29.0
-    );
-    let _ = writeln!(
-        s,
-        r#"<line x1="{:.1}" y1="{}" x2="{:.1}" y2="{}" stroke="black"/><text x="{:.1}" y="{}">min / max of the runs</text>"#,
-        lx + 7.0,
-        top + 36.0,
-        lx + 7.0,
-        top + 46.0,
-        lx + 20.0,
-        top + 45.0
-    );
-    let _ = writeln!(
-        s,
-        r##"<path d="M {:.1} {} L {:.1} {} L {:.1} {} L {:.1} {} Z" fill="#d62728"/><text x="{:.1}" y="{}">fitted simulation</text>"##,
-        lx + 1.0,
-        top + 57.0,
-        lx + 7.0,
-        top + 51.0,
-        lx + 13.0,
-        top + 57.0,
-        lx + 7.0,
-        top + 63.0,
-        lx + 20.0,
-        top + 61.0
-    );
-    s.push_str("</svg>\n");
-    s
+}
+
+impl Figure for FitPlot {
+    fn size(&self) -> (u32, u32) {
+        FIT_SIZE
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
+        let area = plot::title(root, &self.title)?;
+        let (w, h) = area.dim_in_pixel();
+        let sub_h = plot::wrapped_height(w, &self.subtitle, plot::LABEL_SIZE);
+        let key_h = plot::legend_height(w, &FIT_LEGEND);
+        let (sub, rest) = area.split_vertically(sub_h);
+        plot::draw_wrapped(&sub, &self.subtitle, plot::LABEL_SIZE)?;
+        let (chart_area, key) = rest.split_vertically(h - sub_h - key_h);
+        let top = self
+            .categories
+            .iter()
+            .map(|c| c.4.max(c.5).max(c.1 + if c.2.is_finite() { c.2 } else { 0.0 }))
+            .fold(0.0, f64::max);
+        let labels: Vec<String> = self.categories.iter().map(|c| c.0.clone()).collect();
+        let n = labels.len();
+        let mut chart = ChartBuilder::on(&chart_area)
+            .margin(15)
+            .x_label_area_size(50)
+            .y_label_area_size(70)
+            .build_cartesian_2d(plot::category_range(n), 0.0..(100.0 * top * 1.08).max(1.0))
+            .drawn()?;
+        let x_label = plot::category_label(&labels);
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(n + 1)
+            .x_label_formatter(&x_label)
+            .y_label_formatter(&plot::tick)
+            .x_desc("tooth")
+            .y_desc("particle fraction [%]")
+            .label_style(plot::text_style(plot::SMALL_SIZE))
+            .axis_desc_style(plot::text_style(plot::LABEL_SIZE))
+            .bold_line_style(plot::GRID)
+            .max_light_lines(1)
+            .draw()
+            .drawn()?;
+        let pct = |v: f64| 100.0 * v;
+        let at = |i: usize| i as f64;
+        chart
+            .draw_series(
+                self.categories.iter().enumerate().filter(|(_, c)| c.1 > 0.0).map(|(i, c)| {
+                    Rectangle::new([(at(i) - 0.25, 0.0), (at(i) + 0.25, pct(c.1))], MEAN_COLOUR.filled())
+                }),
+            )
+            .drawn()?;
+        chart
+            .draw_series(self.categories.iter().enumerate().filter(|(_, c)| c.2.is_finite() && c.2 > 0.0).map(
+                |(i, c)| {
+                    let (a, b) = ((c.1 - c.2).max(0.0), c.1 + c.2);
+                    Rectangle::new([(at(i) - 0.15, pct(a)), (at(i) + 0.15, pct(b))], SD_COLOUR.mix(0.7).filled())
+                },
+            ))
+            .drawn()?;
+        for (i, c) in self.categories.iter().enumerate().filter(|(_, c)| c.4 > 0.0) {
+            let (x, lo, hi) = (at(i), pct(c.3), pct(c.4));
+            let lines =
+                [vec![(x, lo), (x, hi)], vec![(x - 0.08, lo), (x + 0.08, lo)], vec![(x - 0.08, hi), (x + 0.08, hi)]];
+            chart.draw_series(lines.into_iter().map(|l| PathElement::new(l, BLACK.stroke_width(1)))).drawn()?;
+        }
+        chart
+            .draw_series(self.categories.iter().enumerate().map(|(i, c)| {
+                EmptyElement::at((at(i), pct(c.5)))
+                    + Polygon::new(vec![(-7, 0), (0, -7), (7, 0), (0, 7)], FITTED_COLOUR.filled())
+            }))
+            .drawn()?;
+        plot::legend(&key, &FIT_LEGEND)
+    }
 }
 
 /// fit.json, fit.csv and fit.svg into `dir` (created if missing).
@@ -502,5 +440,5 @@ pub fn write_dir(dir: &Path, r: &FitReport, meta: &Meta, json: &Value) -> anyhow
     std::fs::create_dir_all(dir).with_context(|| format!("--out: cannot create directory {}", dir.display()))?;
     write_atomic(&dir.join("fit.json"), format!("{}\n", serde_json::to_string_pretty(json)?).as_bytes())?;
     write_atomic(&dir.join("fit.csv"), to_csv(r, meta).as_bytes())?;
-    write_atomic(&dir.join("fit.svg"), to_svg(r, meta).as_bytes())
+    plot::write_figure(&dir.join("fit.svg"), "fit.svg", &FitPlot::new(r, meta))
 }

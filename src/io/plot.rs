@@ -1,33 +1,42 @@
-//! Standalone SVG of one design's particle flights over the sawtooth (like Figure 5.7):
-//! profile, fill area, launch points, flights and resting points, in millimetres.
+//! The flight plot of one design (like Figure 5.7): profile, fill area, launch points,
+//! flights and resting points, in millimetres at equal scale, drawn through `crate::plot`
+//! (SVG or PNG by the file's extension).
 
-use std::fmt::Write as _;
+use std::ops::Range;
 use std::path::Path;
 
-use anyhow::{Context as _, Result};
+use anyhow::Result;
+use plotters::coord::Shift;
+use plotters::prelude::*;
 
-use super::atomic::write_atomic;
 use super::trajectories::trajectory_points;
 use crate::engine::{Detailed, FlightRecord};
 use crate::model::flight::Flight;
 use crate::model::geometry::{Profile, V2};
 use crate::model::ParticleState;
+use crate::plot::{self, Drawn as _, Figure, Mark, PALETTE};
 
-/// Particle colours, by index (matplotlib's tab10).
-const PALETTE: [&str; 10] =
-    ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"];
-const FILL_COLOUR: &str = "#e3c9a0";
+const FILL_COLOUR: RGBColor = RGBColor(0xe3, 0xc9, 0xa0);
+const RESTING_COLOUR: RGBColor = RGBColor(0x22, 0x22, 0x22);
 const ARC_SAMPLES: usize = 32;
 const FLIGHT_SAMPLES: usize = 24;
 /// Width of the picture in pixels; the height follows the equal-aspect data.
-const WIDTH_PX: f64 = 1200.0;
+const WIDTH_PX: u32 = 1200;
+/// Pixels around the plotting box: margin, y tick labels and title, x tick labels and title.
+const MARGIN_PX: u32 = 15;
+const Y_LABELS_PX: u32 = 80;
+const X_LABELS_PX: u32 = 55;
+/// The plotting box's height is kept within these bounds (the other range grows to keep the
+/// scale equal), so a long flat conveyor or a single tall tooth still reads.
+const MIN_BOX_PX: f64 = 220.0;
+const MAX_BOX_PX: f64 = 1100.0;
 
-fn colour(particle: u32) -> &'static str {
+fn colour(particle: u32) -> RGBColor {
     PALETTE[particle as usize % PALETTE.len()]
 }
 
-fn mm(p: V2) -> V2 {
-    [p[0] * 1e3, p[1] * 1e3]
+fn mm(p: V2) -> (f64, f64) {
+    (p[0] * 1e3, p[1] * 1e3)
 }
 
 /// Number of teeth to draw: up to one past the furthest launch or impact point.
@@ -68,290 +77,174 @@ fn flight_points(r: &FlightRecord, g: f64, k_drag: f64) -> Vec<V2> {
     (0..=FLIGHT_SAMPLES).map(|i| f.pos(r.t * i as f64 / FLIGHT_SAMPLES as f64)).collect()
 }
 
-/// Bounding box of points in mm.
-#[derive(Clone, Copy, Debug)]
-struct Frame {
-    min: V2,
-    max: V2,
+/// Everything drawn, in millimetres, with equal-scale axis ranges.
+pub struct FlightPlot<'a> {
+    det: &'a Detailed,
+    title: String,
+    profile: Vec<(f64, f64)>,
+    flights: Vec<(u32, Vec<(f64, f64)>)>,
+    x: Range<f64>,
+    y: Range<f64>,
+    box_px: (u32, u32),
 }
 
-impl Frame {
-    fn of<'a>(pts: impl IntoIterator<Item = &'a V2>) -> Frame {
-        let mut f = Frame { min: [f64::INFINITY; 2], max: [f64::NEG_INFINITY; 2] };
-        for p in pts.into_iter().map(|&p| mm(p)).filter(|p| p[0].is_finite() && p[1].is_finite()) {
-            f.min = [f.min[0].min(p[0]), f.min[1].min(p[1])];
-            f.max = [f.max[0].max(p[0]), f.max[1].max(p[1])];
+const LEGEND: [(Mark, &str); 4] = [
+    (Mark::Point(PALETTE[0]), "launch point"),
+    (Mark::Line(PALETTE[1]), "flight (colour = particle)"),
+    (Mark::Ring(RESTING_COLOUR), "resting"),
+    (Mark::Block(FILL_COLOUR), "fill"),
+];
+
+impl<'a> FlightPlot<'a> {
+    pub fn new(det: &'a Detailed, g: f64, k_drag: f64, title: &str) -> FlightPlot<'a> {
+        let profile = &det.prepared.profile;
+        let profile_pts = profile_points(profile, teeth_to_draw(profile, det, g, k_drag));
+        let flights: Vec<(u32, Vec<V2>)> = det
+            .flights
+            .iter()
+            .map(|r| (r.particle, flight_points(r, g, k_drag)))
+            .filter(|(_, v)| !v.is_empty())
+            .collect();
+        let all: Vec<(f64, f64)> = profile_pts
+            .iter()
+            .chain(&det.prepared.fill.polygon)
+            .chain(flights.iter().flat_map(|(_, v)| v))
+            .map(|&p| mm(p))
+            .filter(|p| p.0.is_finite() && p.1.is_finite())
+            .collect();
+        let (x0, x1) = plot::extent(all.iter().map(|p| p.0)).unwrap_or((0.0, 1.0));
+        let (y0, y1) = plot::extent(all.iter().map(|p| p.1)).unwrap_or((0.0, 1.0));
+        let (mut x, mut y) = (plot::padded(x0, x1, 0.02), plot::padded(y0, y1, 0.04));
+        // equal scale: mm per pixel the same on both axes, within the box-height bounds
+        let box_w = (WIDTH_PX - 2 * MARGIN_PX - Y_LABELS_PX) as f64;
+        let per_px = (x.end - x.start) / box_w;
+        let mut box_h = (y.end - y.start) / per_px;
+        if box_h < MIN_BOX_PX {
+            let grow = (MIN_BOX_PX * per_px - (y.end - y.start)) / 2.0;
+            y = y.start - grow..y.end + grow;
+            box_h = MIN_BOX_PX;
+        } else if box_h > MAX_BOX_PX {
+            let per_px = (y.end - y.start) / MAX_BOX_PX;
+            let grow = (box_w * per_px - (x.end - x.start)) / 2.0;
+            x = x.start - grow..x.end + grow;
+            box_h = MAX_BOX_PX;
         }
-        f
+        let conv = |v: &Vec<V2>| v.iter().map(|&p| mm(p)).collect::<Vec<_>>();
+        FlightPlot {
+            det,
+            title: title.to_string(),
+            profile: conv(&profile_pts),
+            flights: flights.iter().map(|(p, v)| (*p, conv(v))).collect(),
+            x,
+            y,
+            box_px: (box_w as u32, box_h.round() as u32),
+        }
     }
-    fn size(&self) -> V2 {
-        [self.max[0] - self.min[0], self.max[1] - self.min[1]]
-    }
-}
 
-/// "x,y x,y ..." in SVG coordinates (mm, y flipped).
-fn svg_points(pts: &[V2]) -> String {
-    let mut s = String::new();
-    for p in pts.iter().map(|&p| mm(p)) {
-        let _ = write!(s, "{:.4},{:.4} ", p[0], -p[1]);
-    }
-    s.trim_end().to_string()
-}
-
-fn escape(text: &str) -> String {
-    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
-}
-
-/// A 1-2-5 tick step giving about six ticks over `range`.
-fn tick_step(range: f64) -> f64 {
-    let raw = (range / 6.0).max(1e-9);
-    let mag = 10f64.powf(raw.log10().floor());
-    [1.0, 2.0, 5.0, 10.0].into_iter().map(|m| m * mag).find(|s| *s >= raw).unwrap_or(10.0 * mag)
-}
-
-/// Frame, ticks and axis labels around the data box `f`; `u` is the size unit.
-fn axes(s: &mut String, f: &Frame, u: f64) {
-    let [w, h] = f.size();
-    let fs = 2.2 * u;
-    let _ = writeln!(
-        s,
-        r##"<rect x="{:.4}" y="{:.4}" width="{w:.4}" height="{h:.4}" fill="none" stroke="#444" stroke-width="{:.4}"/>"##,
-        f.min[0],
-        -f.max[1],
-        0.15 * u
-    );
-    let step = tick_step(w.max(h));
-    let mut x = (f.min[0] / step).ceil() * step;
-    while x <= f.max[0] + 1e-9 * step {
-        let y = -f.min[1];
-        let _ = writeln!(
-            s,
-            r##"<line x1="{x:.4}" y1="{y:.4}" x2="{x:.4}" y2="{:.4}" stroke="#444" stroke-width="{:.4}"/>"##,
-            y + u,
-            0.15 * u
-        );
-        let _ = writeln!(
-            s,
-            r##"<text x="{x:.4}" y="{:.4}" font-size="{fs:.4}" text-anchor="middle">{}</text>"##,
-            y + 1.2 * u + fs,
-            fmt_tick(x)
-        );
-        x += step;
-    }
-    let mut y = (f.min[1] / step).ceil() * step;
-    while y <= f.max[1] + 1e-9 * step {
-        let x = f.min[0];
-        let _ = writeln!(
-            s,
-            r##"<line x1="{x:.4}" y1="{:.4}" x2="{:.4}" y2="{:.4}" stroke="#444" stroke-width="{:.4}"/>"##,
-            -y,
-            x - u,
-            -y,
-            0.15 * u
-        );
-        let _ = writeln!(
-            s,
-            r##"<text x="{:.4}" y="{:.4}" font-size="{fs:.4}" text-anchor="end">{}</text>"##,
-            x - 1.5 * u,
-            -y + 0.35 * fs,
-            fmt_tick(y)
-        );
-        y += step;
-    }
-    let (cx, cy) = (f.min[0] + w / 2.0, -(f.min[1] + h / 2.0));
-    let _ = writeln!(
-        s,
-        r##"<text x="{cx:.4}" y="{:.4}" font-size="{:.4}" text-anchor="middle">x [mm]</text>"##,
-        -f.min[1] + 2.5 * u + 2.0 * fs,
-        1.2 * fs
-    );
-    let lx = f.min[0] - 9.0 * u;
-    let _ = writeln!(
-        s,
-        r##"<text x="{lx:.4}" y="{cy:.4}" font-size="{:.4}" text-anchor="middle" transform="rotate(-90 {lx:.4} {cy:.4})">y [mm]</text>"##,
-        1.2 * fs
-    );
-}
-
-fn fmt_tick(v: f64) -> String {
-    let v = if v.abs() < 1e-9 { 0.0 } else { v };
-    format!("{}", (v * 1e6).round() / 1e6)
-}
-
-/// One legend line below the axes: launch, flight, resting point, fill.
-fn legend(s: &mut String, f: &Frame, u: f64) {
-    let fs = 2.2 * u;
-    let y = -f.min[1] + 5.0 * u + 3.0 * fs;
-    let mut x = f.min[0];
-    let label = |s: &mut String, x: &mut f64, text: &str| {
-        let _ = writeln!(
-            s,
-            r##"<text x="{:.4}" y="{:.4}" font-size="{fs:.4}">{text}</text>"##,
-            *x + 1.5 * u,
-            y + 0.35 * fs
-        );
-        *x += 1.5 * u + 0.52 * fs * text.len() as f64 + 3.0 * u;
-    };
-    let _ = writeln!(s, r##"<circle cx="{x:.4}" cy="{y:.4}" r="{:.4}" fill="{}"/>"##, 0.5 * u, colour(0));
-    label(s, &mut x, "launch point");
-    let _ = writeln!(
-        s,
-        r##"<line x1="{:.4}" y1="{y:.4}" x2="{:.4}" y2="{y:.4}" stroke="{}" stroke-width="{:.4}"/>"##,
-        x - u,
-        x + u,
-        colour(1),
-        0.3 * u
-    );
-    label(s, &mut x, "flight (colour = particle)");
-    let _ = writeln!(
-        s,
-        r##"<circle cx="{x:.4}" cy="{y:.4}" r="{:.4}" fill="#222" stroke="{}" stroke-width="{:.4}"/>"##,
-        0.7 * u,
-        colour(2),
-        0.2 * u
-    );
-    label(s, &mut x, "resting");
-    let _ = writeln!(
-        s,
-        r##"<rect x="{:.4}" y="{:.4}" width="{:.4}" height="{:.4}" fill="{FILL_COLOUR}"/>"##,
-        x - u,
-        y - 0.6 * u,
-        2.0 * u,
-        1.2 * u
-    );
-    label(s, &mut x, "fill");
-}
-
-/// The drawing itself: fill, profile, flights, launch and resting points.
-fn content(s: &mut String, det: &Detailed, profile_pts: &[V2], flights: &[(u32, Vec<V2>)], u: f64) {
-    let poly = svg_points(&det.prepared.fill.polygon);
-    let _ = writeln!(s, r##"<polygon points="{poly}" fill="{FILL_COLOUR}" stroke="none"/>"##);
-    let _ = writeln!(
-        s,
-        r##"<polyline points="{}" fill="none" stroke="#000" stroke-width="{:.4}"/>"##,
-        svg_points(profile_pts),
-        0.25 * u
-    );
-    for (p, pts) in flights {
-        let _ = writeln!(
-            s,
-            r##"<polyline points="{}" fill="none" stroke="{}" stroke-width="{:.4}" stroke-opacity="0.8"/>"##,
-            svg_points(pts),
-            colour(*p),
-            0.15 * u
-        );
-    }
-    for r in det.flights.iter().filter(|r| r.bounce == 0) {
-        let p = mm(r.from);
-        let _ = writeln!(
-            s,
-            r##"<circle cx="{:.4}" cy="{:.4}" r="{:.4}" fill="{}"/>"##,
-            p[0],
-            -p[1],
-            0.35 * u,
-            colour(r.particle)
-        );
-    }
-    for (i, end) in det.particles.iter().enumerate().filter(|(_, e)| e.state == ParticleState::Resting) {
-        let p = mm(end.end);
-        let _ = writeln!(
-            s,
-            r##"<circle cx="{:.4}" cy="{:.4}" r="{:.4}" fill="#222" stroke="{}" stroke-width="{:.4}"/>"##,
-            p[0],
-            -p[1],
-            0.5 * u,
-            colour(i as u32),
-            0.15 * u
-        );
+    fn legend_px(&self) -> u32 {
+        plot::legend_height(WIDTH_PX, &LEGEND)
     }
 }
 
-/// The whole SVG document as text.
-pub fn render_svg(det: &Detailed, g: f64, k_drag: f64, title: &str) -> String {
-    let profile = &det.prepared.profile;
-    let profile_pts = profile_points(profile, teeth_to_draw(profile, det, g, k_drag));
-    let flights: Vec<(u32, Vec<V2>)> =
-        det.flights.iter().map(|r| (r.particle, flight_points(r, g, k_drag))).filter(|(_, v)| !v.is_empty()).collect();
-    let all = profile_pts.iter().chain(&det.prepared.fill.polygon).chain(flights.iter().flat_map(|(_, v)| v));
-    let f = Frame::of(all);
-    let [w, h] = f.size();
-    let u = w.max(h).max(1e-6) / 100.0; // size unit for strokes and text
-    let (left, right, top, bottom) = (12.0 * u, 3.0 * u, 8.0 * u, 16.0 * u);
-    let (vx, vy, vw, vh) = (f.min[0] - left, -f.max[1] - top, w + left + right, h + top + bottom);
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r##"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH_PX:.0}" height="{:.0}" viewBox="{vx:.4} {vy:.4} {vw:.4} {vh:.4}" font-family="sans-serif">"##,
-        (WIDTH_PX * vh / vw).ceil()
-    );
-    let _ = writeln!(s, r##"<rect x="{vx:.4}" y="{vy:.4}" width="{vw:.4}" height="{vh:.4}" fill="#fff"/>"##);
-    let _ = writeln!(
-        s,
-        r##"<text x="{:.4}" y="{:.4}" font-size="{:.4}" text-anchor="middle">{}</text>"##,
-        f.min[0] + w / 2.0,
-        vy + 5.0 * u,
-        3.0 * u,
-        escape(title)
-    );
-    content(&mut s, det, &profile_pts, &flights, u);
-    axes(&mut s, &f, u);
-    legend(&mut s, &f, u);
-    s.push_str("</svg>\n");
-    s
+impl Figure for FlightPlot<'_> {
+    fn size(&self) -> (u32, u32) {
+        let title = (plot::TITLE_SIZE * 1.6) as u32;
+        (WIDTH_PX, title + 2 * MARGIN_PX + self.box_px.1 + X_LABELS_PX + self.legend_px())
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
+        let area = plot::title(root, &self.title)?;
+        let (_, h) = area.dim_in_pixel();
+        let (chart_area, key) = area.split_vertically(h - self.legend_px());
+        let mut chart = ChartBuilder::on(&chart_area)
+            .margin(MARGIN_PX)
+            .x_label_area_size(X_LABELS_PX)
+            .y_label_area_size(Y_LABELS_PX)
+            .build_cartesian_2d(self.x.clone(), self.y.clone())
+            .drawn()?;
+        chart
+            .configure_mesh()
+            .x_desc("x [mm]")
+            .y_desc("y [mm]")
+            .x_label_formatter(&plot::tick)
+            .y_label_formatter(&plot::tick)
+            .label_style(plot::text_style(plot::SMALL_SIZE))
+            .axis_desc_style(plot::text_style(plot::LABEL_SIZE))
+            .bold_line_style(plot::GRID)
+            .max_light_lines(1)
+            .draw()
+            .drawn()?;
+        let fill: Vec<(f64, f64)> = self.det.prepared.fill.polygon.iter().map(|&p| mm(p)).collect();
+        chart.draw_series(std::iter::once(Polygon::new(fill, FILL_COLOUR.filled()))).drawn()?;
+        chart.draw_series(std::iter::once(PathElement::new(self.profile.clone(), BLACK.stroke_width(2)))).drawn()?;
+        chart
+            .draw_series(
+                self.flights.iter().map(|(p, pts)| PathElement::new(pts.clone(), colour(*p).mix(0.8).stroke_width(1))),
+            )
+            .drawn()?;
+        let launches = self.det.flights.iter().filter(|r| r.bounce == 0);
+        chart.draw_series(launches.map(|r| Circle::new(mm(r.from), 3, colour(r.particle).filled()))).drawn()?;
+        let resting = self
+            .det
+            .particles
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| e.state == ParticleState::Resting)
+            .collect::<Vec<_>>();
+        chart.draw_series(resting.iter().map(|(_, e)| Circle::new(mm(e.end), 5, RESTING_COLOUR.filled()))).drawn()?;
+        chart
+            .draw_series(resting.iter().map(|(i, e)| Circle::new(mm(e.end), 5, colour(*i as u32).stroke_width(2))))
+            .drawn()?;
+        plot::legend(&key, &LEGEND)
+    }
 }
 
-/// Write the flight plot of one design as a standalone SVG, atomically.
-pub fn write_svg(path: &Path, det: &Detailed, g: f64, k_drag: f64, title: &str) -> Result<()> {
-    let svg = render_svg(det, g, k_drag, title);
-    write_atomic(path, svg.as_bytes()).with_context(|| format!("writing plot to {}", path.display()))
+/// Write the flight plot of one design, atomically; SVG or PNG by `path`'s extension (`flag`
+/// names where the path came from, for the error on any other).
+pub fn write_plot(path: &Path, flag: &str, det: &Detailed, g: f64, k_drag: f64, title: &str) -> Result<()> {
+    plot::write_figure(path, flag, &FlightPlot::new(det, g, k_drag, title))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::io::trajectories::tests::{small_lunar, temp_dir};
-
-    /// Every opened tag is closed in order (self-closing tags count as closed).
-    fn tags_balanced(s: &str) -> bool {
-        let mut stack = Vec::new();
-        let mut rest = s;
-        while let Some(i) = rest.find('<') {
-            let Some(j) = rest[i..].find('>') else { return false };
-            let tag = &rest[i + 1..i + j];
-            rest = &rest[i + j + 1..];
-            let name = |t: &str| t.split(|c: char| c.is_whitespace() || c == '/').next().unwrap_or("").to_string();
-            if let Some(closing) = tag.strip_prefix('/') {
-                if stack.pop() != Some(name(closing)) {
-                    return false;
-                }
-            } else if !tag.ends_with('/') {
-                stack.push(name(tag));
-            }
-        }
-        stack.is_empty()
-    }
+    use crate::plot::tests::{assert_has_ticks, assert_real_png, svg_texts};
 
     #[test]
-    fn svg_of_small_lunar_case_is_well_formed() {
+    fn svg_of_small_lunar_case_has_axes_title_and_legend() {
         let (s, det) = small_lunar();
         let dir = temp_dir("plot");
         let path = dir.join("flights.svg");
-        write_svg(&path, &det, s.environment.g, s.environment.k_drag.unwrap_or(0.0), "Solution C <lunar> & co")
-            .unwrap();
+        let title = "Solution C <lunar> & co";
+        write_plot(&path, "--plot", &det, s.environment.g, s.environment.k_drag.unwrap_or(0.0), title).unwrap();
         let text = std::fs::read_to_string(&path).unwrap();
-        assert!(text.starts_with("<svg"));
-        assert!(text.contains("<polyline"));
-        assert!(text.contains("x [mm]") && text.contains("y [mm]"));
-        assert_eq!(text.matches("<svg").count(), 1);
-        assert_eq!(text.matches("</svg>").count(), 1);
-        assert!(tags_balanced(&text));
+        assert!(text.starts_with("<svg") && text.trim_end().ends_with("</svg>"));
+        assert!(text.contains("Solution C &lt;lunar&gt; &amp; co"), "the title is escaped");
+        let texts = svg_texts(&text);
+        for want in [title, "x [mm]", "y [mm]", "launch point", "resting", "fill"] {
+            assert!(texts.iter().any(|t| t == want), "{want} missing: {texts:?}");
+        }
+        assert_has_ticks(&text, 6);
         assert!(!text.contains("NaN") && !text.contains("inf"));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
-    fn tag_checker_rejects_unclosed_tags() {
-        assert!(tags_balanced("<svg><g/><text>a</text></svg>"));
-        assert!(!tags_balanced("<svg><text>a</svg>"));
+    fn png_of_small_lunar_case_is_a_real_image() {
+        let (s, det) = small_lunar();
+        let dir = temp_dir("plot-png");
+        let path = dir.join("flights.png");
+        write_plot(&path, "--plot", &det, s.environment.g, s.environment.k_drag.unwrap_or(0.0), "t").unwrap();
+        let fig = FlightPlot::new(&det, s.environment.g, s.environment.k_drag.unwrap_or(0.0), "t");
+        assert_real_png(&std::fs::read(&path).unwrap(), fig.size());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn other_extension_is_refused_naming_the_flag() {
+        let (s, det) = small_lunar();
+        let e = write_plot(Path::new("/tmp/never.pdf"), "--plot", &det, s.environment.g, 0.0, "t").unwrap_err();
+        assert!(e.to_string().contains("--plot") && e.to_string().contains(".svg or .png"), "{e}");
     }
 }

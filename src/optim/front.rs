@@ -1,6 +1,6 @@
 //! The end of an optimisation: the final front re-evaluated with more particles over
 //! independent particle streams (Monte-Carlo standard errors), pareto.csv like Table C.6,
-//! the picks A/B/C of 5.5 printed like Table 5.2, and a Pareto plot.
+//! the picks A/B/C of 5.5 printed like Table 5.2, and a Pareto plot (through `crate::plot`).
 
 use std::io::Write;
 use std::path::Path;
@@ -9,12 +9,17 @@ use anyhow::Context as _;
 
 use super::nsga2::{Nsga2, State};
 use super::runner::Manifest;
+use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use serde::{Deserialize, Serialize};
+
 use super::sawtooth::{design_of, slope_scenarios, violation};
 use crate::engine::BatchEvaluator;
 use crate::io::atomic::write_atomic;
 use crate::model::requirements::{Assessment, Limit};
 use crate::model::{Design, Scenario};
-use serde::{Deserialize, Serialize};
+use crate::plot::{self, Drawn as _, Figure, Mark};
 
 /// Target mass flow of solution A (5.5): 48 kg/h, in kg/s.
 pub const TARGET_MASS_FLOW_KG_S: f64 = 48.0 / 3600.0;
@@ -304,63 +309,165 @@ fn worst_slope(at_slopes: Vec<(FrontPoint, Option<Assessment>)>) -> FrontPoint {
 
 pub fn write_outputs(dir: &Path, front: &[FrontPoint], evaluations_csv: &Path) -> anyhow::Result<()> {
     write_atomic(&dir.join("pareto.csv"), &pareto_csv(front)?)?;
-    let text =
-        std::fs::read_to_string(evaluations_csv).with_context(|| format!("reading {}", evaluations_csv.display()))?;
-    let mut cloud = Vec::new();
-    for line in text.lines().skip(1) {
-        let f: Vec<&str> = line.split(',').collect();
-        if let (Some(a), Some(b)) =
-            (f.get(9).and_then(|v| v.parse::<f64>().ok()), f.get(10).and_then(|v| v.parse::<f64>().ok()))
-        {
-            if a > 0.0 && a < 2.0 && b < 1e5 {
-                cloud.push([a, b]);
-            }
-        }
-    }
-    let pts: Vec<[f64; 2]> = front.iter().map(|p| [p.f_stroke_hz, p.w_spec_j_kg]).collect();
-    write_atomic(&dir.join("pareto.svg"), pareto_svg(&cloud, &pts).as_bytes())
+    plot::write_figure(
+        &dir.join("pareto.svg"),
+        "pareto.svg",
+        &ParetoPlot::new(&evaluation_cloud(evaluations_csv)?, front),
+    )
 }
 
-/// Objective space like Figure 5.2: every evaluation grey, the re-evaluated front red.
-fn pareto_svg(cloud: &[[f64; 2]], front: &[[f64; 2]]) -> String {
-    let all: Vec<&[f64; 2]> = cloud.iter().chain(front).collect();
-    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
-    for p in &all {
-        x0 = x0.min(p[0]);
-        x1 = x1.max(p[0]);
-        y0 = y0.min(p[1]);
-        y1 = y1.max(p[1]);
+/// Every simulated design's (f_stroke, W_spec) from evaluations.csv, read by column name;
+/// designs without mass flow (or not simulated) have empty cells there and are left out.
+fn evaluation_cloud(evaluations_csv: &Path) -> anyhow::Result<Vec<[f64; 2]>> {
+    let mut r =
+        csv::Reader::from_path(evaluations_csv).with_context(|| format!("reading {}", evaluations_csv.display()))?;
+    let headers = r.headers()?.clone();
+    let column = |name: &str| {
+        headers
+            .iter()
+            .position(|h| h == name)
+            .with_context(|| format!("{}: no column {name}", evaluations_csv.display()))
+    };
+    let (f, w) = (column("f_stroke_hz")?, column("w_spec_j_kg")?);
+    let mut cloud = Vec::new();
+    for row in r.records() {
+        let row = row?;
+        if let (Some(Ok(f)), Some(Ok(w))) = (row.get(f).map(str::parse::<f64>), row.get(w).map(str::parse::<f64>)) {
+            cloud.push([f, w]);
+        }
     }
-    if !x0.is_finite() {
-        (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
+    Ok(cloud)
+}
+
+/// Objective space like Figure 5.2: every evaluation grey, the re-evaluated front red with its
+/// Monte-Carlo standard errors, the picks A/B/C ringed and labelled. The axes are zoomed onto
+/// the front (outlying evaluations would squash it flat); the caption counts what lies outside.
+/// W_spec gets a log axis when the front spans a decade or more.
+struct ParetoPlot<'a> {
+    cloud: &'a [[f64; 2]],
+    front: &'a [FrontPoint],
+    x: std::ops::Range<f64>,
+    y: std::ops::Range<f64>,
+    log_y: bool,
+}
+
+const PARETO_SIZE: (u32, u32) = (900, 640);
+const CLOUD_COLOUR: RGBColor = RGBColor(0xb0, 0xb0, 0xb0);
+const FRONT_COLOUR: RGBColor = RGBColor(0xd6, 0x27, 0x28);
+const PICK_COLOUR: RGBColor = RGBColor(0x10, 0x10, 0x10);
+
+impl<'a> ParetoPlot<'a> {
+    fn new(cloud: &'a [[f64; 2]], front: &'a [FrontPoint]) -> ParetoPlot<'a> {
+        // zoom onto the front; with no front, onto the cloud
+        let focus: Vec<[f64; 2]> = if front.is_empty() {
+            cloud.to_vec()
+        } else {
+            front.iter().map(|p| [p.f_stroke_hz, p.w_spec_j_kg]).collect()
+        };
+        let (x0, x1) = plot::extent(focus.iter().map(|p| p[0])).unwrap_or((0.0, 1.0));
+        let (y0, y1) = plot::extent(focus.iter().map(|p| p[1])).unwrap_or((1.0, 10.0));
+        let log_y = plot::spans_decades(y0, y1);
+        let y = if log_y { plot::padded_log(y0, y1, 0.12) } else { plot::padded(y0, y1, 0.15) };
+        ParetoPlot { cloud, front, x: plot::padded(x0, x1, 0.15), y, log_y }
     }
-    let (w, h, m) = (640.0, 440.0, 60.0);
-    let sx = |x: f64| m + (x - x0) / (x1 - x0).max(1e-12) * (w - 2.0 * m);
-    let sy = |y: f64| h - m - (y - y0) / (y1 - y0).max(1e-12) * (h - 2.0 * m);
-    let mut s = format!(
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="12">"#
-    );
-    s.push_str(&format!(r#"<rect x="0" y="0" width="{w}" height="{h}" fill="white"/>"#));
-    s.push_str(&format!(
-        r#"<rect x="{m}" y="{m}" width="{}" height="{}" fill="none" stroke="black"/>"#,
-        w - 2.0 * m,
-        h - 2.0 * m
-    ));
-    for p in cloud {
-        s.push_str(&format!(r##"<circle cx="{:.2}" cy="{:.2}" r="1.5" fill="#bbb"/>"##, sx(p[0]), sy(p[1])));
+
+    fn outside(&self) -> usize {
+        self.cloud.iter().filter(|p| !self.x.contains(&p[0]) || !self.y.contains(&p[1])).count()
     }
-    for p in front {
-        s.push_str(&format!(r##"<circle cx="{:.2}" cy="{:.2}" r="3" fill="#d62728"/>"##, sx(p[0]), sy(p[1])));
+
+    fn caption(&self) -> String {
+        format!(
+            "grey: {} feasible evaluations, {} of them outside these axes (zoomed onto the front); red: the final front ({} designs) re-evaluated, bars ±1 standard error",
+            self.cloud.len(),
+            self.outside(),
+            self.front.len()
+        )
     }
-    s.push_str(&format!(
-        r#"<text x="{}" y="{}" text-anchor="middle">f_stroke [Hz]  ({x0:.4} .. {x1:.4})</text>"#,
-        w / 2.0,
-        h - 20.0
-    ));
-    s.push_str(&format!(r#"<text x="15" y="{}" transform="rotate(-90 15 {})" text-anchor="middle">W_spec [J/kg]  ({y0:.0} .. {y1:.0})</text>"#, h / 2.0, h / 2.0));
-    s.push_str(&format!(r#"<text x="{m}" y="30">grey: all evaluations; red: final front, re-evaluated</text>"#));
-    s.push_str("</svg>\n");
-    s
+
+    fn legend(&self) -> [(Mark, &'static str); 3] {
+        [
+            (Mark::Point(CLOUD_COLOUR), "all evaluations"),
+            (Mark::Point(FRONT_COLOUR), "final front (re-evaluated)"),
+            (Mark::Ring(PICK_COLOUR), "picks: A closest to 48 kg/h, B highest mass flow, C lowest W_spec"),
+        ]
+    }
+
+    fn draw_on<DB: DrawingBackend, Y>(&self, area: &DrawingArea<DB, Shift>, y: Y) -> anyhow::Result<()>
+    where
+        Y: AsRangedCoord<Value = f64>,
+        Y::CoordDescType: ValueFormatter<f64>,
+    {
+        let mut chart = ChartBuilder::on(area)
+            .margin(15)
+            .margin_right(30)
+            .x_label_area_size(55)
+            .y_label_area_size(80)
+            .build_cartesian_2d(self.x.clone(), y)
+            .drawn()?;
+        chart
+            .configure_mesh()
+            .x_desc("stroke frequency f_stroke [Hz]")
+            .y_desc(if self.log_y { "specific work W_spec [J/kg] (log)" } else { "specific work W_spec [J/kg]" })
+            .x_label_formatter(&plot::tick)
+            .y_label_formatter(&plot::tick)
+            .label_style(plot::text_style(plot::SMALL_SIZE))
+            .axis_desc_style(plot::text_style(plot::LABEL_SIZE))
+            .bold_line_style(plot::GRID)
+            .max_light_lines(1)
+            .draw()
+            .drawn()?;
+        let inside = |p: &(f64, f64)| self.x.contains(&p.0) && self.y.contains(&p.1);
+        let cloud = self.cloud.iter().map(|p| (p[0], p[1])).filter(inside);
+        chart.draw_series(cloud.map(|p| Circle::new(p, 2, CLOUD_COLOUR.filled()))).drawn()?;
+        let (ylo, yhi) = (self.y.start, self.y.end);
+        let bars = self.front.iter().filter(|p| p.w_spec_se.is_finite() && p.w_spec_se > 0.0).map(|p| {
+            let (a, b) = ((p.w_spec_j_kg - p.w_spec_se).max(ylo), (p.w_spec_j_kg + p.w_spec_se).min(yhi));
+            PathElement::new(vec![(p.f_stroke_hz, a), (p.f_stroke_hz, b)], FRONT_COLOUR.stroke_width(1))
+        });
+        chart.draw_series(bars).drawn()?;
+        let front = self.front.iter().map(|p| (p.f_stroke_hz, p.w_spec_j_kg));
+        chart.draw_series(front.map(|p| Circle::new(p, 4, FRONT_COLOUR.filled()))).drawn()?;
+        // one ring per picked design; a design picked twice gets both names ("B, C")
+        let mut marked: Vec<(&FrontPoint, String)> = Vec::new();
+        for (name, p) in picks(self.front) {
+            match marked.iter_mut().find(|(q, _)| std::ptr::eq(*q, p)) {
+                Some((_, names)) => *names = format!("{names}, {name}"),
+                None => marked.push((p, name.to_string())),
+            }
+        }
+        let label = plot::text_style(plot::LABEL_SIZE);
+        chart
+            .draw_series(marked.iter().map(|(p, names)| {
+                EmptyElement::at((p.f_stroke_hz, p.w_spec_j_kg))
+                    + Circle::new((0, 0), 9, PICK_COLOUR.stroke_width(2))
+                    + Text::new(names.clone(), (10, -22), label.clone())
+            }))
+            .drawn()?;
+        Ok(())
+    }
+}
+
+impl Figure for ParetoPlot<'_> {
+    fn size(&self) -> (u32, u32) {
+        PARETO_SIZE
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
+        let area = plot::title(root, "Objective space: stroke frequency vs specific work")?;
+        let (w, h) = area.dim_in_pixel();
+        let legend = self.legend();
+        let key_h = plot::legend_height(w, &legend);
+        let caption_h = plot::wrapped_height(w, &self.caption(), plot::SMALL_SIZE);
+        let (chart_area, rest) = area.split_vertically(h - key_h - caption_h);
+        let (key, caption) = rest.split_vertically(key_h);
+        if self.log_y {
+            self.draw_on(&chart_area, self.y.clone().log_scale())?;
+        } else {
+            self.draw_on(&chart_area, self.y.clone())?;
+        }
+        plot::legend(&key, &legend)?;
+        plot::draw_wrapped(&caption, &self.caption(), plot::SMALL_SIZE)
+    }
 }
 
 /// Picks A (closest to 48 kg/h), B (highest mass flow), C (lowest W_spec) as in Table 5.2;
@@ -561,6 +668,7 @@ pub fn closest_to_mass_flow(front: &[FrontPoint], target: f64) -> Option<&FrontP
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::plot::tests::{assert_has_ticks, assert_real_png, svg_texts};
 
     fn point(m_dot_kg_h: f64, w_spec: f64, compliant: Option<bool>) -> FrontPoint {
         FrontPoint {
@@ -627,5 +735,64 @@ mod tests {
         let unjudged = vec![point(131.0, 300.0, None), point(95.0, 200.0, None)];
         let notes = pick_notes(&unjudged);
         assert!(notes[0].contains("no front design delivers 6-48 kg/h") && notes[0].contains("95.0"), "{notes:?}");
+    }
+
+    fn plot_point(f: f64, w: f64, m_dot: f64) -> FrontPoint {
+        FrontPoint {
+            design: Design::from_cli_units([47.0, 46.0, 32.0, 43.0, 94.0, 11.0, 0.84, 32.0]),
+            f_stroke_hz: f,
+            w_spec_j_kg: w,
+            w_spec_se: 0.05 * w,
+            m_dot_kg_s: m_dot,
+            m_dot_se: 0.0,
+            stroke_m: 0.01,
+            n_wire: 1,
+            d_avg_m: 1e-3,
+            d_avg_se: 0.0,
+            p_avg_w: 1.0,
+            wire_length_m: 0.2,
+            alpha_deg: 35.0,
+            compliance: None,
+        }
+    }
+
+    /// A front spanning two decades of W_spec and a cloud with far outliers.
+    fn example() -> (Vec<[f64; 2]>, Vec<FrontPoint>) {
+        // B: highest mass flow, A: closest to 48 kg/h (0.0133 kg/s), C: lowest W_spec
+        let front = vec![plot_point(0.2, 2000.0, 0.03), plot_point(0.1, 150.0, 0.013), plot_point(0.05, 20.0, 0.005)];
+        let mut cloud: Vec<[f64; 2]> = (0..50).map(|i| [0.05 + 0.003 * i as f64, 30.0 + 50.0 * i as f64]).collect();
+        cloud.push([1.9, 90_000.0]);
+        (cloud, front)
+    }
+
+    #[test]
+    fn pareto_svg_has_ticks_units_picks_and_counts_outliers() {
+        let (cloud, front) = example();
+        let fig = ParetoPlot::new(&cloud, &front);
+        assert!(fig.log_y, "a front over two decades gets a log W_spec axis");
+        assert!(fig.y.end < 1e4 && fig.x.end < 1.0, "zoomed onto the front: {:?} {:?}", fig.x, fig.y);
+        assert!(fig.caption().contains("outside these axes") && fig.outside() >= 1);
+        let svg = plot::render_svg(&fig).unwrap();
+        let texts = svg_texts(&svg);
+        for want in ["A", "B", "C", "stroke frequency f_stroke [Hz]", "specific work W_spec [J/kg] (log)"] {
+            assert!(texts.iter().any(|t| t == want), "{want} missing: {texts:?}");
+        }
+        assert!(texts.iter().any(|t| t.contains(&format!("{} of them outside", fig.outside()))), "{texts:?}");
+        assert_has_ticks(&svg, 5);
+    }
+
+    #[test]
+    fn a_design_picked_twice_carries_both_names() {
+        // one design with the highest flow and the lowest W_spec: B and C
+        let front = vec![plot_point(0.2, 20.0, 0.05), plot_point(0.1, 150.0, 0.013)];
+        let svg = plot::render_svg(&ParetoPlot::new(&[], &front)).unwrap();
+        assert!(svg_texts(&svg).iter().any(|t| t == "B, C"), "{:?}", svg_texts(&svg));
+    }
+
+    #[test]
+    fn pareto_png_is_a_real_image() {
+        let (cloud, front) = example();
+        let fig = ParetoPlot::new(&cloud, &front);
+        assert_real_png(&plot::render_png(&fig).unwrap(), PARETO_SIZE);
     }
 }
