@@ -377,7 +377,7 @@ impl<'a> ParetoPlot<'a> {
 
     fn caption(&self) -> String {
         format!(
-            "grey: {} feasible evaluations, {} of them outside these axes (zoomed onto the front); red: the final front ({} designs) re-evaluated, bars ±1 standard error",
+            "grey: {} simulated evaluations with mass flow, {} of them outside these axes (zoomed onto the front); red: the final front ({} designs) re-evaluated, bars ±1 standard error",
             self.cloud.len(),
             self.outside(),
             self.front.len()
@@ -388,7 +388,14 @@ impl<'a> ParetoPlot<'a> {
         [
             (Mark::Point(CLOUD_COLOUR), "all evaluations"),
             (Mark::Point(FRONT_COLOUR), "final front (re-evaluated)"),
-            (Mark::Ring(PICK_COLOUR), "picks: A closest to 48 kg/h, B highest mass flow, C lowest W_spec"),
+            (
+                Mark::Ring(PICK_COLOUR),
+                if self.front.iter().any(|p| p.compliance.is_some()) {
+                    "picks among compliant designs: A most feed at its operating point, B highest mass flow, C lowest W_spec"
+                } else {
+                    "picks: A closest to 48 kg/h, B highest mass flow, C lowest W_spec"
+                },
+            ),
         ]
     }
 
