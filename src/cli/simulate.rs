@@ -11,7 +11,7 @@ use serde_json::json;
 use super::args::{EngineArgs, RequirementArgs, ScenarioArgs};
 use crate::engine::{evaluate_detailed, make_engine_for, Detailed, EngineKind};
 use crate::model::outcome::centre_and_dispersion;
-use crate::model::requirements::{worst_over_slopes, Assessment, Requirements, MODEL_MIN_SLOPE_DEG, NOT_ASSESSED};
+use crate::model::requirements::{worst_over_slopes, Assessment, Requirements, NOT_ASSESSED};
 use crate::model::{Design, PhysicsMode, Scenario};
 
 #[derive(Debug, Args)]
@@ -219,16 +219,11 @@ fn status(met: bool) -> &'static str {
 fn slope_coverage(r: &Requirements, per_slope: &[(f64, Assessment)]) -> (bool, String) {
     let lo = per_slope.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
     let hi = per_slope.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
-    let covered = lo <= r.slope_min_deg.max(MODEL_MIN_SLOPE_DEG) + 1e-9 && hi >= r.slope_max_deg - 1e-9;
+    let covered = lo <= r.slope_min_deg + 1e-9 && hi >= r.slope_max_deg - 1e-9;
     let what = if per_slope.len() == 1 {
         format!("evaluated at {lo} deg only (give --alpha {}..{} to judge the range)", r.slope_min_deg, r.slope_max_deg)
     } else {
         format!("evaluated at {} slopes over {lo}..{hi} deg", per_slope.len())
-    };
-    let what = if covered && lo > r.slope_min_deg + 1e-9 {
-        format!("{what}; below {MODEL_MIN_SLOPE_DEG} deg the model judges no design (5.3.1 spill check)")
-    } else {
-        what
     };
     (covered, what)
 }

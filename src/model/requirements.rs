@@ -44,13 +44,6 @@ fn preset_name() -> String {
     PRESET_TABLE_2_2.to_string()
 }
 
-/// The lowest slope the model can judge a design at, degrees. On a level conveyor the fill
-/// surface under the upstroke's acceleration always rises above the conveyor, which the
-/// simulation cannot handle (5.3.1's spill check rejects every design), so the thesis's own
-/// angle study starts at 1° (5.4.3, Figure 5.5). Req. 1.6.3's 0° end counts as covered by
-/// an evaluation at this slope, and every report that relies on it says so.
-pub const MODEL_MIN_SLOPE_DEG: f64 = 1.0;
-
 /// Relative excess over a requirement that still counts as met: rounding only (a
 /// power-limited operating point meets its limit only to the last bit).
 pub const REQUIREMENT_TOLERANCE: f64 = 1e-9;
