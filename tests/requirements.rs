@@ -121,6 +121,11 @@ fn requirements_come_from_files_and_bad_ones_are_named() {
     assert_eq!(code, 0);
     assert!(out.contains("feed rate >= 10 kg/h"), "{out}");
 
+    // a steeper conveyor than the thesis's is simulated, with a note rather than silently
+    let (code, _, err) = sawtooth(&["simulate", "--design", SOLUTION_C, "--particles", "100", "--alpha", "50"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("beyond the thesis's slope range 0..40 deg"), "{err}");
+
     let bad = [
         (vec!["--requirements", "table-9"], "neither a preset"),
         (vec!["--alpha-points", "3"], "--alpha-points needs a slope range"),

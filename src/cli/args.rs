@@ -99,6 +99,12 @@ impl ScenarioArgs {
                 );
             }
             s.environment.alpha_deg = a;
+            if a > THESIS_MAX_SLOPE_DEG {
+                // valid for the model (up to 80 deg), but outside what the thesis designed for
+                eprintln!(
+                    "note: --alpha {a} lies beyond the thesis's slope range 0..{THESIS_MAX_SLOPE_DEG} deg (Table 2.2 req. 1.6.3; its angle study, 5.4.3, stops at 40 deg)"
+                );
+            }
         }
         if let Some(v) = self.k_elastic {
             s.collision.k_elastic = v;
@@ -146,6 +152,9 @@ pub struct EngineArgs {
     #[arg(long, value_enum, default_value = "cpu")]
     pub engine: EngineKind,
 }
+
+/// The steepest conveyor the thesis designs for (Table 2.2 req. 1.6.3), degrees.
+pub const THESIS_MAX_SLOPE_DEG: f64 = 40.0;
 
 /// Most slopes `--alpha-points` may ask for: each is one more simulation per design.
 pub const MAX_ALPHA_POINTS: u32 = 41;
