@@ -14,6 +14,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod common;
+use common::{assert_figure, svg_texts};
+
 use serde_json::Value;
 
 /// The default solver budget with fewer particles than the data call for (12 000 by
@@ -366,21 +369,4 @@ fn bad_input_is_named_with_exit_2() {
         assert!(!err.contains("panicked"), "{err}");
     }
     std::fs::remove_dir_all(&out).ok();
-}
-
-/// The `<text>` contents of an SVG document (trimmed).
-fn svg_texts(svg: &str) -> Vec<String> {
-    svg.split("<text")
-        .skip(1)
-        .filter_map(|t| Some(t[t.find('>')? + 1..t.find("</text>")?].trim().to_string()))
-        .collect()
-}
-
-/// The figure has real axes: at least `n` numeric tick labels, and every `label`.
-fn assert_figure(svg: &str, n: usize, labels: &[&str]) {
-    let texts = svg_texts(svg);
-    assert!(texts.iter().filter(|t| t.parse::<f64>().is_ok()).count() >= n, "too few tick labels: {texts:?}");
-    for l in labels {
-        assert!(texts.iter().any(|t| t == l), "`{l}` missing: {texts:?}");
-    }
 }

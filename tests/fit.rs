@@ -4,6 +4,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod common;
+use common::assert_figure;
+
 use sawtooth::engine::{make_engine, EngineKind};
 use sawtooth::fit::objective::simulated_bins;
 use sawtooth::io::config::ConfigFile;
@@ -363,21 +366,4 @@ fn bad_input_exits_2_naming_the_field() {
         &["k_drag", "vacuum"],
     );
     std::fs::remove_dir_all(&dir).ok();
-}
-
-/// The `<text>` contents of an SVG document (trimmed).
-fn svg_texts(svg: &str) -> Vec<String> {
-    svg.split("<text")
-        .skip(1)
-        .filter_map(|t| Some(t[t.find('>')? + 1..t.find("</text>")?].trim().to_string()))
-        .collect()
-}
-
-/// The figure has real axes: at least `n` numeric tick labels, and every `label`.
-fn assert_figure(svg: &str, n: usize, labels: &[&str]) {
-    let texts = svg_texts(svg);
-    assert!(texts.iter().filter(|t| t.parse::<f64>().is_ok()).count() >= n, "too few tick labels: {texts:?}");
-    for l in labels {
-        assert!(texts.iter().any(|t| t == l), "`{l}` missing: {texts:?}");
-    }
 }

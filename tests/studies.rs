@@ -4,6 +4,9 @@
 use std::path::PathBuf;
 use std::process::Command;
 
+mod common;
+use common::assert_figure;
+
 fn run(args: &[&str]) -> (i32, String, String) {
     let o = Command::new(env!("CARGO_BIN_EXE_sawtooth")).args(args).output().unwrap();
     (
@@ -114,21 +117,4 @@ fn repeatability_and_sensitivity_write_their_tables() {
     assert_eq!(std::fs::read_to_string(sens.join("grid.csv")).unwrap().lines().count(), 26);
     let _ = std::fs::remove_dir_all(&rep);
     let _ = std::fs::remove_dir_all(&sens);
-}
-
-/// The `<text>` contents of an SVG document (trimmed).
-fn svg_texts(svg: &str) -> Vec<String> {
-    svg.split("<text")
-        .skip(1)
-        .filter_map(|t| Some(t[t.find('>')? + 1..t.find("</text>")?].trim().to_string()))
-        .collect()
-}
-
-/// The figure has real axes: at least `n` numeric tick labels, and every `label`.
-fn assert_figure(svg: &str, n: usize, labels: &[&str]) {
-    let texts = svg_texts(svg);
-    assert!(texts.iter().filter(|t| t.parse::<f64>().is_ok()).count() >= n, "too few tick labels: {texts:?}");
-    for l in labels {
-        assert!(texts.iter().any(|t| t == l), "`{l}` missing: {texts:?}");
-    }
 }
