@@ -118,7 +118,7 @@ fn over_slopes(
         let det = evaluate_detailed(engine, &s, design, false);
         let assessment = requirements.map(|r| match &det {
             Ok(det) => r.assess(&det.evaluation.performance, &s.performance, det.evaluation.sim.lost_fraction),
-            Err(_) => r.assess(&no_flow(&s, design), &s.performance, 1.0),
+            Err(_) => r.assess_rejected(&s, design),
         });
         rows.push((alpha, det, assessment));
     }
@@ -197,14 +197,6 @@ fn over_slopes(
         write_verdicts(out, r, &assessed, &rejected)?;
     }
     Ok(ExitCode::SUCCESS)
-}
-
-/// What a design the model rejects delivers: no mass flow (its stroke still sets the wire).
-fn no_flow(s: &Scenario, d: &Design) -> crate::model::Performance {
-    let mut p = crate::model::performance::performance(s, d, 0.0, 0.0);
-    p.m_dot_kg_s = 0.0;
-    p.w_spec_j_kg = None;
-    p
 }
 
 fn status(met: bool) -> &'static str {

@@ -14,8 +14,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::performance::Performance;
-use super::scenario::PerformanceParams;
+use super::design::Design;
+use super::performance::{performance, Performance};
+use super::scenario::{PerformanceParams, Scenario};
 
 const SECONDS_PER_HOUR: f64 = 3600.0;
 
@@ -137,6 +138,13 @@ impl Requirements {
             lost_fraction,
             operating_point: op,
         }
+    }
+
+    /// The verdict on a design the model rejects at this scenario (e.g. 5.3.1's spill check):
+    /// it delivers nothing there (D.7 with no travel and no fill: ṁ = 0, no W_spec) and loses
+    /// everything, while its stroke still sets the wire.
+    pub fn assess_rejected(&self, s: &Scenario, d: &Design) -> Assessment {
+        self.assess(&performance(s, d, 0.0, 0.0), &s.performance, 1.0)
     }
 
     /// See the module doc: the highest feed rate up to the target within the power limit,

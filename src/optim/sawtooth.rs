@@ -97,12 +97,7 @@ pub struct Logged {
 pub fn assess(r: &Requirements, scenario: &Scenario, x: &[f64], result: &Result<Evaluation, Invalid>) -> Assessment {
     match result {
         Ok(e) => r.assess(&e.performance, &scenario.performance, e.sim.lost_fraction),
-        Err(_) => {
-            let mut p = crate::model::performance::performance(scenario, &design_of(x), 0.0, 0.0);
-            p.m_dot_kg_s = 0.0;
-            p.w_spec_j_kg = None;
-            r.assess(&p, &scenario.performance, 1.0)
-        }
+        Err(_) => r.assess_rejected(scenario, &design_of(x)),
     }
 }
 
