@@ -13,12 +13,18 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
+use sawtooth::cli::args::MAX_ALPHA_POINTS;
 use sawtooth::cli::args::{Compat, ScenarioArgs};
 use sawtooth::engine::{cpu_only_effects, evaluate_detailed, make_engine, make_engine_for, Engine, EngineKind};
+use sawtooth::io::config::load_requirements;
 use sawtooth::model::design::{LOWER_BOUND_CLI, UPPER_BOUND_CLI, VARIABLES};
+use sawtooth::model::requirements::REQUIREMENT_TOLERANCE;
 use sawtooth::model::scenario::EnvPreset;
 use sawtooth::model::Design;
-use sawtooth::optim::sawtooth::{nonlinear_constraints, objectives, violation, CONSTRAINT_TOLERANCE};
+use sawtooth::optim::nsga2::BatchProblem;
+use sawtooth::optim::sawtooth::{
+    nonlinear_constraints, objectives, violation, Logged, SawtoothProblem, CONSTRAINT_TOLERANCE, UNSIMULATED_VIOLATION,
+};
 
 fn value_error(e: anyhow::Error) -> PyErr {
     // the CLI prints `error: {e:#}`: the whole context chain on one line
@@ -257,13 +263,7 @@ fn evaluate<'py>(
     let n = xs.len();
     let teeth = scenario.sim.teeth as usize;
     let violations: Vec<f64> = xs.iter().map(|v| violation(v)).collect();
-    let constraints: Vec<[f64; 7]> = xs
-        .iter()
-        .map(|v| {
-            let c = nonlinear_constraints(v);
-            [v[2] - v[3], v[3] - v[1], v[1] - v[0], c[0], c[1], c[2], c[3]]
-        })
-        .collect();
+    let constraints: Vec<[f64; 7]> = xs.iter().map(geometric_constraints).collect();
     let simulate: Vec<usize> = (0..n).filter(|&i| !feasible_only || violations[i] == 0.0).collect();
     let designs: Vec<Design> = simulate.iter().map(|&i| Design::from_cli_units(xs[i])).collect();
     let eng = engine_for(kind, &scenario).map_err(value_error)?;
@@ -343,6 +343,156 @@ fn evaluate<'py>(
     d.set_item("engine", eng.backend())?;
     d.set_item("seed", scenario.sim.seed)?;
     d.set_item("particles", scenario.sim.particles)?;
+    Ok(d)
+}
+
+/// The seven geometric constraint values of one design, mm (CONSTRAINT_NAMES' order).
+fn geometric_constraints(v: &[f64; 8]) -> [f64; 7] {
+    let c = nonlinear_constraints(v);
+    [v[2] - v[3], v[3] - v[1], v[1] - v[0], c[0], c[1], c[2], c[3]]
+}
+
+/// evaluate_problem(scenario, x, *, engine="cpu", generation=0, requirements=None, slopes_deg=None) -> dict
+///
+/// One generation of the built-in optimiser's problem (`sawtooth optimize`'s own code,
+/// `optim::sawtooth::SawtoothProblem::evaluate_batch`): the rows of x (shape (n, 8), VARIABLES'
+/// units) on the particle streams of `generation` (seed = scenario.seed + generation *
+/// 0x9E3779B97F4A7C15 mod 2^64), every slope of slopes_deg (degrees; default: the scenario's
+/// alpha) in one engine job, designs that violate a geometric constraint not simulated.
+/// requirements: "table-2.2" or a TOML file with a [requirements] table (`optimize
+/// --requirements`).
+///
+/// Returns: objectives (n, 2: the penalised f_stroke (Hz) and W_spec (J/kg), worst over the
+/// slopes; 1e12 where not simulated), violation (n: what Deb's rules rank by: geometric excess
+/// in mm, plus the requirements' relative shortfalls, plus UNSIMULATED_VIOLATION for a design
+/// not simulated when there are requirements), simulated (n), constraints_mm (n, 7),
+/// requirement_constraints (n, 3: REQUIREMENT_NAMES' worst relative shortfalls over the
+/// slopes, <= 0 met; NaN where not simulated or without requirements), compliant (n),
+/// binding_requirement and operating_limit (lists of str, "" where none), m_dot_op_kg_h,
+/// p_op_w (operating point at the slope shown), alpha_deg (n: the slope shown: the one failing
+/// the requirements worst, else the highest W_spec), and at that slope f_stroke_hz, w_spec_j_kg,
+/// m_dot_kg_s, p_avg_w, d_avg_m, lost_fraction, distribution (n, teeth), invalid_rule; and
+/// engine, seed, particles, slopes_deg.
+#[pyfunction]
+#[pyo3(signature = (scenario, x, *, engine="cpu", generation=0, requirements=None, slopes_deg=None))]
+#[allow(clippy::too_many_arguments)]
+fn evaluate_problem<'py>(
+    py: Python<'py>,
+    scenario: &PyScenario,
+    x: PyReadonlyArray2<'py, f64>,
+    engine: &str,
+    generation: u64,
+    requirements: Option<String>,
+    slopes_deg: Option<Vec<f64>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let kind = engine_kind(engine)?;
+    let xs = designs_from(&x)?;
+    let scenario = scenario.inner.clone();
+    let requirements = requirements.map(|spec| load_requirements(&spec)).transpose().map_err(value_error)?;
+    let slopes = slopes_deg.unwrap_or_default();
+    if slopes.len() > MAX_ALPHA_POINTS as usize {
+        return Err(PyValueError::new_err(format!(
+            "slopes_deg: at most {MAX_ALPHA_POINTS} slopes (each is one more simulation per design), got {}",
+            slopes.len()
+        )));
+    }
+    for &alpha in &slopes {
+        let mut s = scenario.clone();
+        s.environment.alpha_deg = alpha;
+        s.validate().map_err(|e| PyValueError::new_err(format!("slopes_deg: slope {alpha}: {e}")))?;
+    }
+    let eng = engine_for(kind, &scenario).map_err(value_error)?;
+    let rows: Vec<Vec<f64>> = xs.iter().map(|v| v.to_vec()).collect();
+    let base_seed = scenario.sim.seed;
+    let has_requirements = requirements.is_some();
+    let (seed, logged) = py.detach(|| {
+        let mut logged: Vec<Logged> = Vec::new();
+        let mut problem = SawtoothProblem {
+            scenario: scenario.clone(),
+            engine: eng.as_ref(),
+            base_seed,
+            log: Some(Box::new(|l: &[Logged]| logged.extend_from_slice(l))),
+            requirements,
+            slopes_deg: slopes.clone(),
+        };
+        let seed = problem.seed_for(generation);
+        if !rows.is_empty() {
+            problem.evaluate_batch(&rows, generation);
+        }
+        drop(problem);
+        (seed, logged)
+    });
+
+    let n = xs.len();
+    let teeth = scenario.sim.teeth as usize;
+    let nan = f64::NAN;
+    let mut objs = Vec::with_capacity(2 * n);
+    let mut req = Vec::with_capacity(3 * n);
+    let mut geo = Vec::with_capacity(7 * n);
+    let (mut viol, mut alpha, mut m_op, mut p_op) = (vec![], vec![], vec![], vec![]);
+    let (mut f_stroke, mut w_spec, mut m_dot, mut p_avg, mut d_avg, mut lost) =
+        (vec![], vec![], vec![], vec![], vec![], vec![]);
+    let (mut simulated, mut compliant) = (vec![], vec![]);
+    let (mut binding, mut limit, mut rule) = (vec![], vec![], vec![]);
+    let mut dist = vec![nan; n * teeth];
+    for (i, (l, x)) in logged.iter().zip(&xs).enumerate() {
+        objs.extend_from_slice(&l.objectives);
+        viol.push(l.violation);
+        geo.extend_from_slice(&geometric_constraints(x));
+        let sim = violation(x) == 0.0;
+        simulated.push(sim);
+        req.extend_from_slice(&l.requirement_constraints.unwrap_or([nan; 3]));
+        alpha.push(if sim { l.alpha_deg } else { nan });
+        let a = l.assessment.as_ref();
+        compliant.push(a.is_some_and(|a| a.compliant()));
+        binding.push(a.and_then(|a| a.binding()).unwrap_or(""));
+        limit.push(a.map(|a| a.operating_point.limit.as_str()).unwrap_or(""));
+        m_op.push(a.map_or(nan, |a| a.operating_point.m_dot_kg_h));
+        p_op.push(a.map_or(nan, |a| a.operating_point.p_avg_w));
+        let e = l.evaluation.as_ref();
+        f_stroke.push(e.map_or(nan, |e| e.performance.f_stroke_hz));
+        w_spec.push(e.and_then(|e| e.performance.w_spec_j_kg).unwrap_or(nan));
+        m_dot.push(e.map_or(nan, |e| e.performance.m_dot_kg_s));
+        p_avg.push(e.map_or(nan, |e| e.performance.p_avg_w));
+        d_avg.push(e.map_or(nan, |e| e.sim.d_avg_m));
+        lost.push(e.map_or(nan, |e| e.sim.lost_fraction));
+        if let Some(e) = e {
+            dist[i * teeth..(i + 1) * teeth].copy_from_slice(&e.sim.distribution);
+        }
+        rule.push(match (&l.invalid, sim) {
+            (Some(r), _) => r.clone(),
+            (None, false) => "infeasible_not_simulated".to_string(),
+            (None, true) => String::new(),
+        });
+    }
+    let arr2 = |v: Vec<f64>, cols: usize| {
+        PyArray2::from_owned_array(py, numpy::ndarray::Array2::from_shape_vec((n, cols), v).expect("shape"))
+    };
+    let d = PyDict::new(py);
+    d.set_item("objectives", arr2(objs, 2))?;
+    d.set_item("violation", viol.into_pyarray(py))?;
+    d.set_item("simulated", simulated.into_pyarray(py))?;
+    d.set_item("constraints_mm", arr2(geo, 7))?;
+    d.set_item("requirement_constraints", arr2(req, 3))?;
+    d.set_item("compliant", compliant.into_pyarray(py))?;
+    d.set_item("binding_requirement", PyList::new(py, binding)?)?;
+    d.set_item("operating_limit", PyList::new(py, limit)?)?;
+    d.set_item("m_dot_op_kg_h", m_op.into_pyarray(py))?;
+    d.set_item("p_op_w", p_op.into_pyarray(py))?;
+    d.set_item("alpha_deg", alpha.into_pyarray(py))?;
+    d.set_item("f_stroke_hz", f_stroke.into_pyarray(py))?;
+    d.set_item("w_spec_j_kg", w_spec.into_pyarray(py))?;
+    d.set_item("m_dot_kg_s", m_dot.into_pyarray(py))?;
+    d.set_item("p_avg_w", p_avg.into_pyarray(py))?;
+    d.set_item("d_avg_m", d_avg.into_pyarray(py))?;
+    d.set_item("lost_fraction", lost.into_pyarray(py))?;
+    d.set_item("distribution", arr2(dist, teeth))?;
+    d.set_item("invalid_rule", PyList::new(py, rule)?)?;
+    d.set_item("requirements", has_requirements)?;
+    d.set_item("engine", eng.backend())?;
+    d.set_item("seed", seed)?;
+    d.set_item("particles", scenario.sim.particles)?;
+    d.set_item("slopes_deg", if slopes.is_empty() { vec![scenario.environment.alpha_deg] } else { slopes })?;
     Ok(d)
 }
 
@@ -484,6 +634,7 @@ fn _cli(py: Python<'_>, args: Vec<String>) -> PyResult<String> {
 fn _sawtooth(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyScenario>()?;
     m.add_function(wrap_pyfunction!(evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(evaluate_problem, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(load_measured, m)?)?;
     m.add_function(wrap_pyfunction!(_cli, m)?)?;
@@ -491,6 +642,9 @@ fn _sawtooth(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("LOWER_BOUNDS", LOWER_BOUND_CLI.to_vec())?;
     m.add("UPPER_BOUNDS", UPPER_BOUND_CLI.to_vec())?;
     m.add("CONSTRAINT_TOLERANCE", CONSTRAINT_TOLERANCE)?;
+    m.add("REQUIREMENT_TOLERANCE", REQUIREMENT_TOLERANCE)?;
+    m.add("UNSIMULATED_VIOLATION", UNSIMULATED_VIOLATION)?;
+    m.add("REQUIREMENT_NAMES", ["feed_rate", "power", "wire_length"])?;
     m.add(
         "CONSTRAINT_NAMES",
         [

@@ -11,11 +11,16 @@ def test_readme_python_quickstart_runs(tmp_path, monkeypatch):
     section = re.search(r"<!-- python-quickstart.*?-->(.*?)<!-- /python-quickstart -->", text, re.S)
     assert section, "README lost its python-quickstart markers"
     blocks = re.findall(r"```python\n(.*?)```", section.group(1), re.S)
-    assert len(blocks) == 3
+    assert len(blocks) == 4
     monkeypatch.chdir(tmp_path)
     ns = {}
-    for b in blocks:
-        exec(compile(b, "README.md", "exec"), ns)
+    run = lambda b: exec(compile(b, "README.md", "exec"), ns)  # noqa: E731
+    run(blocks[0])
     assert ns["r"]["w_spec_j_kg"].shape == (25,)
+    run(blocks[1])
     assert ns["problem"].evaluations == 400
+    run(blocks[2])
     assert (tmp_path / "front.png").stat().st_size > 1000
+    run(blocks[3])
+    assert ns["problem"].n_ieq_constr == 10 and ns["problem"].evaluations == 200
+    assert ns["problem"].last["compliant"].shape == (40,)

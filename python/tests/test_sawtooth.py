@@ -262,6 +262,95 @@ def test_pymoo_nsga2_runs_a_few_generations_on_the_problem():
     assert problem.last["seed"] == seed_for(5, 3)
 
 
+BEST_REQ = [49.991, 49.910, 31.073, 36.234, 88.01, 12.34, 0.805, 77.36]  # README: best lunar design over 0-40 deg
+
+
+def test_problem_with_requirements_is_the_clis_verdict_over_the_slopes():
+    # the same designs, seed and slopes through `simulate --requirements --alpha FROM..TO`:
+    # the worst shortfall per requirement and the worst objectives must be the CLI's numbers
+    s = sawtooth.Scenario(env="lunar", particles=100, seed=3)
+    bad_chain = [10.0, 30.0, 20.0, 5.0, 60.0, 10.0, 1.0, 30.0]
+    X = np.array([LUNAR_C, BEST_REQ, bad_chain])
+    r = sawtooth.evaluate_problem(s, X, requirements="table-2.2", slopes_deg=[20.0, 30.0, 40.0])
+    assert r["requirements"] and r["seed"] == 3 and r["slopes_deg"] == [20.0, 30.0, 40.0]
+    assert r["simulated"].tolist() == [True, True, False]
+    for i, x in enumerate(X[:2]):
+        j = json.loads(
+            cli("simulate", "--env", "lunar", "--particles", "100", "--seed", "3", "--design", design_flag(x),
+                "--requirements", "table-2.2", "--alpha", "20..40", "--alpha-points", "3", "--json").stdout
+        )
+        per = [p["assessment"] for p in j["requirements"]["per_slope"]]
+        worst = [max(-a[k]["relative_margin"] for a in per) for k in ("feed_rate", "power", "wire_length")]
+        assert r["requirement_constraints"][i].tolist() == worst
+        assert bool(r["compliant"][i]) == j["requirements"]["compliant"]
+        if all("performance" in sl for sl in j["slopes"]):
+            assert r["objectives"][i][1] == max(sl["performance"]["w_spec_j_kg"] for sl in j["slopes"])
+        else:  # a slope where the model rejects the design gives D.6's penalty (1e6 + code)
+            assert r["objectives"][i][1] > 1e6
+        shown = next(sl for sl in j["slopes"] if sl["alpha_deg"] == r["alpha_deg"][i])
+        if "performance" in shown:
+            assert r["m_dot_kg_s"][i] == shown["performance"]["m_dot_kg_s"]
+        else:
+            assert r["invalid_rule"][i] == shown["invalid"]
+    # the README's best design over 0-40 deg complies at 20-40; solution C fails at 20 deg
+    assert r["compliant"].tolist() == [False, True, False]
+    assert r["binding_requirement"][0] == "1.1 feed rate" and r["binding_requirement"][1] == ""
+    # the optimiser's violation: requirement shortfalls added, unsimulated ranked behind them all
+    assert r["violation"][1] == 0.0 and r["violation"][0] >= r["requirement_constraints"][0].max() > 0
+    assert r["violation"][2] > sawtooth.UNSIMULATED_VIOLATION and np.isnan(r["requirement_constraints"][2]).all()
+    assert r["objectives"][2].tolist() == [1e12, 1e12]
+
+
+def test_problem_without_requirements_is_evaluate_on_the_generations_streams():
+    from sawtooth.pymoo import seed_for
+
+    s = sawtooth.Scenario(env="earth", particles=60, seed=11)
+    X = np.array([EARTH_C, LUNAR_C])
+    r = sawtooth.evaluate_problem(s, X, generation=2)
+    e = sawtooth.evaluate(s, X, seed=seed_for(11, 2))
+    assert r["seed"] == seed_for(11, 2) and not r["requirements"]
+    assert r["objectives"].tolist() == e["objectives"].tolist()
+    assert r["w_spec_j_kg"].tolist() == e["w_spec_j_kg"].tolist()
+    assert np.isnan(r["requirement_constraints"]).all() and not r["compliant"].any()
+
+
+def test_bad_requirements_and_slopes_raise():
+    from sawtooth.pymoo import SawtoothProblem
+
+    s = sawtooth.Scenario(env="lunar", particles=10)
+    X = np.array([LUNAR_C])
+    with pytest.raises(ValueError, match="neither a preset"):
+        sawtooth.evaluate_problem(s, X, requirements="table-9.9")
+    with pytest.raises(ValueError, match="slopes_deg: slope 95"):
+        sawtooth.evaluate_problem(s, X, slopes_deg=[10.0, 95.0])
+    with pytest.raises(ValueError, match="at most 41 slopes"):
+        sawtooth.evaluate_problem(s, X, slopes_deg=np.linspace(0, 40, 42).tolist())
+    # the problem checks them when it is made, not in pymoo's first generation
+    with pytest.raises(ValueError, match="neither a preset"):
+        SawtoothProblem(env="lunar", requirements="table-9.9")
+
+
+def test_pymoo_nsga2_with_requirements_over_slopes():
+    from pymoo.algorithms.moo.nsga2 import NSGA2
+    from pymoo.optimize import minimize
+
+    from sawtooth.pymoo import ChainRepair, SawtoothProblem
+
+    problem = SawtoothProblem(env="lunar", particles=30, seed=2, requirements="table-2.2", slopes_deg=[0.0, 40.0])
+    assert problem.n_ieq_constr == 10
+    res = minimize(problem, NSGA2(pop_size=12, repair=ChainRepair()), ("n_gen", 3), seed=4, verbose=False)
+    assert res.pop is not None and problem.evaluations == 36
+    last = problem.last
+    G = res.pop.get("G")
+    assert G.shape[1] == 10
+    # a design is compliant exactly when pymoo sees all ten constraints met
+    X = res.pop.get("X")
+    r = sawtooth.evaluate_problem(problem.scenario, X, generation=2, requirements="table-2.2", slopes_deg=[0.0, 40.0])
+    feasible = np.all(G <= 0, axis=1)
+    assert feasible.tolist() == (r["compliant"] & (r["violation"] == 0)).tolist()
+    assert set(last["operating_limit"]) <= {"", "capacity", "target", "power", "minimum"}
+
+
 def test_pymoo_problem_rejects_mixed_arguments():
     from sawtooth.pymoo import SawtoothProblem
 

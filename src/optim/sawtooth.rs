@@ -90,6 +90,10 @@ pub struct Logged {
     pub alpha_deg: f64,
     /// The requirements' verdict at that slope, when the run has requirements.
     pub assessment: Option<Assessment>,
+    /// The worst relative shortfall of each requirement over the slopes (feed rate, power,
+    /// wire length; c <= 0 met), when the run has requirements and the design was simulated:
+    /// the constraint values Deb's rules rank by (the Python `SawtoothProblem`'s G).
+    pub requirement_constraints: Option<[f64; 3]>,
 }
 
 /// The requirements' verdict on one simulated (or rejected) design at one slope: a design the
@@ -193,11 +197,13 @@ impl BatchProblem for SawtoothProblem<'_> {
         let mut out = Vec::with_capacity(xs.len());
         for (i, x) in xs.iter().enumerate() {
             let mut violation = violations[i];
+            let mut requirement_constraints = None;
             let (objs, evaluation, invalid, alpha_deg, assessment) = if violations[i] == 0.0 {
                 let results: Vec<Result<Evaluation, Invalid>> =
                     per_slope.iter_mut().map(|g| g.next().expect("one result per design and slope")).collect();
                 let judged = judge(&scenarios, x, &results, self.requirements.as_ref());
                 violation += judged.constraints.iter().map(|&c| excess(c)).sum::<f64>();
+                requirement_constraints = judged.assessment.is_some().then_some(judged.constraints);
                 let worst = results.into_iter().nth(judged.worst).expect("worst slope exists");
                 let alpha = scenarios[judged.worst].environment.alpha_deg;
                 match worst {
@@ -218,6 +224,7 @@ impl BatchProblem for SawtoothProblem<'_> {
                 invalid,
                 alpha_deg,
                 assessment,
+                requirement_constraints,
             });
             out.push(GaEvaluation { objectives: objs.to_vec(), violation });
         }

@@ -21,12 +21,16 @@ from ._sawtooth import (  # noqa: F401
     CONSTRAINT_NAMES,
     CONSTRAINT_TOLERANCE,
     LOWER_BOUNDS,
+    REQUIREMENT_NAMES,
+    REQUIREMENT_TOLERANCE,
+    UNSIMULATED_VIOLATION,
     UPPER_BOUNDS,
     VARIABLES,
     Scenario,
     __version__,
     _cli,
     evaluate,
+    evaluate_problem,
     load_measured,
     simulate,
 )
@@ -34,6 +38,7 @@ from ._sawtooth import (  # noqa: F401
 __all__ = [
     "Scenario",
     "evaluate",
+    "evaluate_problem",
     "simulate",
     "load_measured",
     "fit",
@@ -43,6 +48,9 @@ __all__ = [
     "UPPER_BOUNDS",
     "CONSTRAINT_NAMES",
     "CONSTRAINT_TOLERANCE",
+    "REQUIREMENT_NAMES",
+    "REQUIREMENT_TOLERANCE",
+    "UNSIMULATED_VIOLATION",
 ]
 
 PathLike = Union[str, "os.PathLike[str]"]

@@ -18,6 +18,13 @@ UPPER_BOUNDS: List[float]
 CONSTRAINT_TOLERANCE: float
 #: Names of the seven columns of ``constraints_mm``: the chain of Eq. 5.2 and c1-c4 of D.5.
 CONSTRAINT_NAMES: List[str]
+#: Names of the three columns of ``requirement_constraints``: 1.1 feed rate, 1.4 power and
+#: 5.5 wire length of Table 2.2, each a relative shortfall (<= 0 met).
+REQUIREMENT_NAMES: List[str]
+#: Rounding-only tolerance of the requirement verdicts (a requirement c is met when c <= this).
+REQUIREMENT_TOLERANCE: float
+#: Added to the violation of a design not simulated when a run has requirements.
+UNSIMULATED_VIOLATION: float
 __version__: str
 
 class Scenario:
@@ -88,6 +95,31 @@ def evaluate(
     the excesses, 0 = feasible), objectives (n, 2; the built-in optimiser's f_stroke and W_spec
     with its penalties), and engine, seed, particles. ``feasible_only`` skips the simulation of
     designs whose violation is > 0 (as the optimiser does).
+    """
+
+def evaluate_problem(
+    scenario: Scenario,
+    x: npt.NDArray[np.float64],
+    *,
+    engine: _Engine = "cpu",
+    generation: int = 0,
+    requirements: Optional[_Path] = None,
+    slopes_deg: Optional[Sequence[float]] = None,
+) -> Dict[str, Any]:
+    """One generation of ``sawtooth optimize``'s problem, by its own code: the rows of ``x`` on
+    the particle streams of ``generation`` (seed + generation * 0x9E3779B97F4A7C15 mod 2^64),
+    at every slope of ``slopes_deg`` (deg; default: the scenario's alpha) in one engine job,
+    designs violating a geometric constraint not simulated. ``requirements``: "table-2.2" or a
+    TOML file with a [requirements] table.
+
+    Returns: objectives (n, 2; penalised f_stroke in Hz and W_spec in J/kg, worst over the
+    slopes, 1e12 where not simulated), violation (what Deb's rules rank by), simulated,
+    constraints_mm (n, 7), requirement_constraints (n, 3; REQUIREMENT_NAMES, worst over the
+    slopes, NaN where not simulated or without requirements), compliant, binding_requirement,
+    operating_limit (lists of str), m_dot_op_kg_h (kg/h), p_op_w (W), alpha_deg (the slope
+    shown: failing the requirements worst, else highest W_spec) and at that slope f_stroke_hz,
+    w_spec_j_kg, m_dot_kg_s, p_avg_w, d_avg_m, lost_fraction, distribution (n, teeth),
+    invalid_rule; and requirements (bool), engine, seed, particles, slopes_deg.
     """
 
 def simulate(

@@ -1,4 +1,4 @@
-from typing import Any, Optional
+from typing import Any, List, Optional, Sequence
 
 import numpy as np
 from pymoo.core.problem import Problem
@@ -11,8 +11,10 @@ INFEASIBLE_F: float
 def seed_for(base_seed: int, generation: int) -> int: ...
 
 class SawtoothProblem(Problem):
-    """8 variables (sawtooth.VARIABLES' units), objectives f_stroke (Hz) and W_spec (J/kg),
-    7 inequality constraints in mm (<= 0 feasible), common random numbers per generation."""
+    """8 variables (sawtooth.VARIABLES' units), objectives f_stroke (Hz) and W_spec (J/kg)
+    (worst over ``slopes_deg``), 7 inequality constraints in mm (<= 0 feasible) and, with
+    ``requirements``, 3 more: the relative shortfalls of feed rate, power and wire length
+    (sawtooth.REQUIREMENT_NAMES); common random numbers per generation."""
 
     scenario: Scenario
     engine: str
@@ -20,12 +22,16 @@ class SawtoothProblem(Problem):
     base_seed: int
     generation: int
     evaluations: int
+    requirements: Optional[str]
+    slopes_deg: Optional[List[float]]
     last: Optional[dict]
     def __init__(
         self,
         scenario: Optional[Scenario] = None,
         engine: str = "cpu",
         common_random_numbers: bool = True,
+        requirements: Optional[str] = None,
+        slopes_deg: Optional[Sequence[float]] = None,
         **scenario_keywords: Any,
     ) -> None: ...
 
