@@ -162,6 +162,7 @@ def main():
         "built-in nsga2": lambda s: builtin("nsga2", a, s, a.out),
         "built-in matlab-like": lambda s: builtin("matlab-like", a, s, a.out),
         "built-in nsga2, permutation selection": lambda s: builtin("nsga2", a, s, a.out, "permutation"),
+        "built-in matlab-like, permutation selection": lambda s: builtin("matlab-like", a, s, a.out, "permutation"),
         "pymoo NSGA2": lambda s: pymoo_run("nsga2", a, s),
         "pymoo SMS-EMOA": lambda s: pymoo_run("smsemoa", a, s),
     }
