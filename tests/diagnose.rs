@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 mod common;
-use common::{assert_figure, svg_texts};
+use common::{assert_figure, assert_png_beside, svg_texts};
 
 use serde_json::Value;
 
@@ -65,6 +65,7 @@ fn diagnose(pairs: &[(&Path, &str)], out: &Path) -> Value {
         assert!(!text.is_empty(), "{f}");
         if f.ends_with(".svg") {
             assert!(text.starts_with("<svg") && text.trim_end().ends_with("</svg>"), "{f}");
+            assert_png_beside(&out.join(f));
         }
     }
     let read = |f: &str| std::fs::read_to_string(out.join(f)).unwrap();

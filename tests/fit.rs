@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 mod common;
-use common::assert_figure;
+use common::{assert_figure, assert_png_beside};
 
 use sawtooth::engine::{make_engine, EngineKind};
 use sawtooth::fit::objective::simulated_bins;
@@ -214,6 +214,7 @@ fn json_on_test3_has_the_documented_keys_and_files_are_written() {
     assert_eq!(csv.lines().count(), 1 + 20);
     let svg = std::fs::read_to_string(dir.join("fit.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert_png_beside(&dir.join("fit.svg"));
     // axes with tick numbers and units, tooth categories, the legend
     assert_figure(&svg, 5, &["tooth", "particle fraction [%]", "1", "2", "measured mean", "fitted simulation"]);
     assert!(!std::fs::read_dir(&dir).unwrap().any(|e| e.unwrap().file_name().to_string_lossy().contains(".tmp")));

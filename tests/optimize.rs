@@ -5,6 +5,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
+mod common;
+
 fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_sawtooth")
 }
@@ -55,6 +57,7 @@ fn optimize_writes_its_outputs_and_resumes_after_a_kill_to_the_same_front() {
     for f in ["run.toml", "evaluations.csv", "generations.csv", "checkpoint.json", "pareto.csv", "pareto.svg"] {
         assert!(full.join(f).exists(), "missing {f}");
     }
+    common::assert_png_beside(&full.join("pareto.svg"));
     assert!(stdout.contains("A ") && stdout.contains("C "), "{stdout}");
     assert_eq!(rows(&full.join("generations.csv")), 14);
     assert_eq!(rows(&full.join("evaluations.csv")), 48 * 15);

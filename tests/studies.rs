@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::process::Command;
 
 mod common;
-use common::assert_figure;
+use common::{assert_figure, assert_png_beside};
 
 fn run(args: &[&str]) -> (i32, String, String) {
     let o = Command::new(env!("CARGO_BIN_EXE_sawtooth")).args(args).output().unwrap();
@@ -53,6 +53,7 @@ fn sweep_writes_a_summary_per_angle_and_reruns_from_disk() {
     assert!(summary.lines().count() >= 4);
     let svg = std::fs::read_to_string(out.join("sweep.svg")).unwrap();
     assert!(svg.starts_with("<svg"));
+    assert_png_beside(&out.join("sweep.svg"));
     assert_figure(
         &svg,
         10,
@@ -98,6 +99,7 @@ fn repeatability_and_sensitivity_write_their_tables() {
     assert!(header.contains(&"m_dot_from_target_rel"));
     let all_at = runs.lines().skip(1).all(|l| l.split(',').nth(at) == Some("true"));
     assert_eq!(out.contains("NOT at the target"), !all_at, "{out}\n{runs}");
+    assert_png_beside(&rep.join("repeatability.svg"));
 
     let sens = tmp("sens");
     let mut args = vec![
@@ -115,6 +117,7 @@ fn repeatability_and_sensitivity_write_their_tables() {
     assert_eq!(code, 0, "{err}");
     // Table C.2's 5 x 5 grid in vacuum
     assert_eq!(std::fs::read_to_string(sens.join("grid.csv")).unwrap().lines().count(), 26);
+    assert_png_beside(&sens.join("sensitivity.svg"));
     let _ = std::fs::remove_dir_all(&rep);
     let _ = std::fs::remove_dir_all(&sens);
 }

@@ -152,7 +152,7 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         for n in &d.notes {
             writeln!(out, "note: {n}")?;
         }
-        writeln!(out, "wrote {0}/report.md, {0}/diagnosis.json and SVG plots", a.out.display())?;
+        writeln!(out, "wrote {0}/report.md, {0}/diagnosis.json and the plots (SVG and PNG)", a.out.display())?;
     }
     Ok(ExitCode::SUCCESS)
 }

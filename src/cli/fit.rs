@@ -126,7 +126,8 @@ pub fn run(a: FitArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     } else {
         report::write_table(out, &report, &meta).context("writing output")?;
         if let Some(dir) = &a.out {
-            writeln!(out, "\nwrote {0}/fit.json, {0}/fit.csv, {0}/fit.svg", dir.display()).context("writing output")?;
+            writeln!(out, "\nwrote {0}/fit.json, {0}/fit.csv, {0}/fit.svg, {0}/fit.png", dir.display())
+                .context("writing output")?;
         }
     }
     Ok(ExitCode::SUCCESS)

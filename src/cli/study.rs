@@ -223,7 +223,7 @@ pub fn summarise_repeatability(
         panels: vec![panel("f_stroke [Hz]", f), panel("W_spec [J/kg]", w), panel("mass flow [kg/s]", m)],
         joined: false,
     };
-    plot::write_figure(&root.join("repeatability.svg"), "repeatability.svg", &figure)?;
+    plot::write_figure_files(root, "repeatability", &figure)?;
     Ok(())
 }
 
@@ -341,6 +341,6 @@ pub fn summarise_sensitivity(
         }],
         joined: false,
     };
-    plot::write_figure(&root.join("sensitivity.svg"), "sensitivity.svg", &figure)?;
+    plot::write_figure_files(root, "sensitivity", &figure)?;
     Ok(())
 }

@@ -123,7 +123,7 @@ pub fn summarise(root: &Path, plan: &Plan, fronts: &[Vec<FrontPoint>], out: &mut
         ],
         joined: true,
     };
-    plot::write_figure(&root.join("sweep.svg"), "sweep.svg", &figure)?;
-    writeln!(out, "wrote {} and {}", root.join("summary.csv").display(), root.join("sweep.svg").display())?;
+    plot::write_figure_files(root, "sweep", &figure)?;
+    writeln!(out, "wrote {} and {} (and .png)", root.join("summary.csv").display(), root.join("sweep.svg").display())?;
     Ok(())
 }

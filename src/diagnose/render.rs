@@ -336,7 +336,10 @@ pub fn to_markdown(d: &Diagnosis) -> String {
             let _ = writeln!(s, "{}\n", row(&m.name(), &m.full.bins[ci]));
         }
     }
-    let _ = writeln!(s, "Plots: `residuals.svg`, `ranking.svg`, `distributions.svg`; numbers: `diagnosis.json`.");
+    let _ = writeln!(
+        s,
+        "Plots: `residuals.svg`, `ranking.svg`, `distributions.svg` (each also as `.png`); numbers: `diagnosis.json`."
+    );
     s
 }
 
@@ -648,7 +651,7 @@ pub fn write_dir(dir: &Path, d: &Diagnosis, json: &Value) -> anyhow::Result<()> 
     std::fs::create_dir_all(dir).with_context(|| format!("--out: cannot create directory {}", dir.display()))?;
     write_atomic(&dir.join("diagnosis.json"), format!("{}\n", serde_json::to_string_pretty(json)?).as_bytes())?;
     write_atomic(&dir.join("report.md"), to_markdown(d).as_bytes())?;
-    plot::write_figure(&dir.join("residuals.svg"), "residuals.svg", &ResidualsPlot(d))?;
-    plot::write_figure(&dir.join("ranking.svg"), "ranking.svg", &RankingPlot(d))?;
-    plot::write_figure(&dir.join("distributions.svg"), "distributions.svg", &DistributionsPlot(d))
+    plot::write_figure_files(dir, "residuals", &ResidualsPlot(d))?;
+    plot::write_figure_files(dir, "ranking", &RankingPlot(d))?;
+    plot::write_figure_files(dir, "distributions", &DistributionsPlot(d))
 }

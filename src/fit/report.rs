@@ -440,5 +440,5 @@ pub fn write_dir(dir: &Path, r: &FitReport, meta: &Meta, json: &Value) -> anyhow
     std::fs::create_dir_all(dir).with_context(|| format!("--out: cannot create directory {}", dir.display()))?;
     write_atomic(&dir.join("fit.json"), format!("{}\n", serde_json::to_string_pretty(json)?).as_bytes())?;
     write_atomic(&dir.join("fit.csv"), to_csv(r, meta).as_bytes())?;
-    plot::write_figure(&dir.join("fit.svg"), "fit.svg", &FitPlot::new(r, meta))
+    plot::write_figure_files(dir, "fit", &FitPlot::new(r, meta))
 }

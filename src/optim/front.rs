@@ -309,11 +309,7 @@ fn worst_slope(at_slopes: Vec<(FrontPoint, Option<Assessment>)>) -> FrontPoint {
 
 pub fn write_outputs(dir: &Path, front: &[FrontPoint], evaluations_csv: &Path) -> anyhow::Result<()> {
     write_atomic(&dir.join("pareto.csv"), &pareto_csv(front)?)?;
-    plot::write_figure(
-        &dir.join("pareto.svg"),
-        "pareto.svg",
-        &ParetoPlot::new(&evaluation_cloud(evaluations_csv)?, front),
-    )
+    plot::write_figure_files(dir, "pareto", &ParetoPlot::new(&evaluation_cloud(evaluations_csv)?, front))
 }
 
 /// Every simulated design's (f_stroke, W_spec) from evaluations.csv, read by column name;

@@ -148,6 +148,17 @@ pub fn write_figure(path: &Path, flag: &str, figure: &impl Figure) -> anyhow::Re
     write_atomic(path, &bytes).with_context(|| format!("writing figure {}", path.display()))
 }
 
+/// A run folder's figure in both formats: `stem.svg` (vector, for papers and zooming) and
+/// `stem.png` (for viewers, notebooks and documents that take no SVG), each written
+/// atomically from the same drawing.
+pub fn write_figure_files(dir: &Path, stem: &str, figure: &impl Figure) -> anyhow::Result<()> {
+    for extension in ["svg", "png"] {
+        let name = format!("{stem}.{extension}");
+        write_figure(&dir.join(&name), &name, figure)?;
+    }
+    Ok(())
+}
+
 /// Text in the figure font.
 pub fn text_style(size: f64) -> TextStyle<'static> {
     (FONT, size).into_font().into()

@@ -1,4 +1,6 @@
 //! Helpers shared by the integration tests that read the figures the CLI writes.
+// each test binary includes this module and uses a part of it
+#![allow(dead_code)]
 
 /// The `<text>` contents of an SVG document (trimmed).
 pub fn svg_texts(svg: &str) -> Vec<String> {
@@ -15,4 +17,21 @@ pub fn assert_figure(svg: &str, n: usize, labels: &[&str]) {
     for l in labels {
         assert!(texts.iter().any(|t| t == l), "`{l}` missing: {texts:?}");
     }
+}
+
+/// A run folder's figure exists in both formats: `stem.png` beside `stem.svg`, a real PNG
+/// (signature, IHDR) with the SVG's pixel size, drawn (more than a blank page of bytes).
+pub fn assert_png_beside(svg_path: &std::path::Path) {
+    let svg = std::fs::read_to_string(svg_path).unwrap_or_else(|e| panic!("{}: {e}", svg_path.display()));
+    let png_path = svg_path.with_extension("png");
+    let png = std::fs::read(&png_path).unwrap_or_else(|e| panic!("{}: {e}", png_path.display()));
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{} is not a PNG", png_path.display());
+    assert_eq!(&png[12..16], b"IHDR");
+    let be = |b: &[u8]| u32::from_be_bytes([b[0], b[1], b[2], b[3]]);
+    let attr = |name: &str| -> u32 {
+        let at = svg.find(&format!("{name}=\"")).expect("svg size attribute") + name.len() + 2;
+        svg[at..at + svg[at..].find('"').unwrap()].parse().expect("integer svg size")
+    };
+    assert_eq!((be(&png[16..20]), be(&png[20..24])), (attr("width"), attr("height")), "{}", png_path.display());
+    assert!(png.len() > 5000, "{} holds only {} bytes", png_path.display(), png.len());
 }
