@@ -262,6 +262,11 @@ impl Assessment {
         [-self.feed_rate.relative_margin, -self.power.relative_margin, -self.wire_length.relative_margin]
     }
 
+    /// The largest of [`Self::constraints`]: > 0 when some requirement fails.
+    pub fn worst_constraint(&self) -> f64 {
+        self.constraints().into_iter().fold(f64::NEG_INFINITY, f64::max)
+    }
+
     /// The requirement that fails by the largest relative amount, if any.
     pub fn binding(&self) -> Option<&'static str> {
         let named =
@@ -280,7 +285,7 @@ impl Assessment {
 /// that limits the conveyor; margins alone tie where every slope is power-limited).
 pub fn worst_over_slopes(per_slope: &[(f64, Assessment)]) -> Option<(f64, Assessment)> {
     let key = |a: &Assessment| {
-        let c = a.constraints().into_iter().fold(f64::NEG_INFINITY, f64::max);
+        let c = a.worst_constraint();
         if c > REQUIREMENT_TOLERANCE {
             (1.0_f64, c)
         } else {

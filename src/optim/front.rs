@@ -14,7 +14,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::sawtooth::{design_of, slope_scenarios, violation};
+use super::sawtooth::{design_of, shown_slope, slope_scenarios, violation};
 use crate::engine::BatchEvaluator;
 use crate::io::atomic::write_atomic;
 use crate::model::requirements::{Assessment, Limit};
@@ -280,22 +280,13 @@ pub fn final_front(engine: &dyn BatchEvaluator, m: &Manifest, state: &State) -> 
     Ok(out)
 }
 
-/// The figures at the slope where a design does worst: the one failing the requirements
-/// most, else the highest W_spec; compliant only if compliant at every slope.
-fn worst_slope(at_slopes: Vec<(FrontPoint, Option<Assessment>)>) -> FrontPoint {
+/// The figures at the slope where a design does worst (`shown_slope`: the one failing the
+/// requirements most, else the highest W_spec); compliant only if compliant at every slope.
+fn worst_slope(mut at_slopes: Vec<(FrontPoint, Option<Assessment>)>) -> FrontPoint {
     let all_compliant = at_slopes.iter().all(|(_, a)| a.as_ref().is_some_and(|a| a.compliant()));
-    let badness = |(p, a): &(FrontPoint, Option<Assessment>)| {
-        let c = a.as_ref().map_or(f64::NEG_INFINITY, |a| a.constraints().into_iter().fold(f64::NEG_INFINITY, f64::max));
-        (if c > 0.0 { c } else { f64::NEG_INFINITY }, p.w_spec_j_kg)
-    };
-    let (mut point, assessment) = at_slopes
-        .into_iter()
-        .max_by(|a, b| {
-            let (ca, wa) = badness(a);
-            let (cb, wb) = badness(b);
-            ca.total_cmp(&cb).then(wa.total_cmp(&wb))
-        })
-        .expect("at least one slope");
+    let keys: Vec<(Option<f64>, f64)> =
+        at_slopes.iter().map(|(p, a)| (a.as_ref().map(Assessment::worst_constraint), p.w_spec_j_kg)).collect();
+    let (mut point, assessment) = at_slopes.swap_remove(shown_slope(&keys));
     point.compliance = assessment.map(|a| Compliance {
         f_op_hz: a.operating_point.f_stroke_hz,
         m_dot_op_kg_h: a.operating_point.m_dot_kg_h,

@@ -246,6 +246,22 @@ pub struct Judged {
     pub assessment: Option<Assessment>,
 }
 
+/// The slope a design is shown at, from each slope's largest relative requirement shortfall
+/// (None without requirements) and its W_spec: the slope failing the requirements most,
+/// else the one with the highest W_spec (where its objective is worst); a tie goes to the
+/// higher W_spec, then to the later slope. One rule for the optimiser's log (`judge`) and the
+/// final front (`front::final_front`).
+pub fn shown_slope(per_slope: &[(Option<f64>, f64)]) -> usize {
+    // failing as the verdict fails (`Verdict::met`: beyond rounding)
+    let key = |&(c, w): &(Option<f64>, f64)| (c.filter(|&c| c > REQUIREMENT_TOLERANCE).unwrap_or(f64::NEG_INFINITY), w);
+    (0..per_slope.len())
+        .max_by(|&a, &b| {
+            let ((ca, wa), (cb, wb)) = (key(&per_slope[a]), key(&per_slope[b]));
+            ca.total_cmp(&cb).then(wa.total_cmp(&wb))
+        })
+        .unwrap_or(0)
+}
+
 /// The worst case over the slopes: the objectives element-wise, the requirements each on
 /// its own (one conveyor must meet every one at every slope, req. 1.6.3).
 pub fn judge(
@@ -256,23 +272,17 @@ pub fn judge(
 ) -> Judged {
     let per: Vec<[f64; 2]> = results.iter().map(objectives).collect();
     let objectives = per.iter().fold([f64::NEG_INFINITY; 2], |w, o| [w[0].max(o[0]), w[1].max(o[1])]);
-    let worst_w = (0..per.len()).max_by(|&a, &b| per[a][1].total_cmp(&per[b][1])).unwrap_or(0);
     let Some(r) = requirements else {
-        return Judged { objectives, constraints: [f64::NEG_INFINITY; 3], worst: worst_w, assessment: None };
+        let worst = shown_slope(&per.iter().map(|o| (None, o[1])).collect::<Vec<_>>());
+        return Judged { objectives, constraints: [f64::NEG_INFINITY; 3], worst, assessment: None };
     };
     let assessments: Vec<Assessment> = scenarios.iter().zip(results).map(|(s, res)| assess(r, s, x, res)).collect();
     let constraints = assessments.iter().fold([f64::NEG_INFINITY; 3], |w, a| {
         let c = a.constraints();
         [w[0].max(c[0]), w[1].max(c[1]), w[2].max(c[2])]
     });
-    let worst_c = |a: &Assessment| a.constraints().into_iter().fold(f64::NEG_INFINITY, f64::max);
-    let worst = if constraints.iter().any(|&c| c > 0.0) {
-        (0..assessments.len())
-            .max_by(|&a, &b| worst_c(&assessments[a]).total_cmp(&worst_c(&assessments[b])))
-            .unwrap_or(0)
-    } else {
-        worst_w
-    };
+    let worst =
+        shown_slope(&assessments.iter().zip(&per).map(|(a, o)| (Some(a.worst_constraint()), o[1])).collect::<Vec<_>>());
     Judged { objectives, constraints, worst, assessment: Some(assessments[worst].clone()) }
 }
 
@@ -306,6 +316,18 @@ mod tests {
         let mut x = vec![10.0, 30.0, 20.0, 5.0, 60.0, 10.0, 1.0, 30.0];
         p.repair(&mut x);
         assert!(x[2] <= x[3] && x[3] <= x[1] && x[1] <= x[0], "{x:?}");
+    }
+
+    #[test]
+    fn a_design_is_shown_at_its_worst_failing_slope_else_at_its_highest_w_spec() {
+        // no requirements, or all met: the highest W_spec (a tie: the later slope)
+        assert_eq!(shown_slope(&[(None, 300.0), (None, 410.0), (None, 350.0)]), 1);
+        assert_eq!(shown_slope(&[(Some(-0.2), 300.0), (Some(-0.1), 410.0), (Some(1e-12), 350.0)]), 1);
+        assert_eq!(shown_slope(&[(None, 300.0), (None, 300.0)]), 1);
+        // a failing slope wins over any W_spec; the larger shortfall first, then the higher W_spec
+        assert_eq!(shown_slope(&[(Some(0.05), 300.0), (Some(-0.5), 900.0), (Some(0.30), 280.0)]), 2);
+        assert_eq!(shown_slope(&[(Some(1.0), 1e6 + 7.0), (Some(1.0), 1e6 + 3.0), (Some(0.2), 400.0)]), 0);
+        assert_eq!(shown_slope(&[]), 0);
     }
 
     #[test]
