@@ -17,58 +17,67 @@ pub enum Compat {
     Listing,
 }
 
+/// `[default: …]` of a scenario flag, read from the presets themselves so that the help
+/// cannot drift from them: one value, or the lunar and Earth presets' values.
+fn preset_default(text: &str, value: impl Fn(&Scenario) -> String) -> String {
+    let (lunar, earth) = (value(&Scenario::lunar()), value(&Scenario::earth()));
+    let default = if lunar == earth { lunar } else { format!("{lunar} with --env lunar, {earth} with --env earth") };
+    format!("{text} [default: the --config file's, else {default}]")
+}
+
+pub fn effect_help() -> String {
+    format!(
+        "Switch on an effect beyond the thesis's model, repeatable (cpu and gpu engines unless said; \
+         a config file takes them as [effects.impact_scatter] sigma_deg = …, and so on):\n{}",
+        crate::model::effects::effects_help()
+    )
+}
+
+// Help texts are built from the presets (`preset_default`) and the effects' registry
+// (`effect_help`), so each flag's `help` is an expression, not a doc comment.
 #[derive(Debug, Clone, Args)]
 pub struct ScenarioArgs {
     /// TOML file with `env`, `mode`, [design], [environment], [material], [collision], [sim],
-    /// [performance]; flags override it.
+    /// [performance], [effects], [requirements]; flags override it.
     #[arg(long)]
     pub config: Option<PathBuf>,
-    /// Environment preset (listing D.5).
-    #[arg(long, value_enum)]
+    #[arg(long, value_enum, help = "Environment preset (listing D.5) [default: the --config file's, else lunar]")]
     pub env: Option<EnvPreset>,
-    /// Conveyor angle α, degrees; `gpu-sweep`, `simulate` and `optimize` take a range
-    /// `FROM..TO` (the latter two with --alpha-points).
-    #[arg(long, value_parser = parse_alpha)]
+    #[arg(long, value_parser = parse_alpha, help = preset_default(
+        "Conveyor angle α, degrees; `gpu-sweep`, `simulate` and `optimize` take a range `FROM..TO` (the latter two with --alpha-points)",
+        |s| format!("{} deg", s.environment.alpha_deg)))]
     pub alpha: Option<(f64, f64)>,
-    /// Elastic normal coefficient of restitution.
-    #[arg(long)]
+    #[arg(long, help = preset_default("Elastic normal coefficient of restitution (-)", |s| s.collision.k_elastic.to_string()))]
     pub k_elastic: Option<f64>,
-    /// Friction coefficient of the tangential COR (Eq. 4.14).
-    #[arg(long)]
+    #[arg(long, help = preset_default("Friction coefficient of the tangential COR (-, Eq. 4.14)", |s| s.collision.mu_friction.to_string()))]
     pub mu_fric: Option<f64>,
-    /// Stokes drag parameter k_drag, 1/s (0 = vacuum).
-    #[arg(long)]
+    #[arg(long, help = preset_default("Stokes drag parameter k_drag, 1/s (0 = vacuum)", |s| match s.environment.k_drag {
+        Some(k) => format!("{k} 1/s"),
+        None => "0 (vacuum)".to_string(),
+    }))]
     pub k_drag: Option<f64>,
-    /// Angle of repose, degrees.
-    #[arg(long)]
+    #[arg(long, help = preset_default("Angle of repose, degrees", |s| format!("{} deg", s.material.aor_deg)))]
     pub aor: Option<f64>,
-    /// Material preset: lunar-regolith, quartz-sand, glass-beads.
-    #[arg(long)]
+    #[arg(long, help = preset_default("Material preset: lunar-regolith, quartz-sand, glass-beads", |s| s.material.name.clone()))]
     pub material: Option<String>,
-    /// Particles per design.
-    #[arg(long)]
+    #[arg(long, help = preset_default("Particles per design", |s| s.sim.particles.to_string()))]
     pub particles: Option<u32>,
-    /// Simulated teeth.
-    #[arg(long)]
+    #[arg(long, help = preset_default("Simulated teeth", |s| s.sim.teeth.to_string()))]
     pub teeth: Option<u32>,
-    /// Maximum bounce iterations.
-    #[arg(long)]
+    #[arg(long, help = preset_default("Maximum bounce iterations", |s| s.sim.max_bounces.to_string()))]
     pub bounces: Option<u32>,
-    /// Seed of the counter-based random numbers.
-    #[arg(long)]
+    #[arg(long, help = preset_default("Seed of the counter-based random numbers", |s| s.sim.seed.to_string()))]
     pub seed: Option<u64>,
-    /// Launch-angle offset added to α + δ, degrees (listing: 18.434).
-    #[arg(long)]
+    #[arg(long, help = preset_default("Launch-angle offset added to α + δ, degrees (listing: 18.434)",
+        |s| format!("{} deg", s.sim.launch_offset_deg)))]
     pub launch_offset: Option<f64>,
-    /// Switch off the launch randomisation.
+    /// Switch off the launch randomisation (±10 % on the launch angle and speed, Eq. 4.38).
     #[arg(long)]
     pub no_randomise: bool,
-    /// Compatibility mode.
+    /// Compatibility mode [default: physical, the thesis's text with its errata repaired].
     #[arg(long, value_enum)]
     pub compat: Option<Compat>,
-    /// Switch on an effect beyond the thesis's model (cpu engine), repeatable:
-    /// impact-scatter=SIGMA_DEG, launch-spread=SPEED_SPREAD,ANGLE_SIGMA_DEG, polydisperse=SIGMA_LN.
-    #[arg(long = "effect")]
+    #[arg(long = "effect", value_name = "NAME=PARAMS", help = effect_help())]
     pub effects: Vec<String>,
 }
 

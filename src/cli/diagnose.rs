@@ -26,9 +26,9 @@ pub struct DiagnoseArgs {
     /// The rig's setup for each --data (config TOML with [design], optional [measurement]).
     #[arg(long, required = true)]
     pub setup: Vec<PathBuf>,
-    /// Candidate effects: a comma list of impact-scatter, launch-spread, polydisperse,
-    /// sled-motion, quadratic-drag, or `all`.
-    #[arg(long, default_value = "all")]
+    #[arg(long, default_value = "all", help = format!(
+        "Candidate effects: `all` or a comma list of their names (see `sawtooth simulate --help` for each): {}",
+        crate::model::effects::known_effects()))]
     pub effects: String,
     /// Seed of the particle streams, the solver and the bootstrap (default: the first setup's
     /// sim.seed).
@@ -50,7 +50,7 @@ pub struct DiagnoseArgs {
     /// Bootstrap replicates for the intervals (resampling held-out runs).
     #[arg(long, default_value_t = 400)]
     pub bootstrap: usize,
-    /// Write report.md, diagnosis.json, residuals.svg, ranking.svg, distributions.svg here.
+    /// Write report.md, diagnosis.json and the figures residuals, ranking, distributions (.svg and .png) here.
     #[arg(long)]
     pub out: PathBuf,
     /// Print diagnosis.json's object instead of a summary.

@@ -55,7 +55,7 @@ pub struct FitArgs {
     /// the runs; the parameters not named keep the setup's values.
     #[arg(long, conflicts_with = "params")]
     pub at: Option<String>,
-    /// Write fit.json, fit.csv and fit.svg into this directory.
+    /// Write fit.json, fit.csv, fit.svg and fit.png into this directory.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Print one JSON object instead of a table.

@@ -27,31 +27,69 @@ pub struct Cli {
     pub command: Command,
 }
 
+// Every command's --help ends with examples that run as written from the repository root
+// (tests/cli.rs runs the help of each; the README shows the same commands).
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Simulate one design: tooth distribution, d_avg, performance.
+    #[command(after_help = "Examples:
+  sawtooth simulate --config examples/lunar_solution_c.toml
+  sawtooth simulate --env earth --design 47.376,45.884,34.375,36.916,62.853,17.552,1.299,58.595 --json
+  sawtooth simulate --config examples/lunar_solution_c.toml --requirements table-2.2 --alpha 0..40
+  sawtooth simulate --config data/validation/test3.toml --effect polydisperse=0.5 --plot flights.png")]
     Simulate(simulate::SimulateArgs),
     /// Measure particle-bounces per second of the engines side by side.
+    #[command(after_help = "Examples:
+  sawtooth bench --env lunar --repeats 7 --engines listing,cpu,gpu
+  sawtooth bench --env earth --repeats 7 --engines listing,cpu --compat listing")]
     Bench(bench::BenchArgs),
     /// Compare the GPU engine with the CPU reference on random designs; exit 1 on failure.
+    #[command(after_help = "Example:\n  sawtooth conformance --env lunar")]
     Conformance(conformance::ConformanceArgs),
     /// Constrained multi-objective optimisation (NSGA-II), resumable.
+    #[command(after_help = "Examples:
+  sawtooth optimize --env earth --pop 100 --generations 50 --algorithm nsga2 --out runs/earth-quick
+  sawtooth optimize --env earth --pop 100 --generations 50 --algorithm nsga2 --out runs/earth-quick --resume
+  sawtooth optimize --env lunar --pop 1000 --tol 1e-6 --engine auto --out runs/lunar-hf
+  sawtooth optimize --env lunar --requirements table-2.2 --alpha 0..40 --alpha-points 5 --pop 500 --out runs/lunar-req")]
     Optimize(optimize::OptimizeArgs),
     /// Calibrate collision and drag parameters against measured tooth masses.
+    #[command(after_help = "Examples:
+  sawtooth fit --data data/validation/test3.csv --setup data/validation/test3.toml --out runs/fit3
+  sawtooth fit --data data/validation/test1.csv --setup data/validation/test1.toml --at k_elastic=0.854,mu_fric=0.133,k_drag=5.347")]
     Fit(fit::FitArgs),
     /// One optimisation per conveyor angle (--alpha FROM..TO), angles batched per generation.
-    #[command(name = "gpu-sweep")]
+    #[command(
+        name = "gpu-sweep",
+        after_help = "Examples:
+  sawtooth gpu-sweep --env lunar --alpha 1..40 --step 1 --engine auto --out runs/sweep
+  sawtooth gpu-sweep --env lunar --alpha 1..40 --pop 500 --tol 1e-4 --out /scratch/$USER/sweep --plan"
+    )]
     GpuSweep(sweep::SweepArgs),
     /// Repeatability and sensitivity studies of the optimiser (5.4.1-5.4.2).
-    #[command(subcommand)]
+    #[command(
+        subcommand,
+        after_help = "Examples:
+  sawtooth study repeatability --env lunar --runs 45 --pop 500 --tol 1e-4 --out runs/rep
+  sawtooth study sensitivity --env earth --pop 500 --tol 1e-4 --repeatability runs/rep --out runs/sens"
+    )]
     Study(study::StudyCommand),
     /// Run, gather, inspect a campaign planned with `gpu-sweep --plan` / `study … --plan`,
     /// or turn it into a Slurm job array.
-    #[command(subcommand)]
+    #[command(
+        subcommand,
+        after_help = "Examples:
+  sawtooth campaign slurm /scratch/$USER/sweep --partition cpu --time 4:00:00 --cpus-per-task 8 --submit
+  sawtooth campaign run /scratch/$USER/sweep --task 3"
+    )]
     Campaign(campaign::CampaignCommand),
     /// Measurement-like tooth masses from the model, optionally with effects switched on.
+    #[command(after_help = "Example:
+  sawtooth synth --setup data/validation/test3.toml --effect impact-scatter=8 --runs 10 --seed 1 --out runs/synth.csv")]
     Synth(synth::SynthArgs),
     /// Locate the sim-to-real gap and rank candidate effects by held-out error.
+    #[command(after_help = "Example:
+  sawtooth diagnose --data data/validation/test3.csv --setup data/validation/test3.toml --out runs/diag3")]
     Diagnose(diagnose::DiagnoseArgs),
 }
 

@@ -139,7 +139,8 @@ pub struct OptimizeArgs {
     /// Requirements as constraints (Deb's rules) and the slopes a design must meet them at.
     #[command(flatten)]
     pub requirements: RequirementArgs,
-    /// Output directory.
+    /// Output directory (created; owned by this run: run.toml, evaluations.csv,
+    /// generations.csv, checkpoint.json, pareto.csv, pareto.svg/.png).
     #[arg(long)]
     pub out: PathBuf,
     /// Continue the run in --out from its checkpoint (settings come from its run.toml).

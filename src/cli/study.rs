@@ -38,6 +38,8 @@ pub struct Common {
     /// as Tables C.2-C.3; erratum 17).
     #[arg(long)]
     pub target_mass_flow: Option<f64>,
+    /// Output directory: one run folder per member, then runs.csv/grid.csv, summary.csv and the
+    /// figure (.svg and .png); rerunning reads finished members back and resumes the rest.
     #[arg(long)]
     pub out: PathBuf,
     /// Only write the campaign's plan into --out (run it with `sawtooth campaign`).

@@ -29,6 +29,8 @@ pub struct SweepArgs {
     /// Angle step, degrees.
     #[arg(long, default_value_t = 1.0)]
     pub step: f64,
+    /// Output directory: one run folder per angle, then summary.csv and sweep.svg/.png;
+    /// rerunning reads finished angles back and resumes the rest.
     #[arg(long)]
     pub out: PathBuf,
     /// Only write the campaign's plan into --out (run it with `sawtooth campaign`).

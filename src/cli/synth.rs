@@ -18,12 +18,12 @@ pub struct SynthArgs {
     /// Setup TOML (the measured-data setup format).
     #[arg(long)]
     pub setup: PathBuf,
-    /// Effect switched on, repeatable: impact-scatter=SIGMA_DEG,
-    /// launch-spread=SPEED_SPREAD,ANGLE_SIGMA_DEG, polydisperse=SIGMA_LN.
-    #[arg(long = "effect")]
+    #[arg(long = "effect", value_name = "NAME=PARAMS", help = super::args::effect_help())]
     pub effects: Vec<String>,
+    /// Measured runs to synthesise (rows of the CSV).
     #[arg(long, default_value_t = 10)]
     pub runs: u32,
+    /// Seed of the particle streams and of the mass and scale noise.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Particles simulated per run (the run's finite grain count).

@@ -292,10 +292,26 @@ impl EffectKind {
         }
     }
 
+    /// What the effect does, its parameters with their units, and where it acts (for --help).
+    pub fn describe(self) -> &'static str {
+        match self {
+            EffectKind::ImpactScatter => "each impact's surface normal tilted by a random angle of sd SIGMA_DEG (deg): rough surfaces, non-spherical grains",
+            EffectKind::LaunchSpread => "grains leave early and slower, speed x (1 - SPEED_SPREAD u), u ~ U(0,1), direction jittered by sd ANGLE_SIGMA_DEG (deg)",
+            EffectKind::Polydisperse => "log-normal grain sizes, sd SIGMA_LN of ln d; Stokes drag per grain ∝ 1/d² (with drag only)",
+            EffectKind::SledMotion => "the sled rests DELAY_S (s) after the launch, then returns at RETURN_SPEED_M_S (m/s) over the stroke (cpu engine only)",
+            EffectKind::QuadraticDrag => "Schiller-Naumann drag of spheres of DIAMETER_M (m) and DENSITY_KG_M3 (kg/m³) instead of the linear k_drag (with drag only; cpu engine only)",
+        }
+    }
+
     /// The CLI's `NAME=p1[,p2]` form of the parameters, for messages.
     pub fn cli_form(self) -> String {
         format!("{}={}", self.name(), self.param_names().iter().map(|p| p.to_uppercase()).collect::<Vec<_>>().join(","))
     }
+}
+
+/// Every effect as `--help` lists it: `NAME=PARAMS: what it does`, one per line.
+pub fn effects_help() -> String {
+    EffectKind::ALL.map(|e| format!("  {}: {}", e.cli_form(), e.describe())).join("\n")
 }
 
 /// The effects' names, comma-separated (for messages).
