@@ -133,3 +133,108 @@ fn optimize_rejects_bad_settings() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("run.toml"));
 }
+
+const SMALL: &[&str] = &[
+    "optimize",
+    "--env",
+    "earth",
+    "--pop",
+    "8",
+    "--algorithm",
+    "nsga2",
+    "--particles",
+    "30",
+    "--final-particles",
+    "20",
+    "--replicates",
+    "1",
+    "--seed",
+    "5",
+    "--quiet",
+];
+
+fn small(out: &Path, extra: &[&str]) -> std::process::Output {
+    Command::new(bin()).args(SMALL).args(["--out", out.to_str().unwrap()]).args(extra).output().unwrap()
+}
+
+fn ok(o: &std::process::Output) {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+fn refused(o: &std::process::Output, needles: &[&str]) {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    for n in needles {
+        assert!(err.contains(n), "`{n}` not in: {err}");
+    }
+}
+
+/// generations.csv without the elapsed-time column
+fn generations(dir: &Path) -> Vec<String> {
+    let t = std::fs::read_to_string(dir.join("generations.csv")).unwrap();
+    t.lines().map(|l| l.rsplit_once(',').unwrap().0.to_string()).collect()
+}
+
+#[test]
+fn resume_checks_the_stored_run_and_the_flags_given_with_it() {
+    let dir = tmp("resume-rules");
+    ok(&small(&dir, &["--generations", "3"]));
+    let manifest = dir.join("run.toml");
+    let original = std::fs::read_to_string(&manifest).unwrap();
+    // a run.toml edited to values the CLI refuses is refused on resume, naming the key
+    for (from, to, key) in [
+        ("k_drag = 5.439", "k_drag = nan", "environment.k_drag"),
+        ("pop = 8", "pop = 2", "config.pop"),
+        ("alpha_deg = 35.0", "alpha_deg = 95.0", "environment.alpha_deg"),
+    ] {
+        assert!(original.contains(from), "{from}");
+        std::fs::write(&manifest, original.replacen(from, to, 1)).unwrap();
+        refused(&small(&dir, &["--generations", "3", "--resume"]), &[key, "run.toml"]);
+    }
+    std::fs::write(&manifest, &original).unwrap();
+    // the run's own command with --resume is fine; flags that describe another run are not
+    ok(&small(&dir, &["--generations", "3", "--resume"]));
+    refused(
+        &small(&dir, &["--generations", "3", "--resume", "--selection", "permutation"]),
+        &["--selection permutation", "deb"],
+    );
+    refused(&small(&dir, &["--generations", "3", "--resume", "--tol", "1e-3"]), &["--tol 0.001", "none"]);
+    refused(
+        &small(&dir, &["--generations", "3", "--resume", "--k-elastic", "0.5"]),
+        &["collision.k_elastic", "0.5", "0.872"],
+    );
+    refused(&small(&dir, &["--generations", "2", "--resume"]), &["can only be extended"]);
+    // a larger --generations extends the finished run to what a longer run gives
+    ok(&small(&dir, &["--generations", "5", "--resume"]));
+    let longer = tmp("resume-longer");
+    ok(&small(&longer, &["--generations", "5"]));
+    assert_eq!(generations(&dir), generations(&longer));
+    for f in ["pareto.csv", "evaluations.csv"] {
+        assert_eq!(std::fs::read(dir.join(f)).unwrap(), std::fs::read(longer.join(f)).unwrap(), "{f}");
+    }
+    assert!(std::fs::read_to_string(&manifest).unwrap().contains("max_generations = 5"));
+
+    // killed before its first checkpoint: only run.toml exists; --resume starts it again
+    let early = tmp("resume-early");
+    std::fs::create_dir_all(&early).unwrap();
+    std::fs::copy(longer.join("run.toml"), early.join("run.toml")).unwrap();
+    let o = small(&early, &["--generations", "5", "--resume"]);
+    ok(&o);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no checkpoint"), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read(early.join("pareto.csv")).unwrap(), std::fs::read(longer.join("pareto.csv")).unwrap());
+
+    // run.toml is a config: its scenario, flags on top
+    let o = Command::new(bin())
+        .args(["simulate", "--config", manifest.to_str().unwrap(), "--particles", "20", "--json"])
+        .args(["--design", "47.376,45.884,34.375,36.916,62.853,17.552,1.299,58.595"])
+        .output()
+        .unwrap();
+    ok(&o);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["scenario"]["environment"]["g"], 9.81);
+    assert_eq!(v["scenario"]["sim"]["particles"], 20);
+    assert_eq!(v["scenario"]["sim"]["seed"], 5);
+    for d in [dir, longer, early] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}

@@ -38,7 +38,8 @@ pub fn effect_help() -> String {
 #[derive(Debug, Clone, Args)]
 pub struct ScenarioArgs {
     /// TOML file with `env`, `mode`, [design], [environment], [material], [collision], [sim],
-    /// [performance], [effects], [requirements]; flags override it.
+    /// [performance], [effects], [requirements], or a run folder's run.toml (its scenario and
+    /// requirements); flags override it.
     #[arg(long)]
     pub config: Option<PathBuf>,
     #[arg(long, value_enum, help = "Environment preset (listing D.5) [default: the --config file's, else lunar]")]
@@ -82,20 +83,61 @@ pub struct ScenarioArgs {
 }
 
 impl ScenarioArgs {
+    /// The flags given on the command line (for refusing them where they cannot apply).
+    pub fn given_flags(&self) -> Vec<&'static str> {
+        let f = |given: bool, name: &'static str| given.then_some(name);
+        [
+            f(self.config.is_some(), "--config"),
+            f(self.env.is_some(), "--env"),
+            f(self.alpha.is_some(), "--alpha"),
+            f(self.k_elastic.is_some(), "--k-elastic"),
+            f(self.mu_fric.is_some(), "--mu-fric"),
+            f(self.k_drag.is_some(), "--k-drag"),
+            f(self.aor.is_some(), "--aor"),
+            f(self.material.is_some(), "--material"),
+            f(self.particles.is_some(), "--particles"),
+            f(self.teeth.is_some(), "--teeth"),
+            f(self.bounces.is_some(), "--bounces"),
+            f(self.seed.is_some(), "--seed"),
+            f(self.launch_offset.is_some(), "--launch-offset"),
+            f(self.no_randomise, "--no-randomise"),
+            f(self.compat.is_some(), "--compat"),
+            f(!self.effects.is_empty(), "--effect"),
+        ]
+        .into_iter()
+        .flatten()
+        .collect()
+    }
+
     /// Config file (if any), then flags; validated.
     pub fn resolve(&self) -> anyhow::Result<(Scenario, Option<Design>)> {
-        let file = match &self.config {
-            Some(p) => ConfigFile::load(p)?,
-            None => ConfigFile::default(),
+        // a run folder's run.toml holds a complete scenario: start from it (flags still
+        // override), so that a run's settings can be simulated or optimised again
+        let run = match &self.config {
+            Some(p) => crate::optim::runner::manifest_in(p)?,
+            None => None,
         };
-        let mut file = file;
-        if let Some(e) = self.env {
-            file.env = Some(e);
-        }
-        if self.compat == Some(Compat::Listing) {
-            file.mode = Some(crate::model::PhysicsMode::Listing);
-        }
-        let mut s = file.scenario()?;
+        let (mut s, file) = if let Some(run) = run {
+            if self.env.is_some() || self.compat.is_some() {
+                bail!(
+                    "--config {}: a run's run.toml holds a complete scenario; --env and --compat would replace it, not adjust it (give the other flags, or no run.toml)",
+                    self.config.as_ref().expect("a config").display()
+                );
+            }
+            (run.scenario, ConfigFile::default())
+        } else {
+            let mut file = match &self.config {
+                Some(p) => ConfigFile::load(p)?,
+                None => ConfigFile::default(),
+            };
+            if let Some(e) = self.env {
+                file.env = Some(e);
+            }
+            if self.compat == Some(Compat::Listing) {
+                file.mode = Some(crate::model::PhysicsMode::Listing);
+            }
+            (file.scenario()?, file)
+        };
         if let Some(m) = &self.material {
             s.material = Material::by_name(m).with_context(|| {
                 format!("--material: unknown material `{m}` (known: lunar-regolith, quartz-sand, glass-beads)")
@@ -213,11 +255,25 @@ pub struct RequirementArgs {
 }
 
 impl RequirementArgs {
+    /// The flags given on the command line.
+    pub fn given_flags(&self) -> Vec<&'static str> {
+        [
+            self.requirements.is_some().then_some("--requirements"),
+            self.alpha_points.is_some().then_some("--alpha-points"),
+        ]
+        .into_iter()
+        .flatten()
+        .collect()
+    }
+
     pub fn resolve(&self, scenario: &ScenarioArgs) -> anyhow::Result<Option<Requirements>> {
         if let Some(spec) = &self.requirements {
             return load_requirements(spec).map(Some);
         }
         let Some(path) = &scenario.config else { return Ok(None) };
+        if let Some(run) = crate::optim::runner::manifest_in(path)? {
+            return Ok(run.requirements);
+        }
         match ConfigFile::load(path)?.requirements {
             Some(t) => t.requirements(&path.display().to_string()).map(Some),
             None => Ok(None),

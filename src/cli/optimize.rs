@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::bail;
-use clap::Args;
+use clap::{Args, ValueEnum};
 
 use super::args::{EngineArgs, RequirementArgs, ScenarioArgs};
 use crate::engine::make_engine_for;
@@ -14,47 +14,57 @@ use crate::optim::front::print_picks;
 use crate::optim::nsga2::{Config, Mode, Selection};
 use crate::optim::runner::{read_manifest, run as run_optimisation, Algorithm, Manifest, RunOptions};
 
-/// Largest population, generation count, particle count and replicate count the GA flags
-/// accept.
-pub const MAX_POP: usize = 100_000;
-pub const MAX_GENERATIONS: u64 = 1_000_000;
-pub const MAX_PARTICLES: u32 = 10_000_000;
-pub const MAX_REPLICATES: u32 = 1000;
+pub use crate::optim::runner::{MAX_GENERATIONS, MAX_PARTICLES, MAX_POP, MAX_REPLICATES, MIN_POP};
 
-/// GA settings shared by every command that optimises.
+/// GA settings shared by every command that optimises. The run settings are options so that
+/// `--resume` can tell a flag the user gave (and refuse one that contradicts the run) from a
+/// default; the defaults are the `DEFAULT_*` constants, stated in each flag's help.
 #[derive(Debug, Clone, Args)]
 pub struct GaArgs {
-    /// Population size (thesis: 500, high fidelity 1000).
-    #[arg(long, default_value_t = 1000)]
-    pub pop: usize,
-    /// Maximum generations (D.5: MaxGenerations 1000).
-    #[arg(long, default_value_t = 1000)]
-    pub generations: u64,
-    #[arg(long, value_enum, default_value = "matlab-like")]
-    pub algorithm: Algorithm,
-    /// Function tolerance of the spread-stall stop (thesis: 1e-4, high fidelity 1e-6).
-    #[arg(long, default_value_t = 1e-6)]
-    pub tol: f64,
-    /// Generations over which the spread change is averaged (MATLAB: MaxStallGenerations 100).
-    #[arg(long, default_value_t = 100)]
-    pub stall_generations: u64,
-    /// Particles per design when re-evaluating the final front.
-    #[arg(long, default_value_t = 1000)]
-    pub final_particles: u32,
-    /// Independent particle streams for the final re-evaluation (standard errors).
-    #[arg(long, default_value_t = 8)]
-    pub replicates: u32,
+    /// Population size (thesis: 500, high fidelity 1000) [default: 1000].
+    #[arg(long)]
+    pub pop: Option<usize>,
+    /// Maximum generations (D.5: MaxGenerations 1000) [default: 1000]. With --resume: a larger
+    /// value extends the run.
+    #[arg(long)]
+    pub generations: Option<u64>,
+    /// [default: matlab-like]
+    #[arg(long, value_enum)]
+    pub algorithm: Option<Algorithm>,
+    /// Function tolerance of the spread-stall stop, relative (thesis: 1e-4, high fidelity
+    /// 1e-6) [default: 1e-6].
+    #[arg(long)]
+    pub tol: Option<f64>,
+    /// Generations over which the spread change is averaged (MATLAB: MaxStallGenerations 100)
+    /// [default: 100].
+    #[arg(long)]
+    pub stall_generations: Option<u64>,
+    /// Particles per design when re-evaluating the final front [default: 1000].
+    #[arg(long)]
+    pub final_particles: Option<u32>,
+    /// Independent particle streams for the final re-evaluation (standard errors) [default: 8].
+    #[arg(long)]
+    pub replicates: Option<u32>,
     /// Save a checkpoint every N generations (always on Ctrl-C and at the end).
     #[arg(long, default_value_t = 1)]
     pub checkpoint_every: u64,
-    /// Mating selection: `deb` (Deb et al. 2002, the default) or `permutation` (pymoo's
-    /// NSGA-II tournaments; ahead of `deb` on the lunar problem, BENCHMARKS.md issue 14).
-    #[arg(long, value_enum, default_value = "deb")]
-    pub selection: Selection,
-    /// No progress bar (logs one line per 10 generations instead).
+    /// Mating selection: `deb` (Deb et al. 2002) or `permutation` (pymoo's NSGA-II
+    /// tournaments; ahead of `deb` on the lunar problem, BENCHMARKS.md issue 14) [default: deb].
+    #[arg(long, value_enum)]
+    pub selection: Option<Selection>,
+    /// Print nothing while running (default: a progress bar on a terminal, else a line with
+    /// the generation, the front and an ETA every few seconds).
     #[arg(long)]
     pub quiet: bool,
 }
+
+pub const DEFAULT_POP: usize = 1000;
+pub const DEFAULT_GENERATIONS: u64 = 1000;
+pub const DEFAULT_ALGORITHM: Algorithm = Algorithm::MatlabLike;
+pub const DEFAULT_TOL: f64 = 1e-6;
+pub const DEFAULT_STALL_GENERATIONS: u64 = 100;
+pub const DEFAULT_FINAL_PARTICLES: u32 = 1000;
+pub const DEFAULT_REPLICATES: u32 = 8;
 
 impl GaArgs {
     /// A manifest for a new run of `scenario` with these settings.
@@ -63,48 +73,54 @@ impl GaArgs {
         scenario: crate::model::Scenario,
         engine: crate::engine::EngineKind,
     ) -> anyhow::Result<Manifest> {
-        if self.pop < 4 {
-            bail!("--pop must be at least 4, got {}", self.pop);
+        let pop = self.pop.unwrap_or(DEFAULT_POP);
+        let generations = self.generations.unwrap_or(DEFAULT_GENERATIONS);
+        let tol = self.tol.unwrap_or(DEFAULT_TOL);
+        let final_particles = self.final_particles.unwrap_or(DEFAULT_FINAL_PARTICLES);
+        let replicates = self.replicates.unwrap_or(DEFAULT_REPLICATES);
+        if pop < MIN_POP {
+            bail!("--pop must be at least {MIN_POP}, got {pop}");
         }
         // Sizes beyond these are typos, not runs: a population of a billion needs tens of GB
         // before the first generation, a re-evaluation beyond sim.particles' bound seats no
         // grain and would leave an empty front.
-        if self.pop > MAX_POP {
+        if pop > MAX_POP {
             bail!(
-                "--pop must be at most {MAX_POP} (one generation is one engine batch of that many designs), got {}",
-                self.pop
+                "--pop must be at most {MAX_POP} (one generation is one engine batch of that many designs), got {pop}"
             );
         }
-        if self.generations > MAX_GENERATIONS {
-            bail!("--generations must be at most {MAX_GENERATIONS}, got {}", self.generations);
+        if generations > MAX_GENERATIONS {
+            bail!("--generations must be at most {MAX_GENERATIONS}, got {generations}");
         }
-        if !(self.tol > 0.0 && self.tol.is_finite()) {
-            bail!("--tol must be a positive number, got {}", self.tol);
+        if !(tol > 0.0 && tol.is_finite()) {
+            bail!("--tol must be a positive number, got {tol}");
         }
-        if self.final_particles == 0 || self.replicates == 0 {
+        if final_particles == 0 || replicates == 0 {
             bail!("--final-particles and --replicates must be at least 1");
         }
-        if self.final_particles > MAX_PARTICLES {
+        if final_particles > MAX_PARTICLES {
             bail!(
-                "--final-particles must be at most {MAX_PARTICLES} (the bound of sim.particles), got {}",
-                self.final_particles
+                "--final-particles must be at most {MAX_PARTICLES} (the bound of sim.particles), got {final_particles}"
             );
         }
-        if self.replicates > MAX_REPLICATES {
-            bail!("--replicates must be at most {MAX_REPLICATES}, got {}", self.replicates);
+        if replicates > MAX_REPLICATES {
+            bail!("--replicates must be at most {MAX_REPLICATES}, got {replicates}");
         }
-        let mode = match self.algorithm {
+        let algorithm = self.algorithm.unwrap_or(DEFAULT_ALGORITHM);
+        let mode = match algorithm {
             Algorithm::Nsga2 => Mode::Standard,
-            Algorithm::MatlabLike => {
-                Mode::MatlabLike { pareto_fraction: 0.35, tol: self.tol, stall_generations: self.stall_generations }
-            }
+            Algorithm::MatlabLike => Mode::MatlabLike {
+                pareto_fraction: 0.35,
+                tol,
+                stall_generations: self.stall_generations.unwrap_or(DEFAULT_STALL_GENERATIONS),
+            },
         };
         let config = Config {
-            pop: self.pop,
+            pop,
             seed: scenario.sim.seed,
-            max_generations: self.generations,
+            max_generations: generations,
             mode,
-            selection: self.selection,
+            selection: self.selection.unwrap_or_default(),
             ..Config::default()
         };
         Ok(Manifest {
@@ -112,15 +128,92 @@ impl GaArgs {
             engine,
             device: String::new(),
             seed: scenario.sim.seed,
-            algorithm: self.algorithm,
+            algorithm,
             config,
-            final_particles: self.final_particles,
-            replicates: self.replicates,
+            final_particles,
+            replicates,
             scenario,
             termination: None,
             slopes_deg: Vec::new(),
             requirements: None,
         })
+    }
+
+    /// With `--resume`: refuse a run setting given on the command line that differs from the
+    /// stored run's (it would be silently ignored otherwise), and apply a larger
+    /// `--generations`, which extends the run.
+    pub fn apply_to_resumed(&self, m: &mut Manifest) -> anyhow::Result<()> {
+        let stored_tol = match m.config.mode {
+            Mode::MatlabLike { tol, .. } => Some(tol),
+            Mode::Standard => None,
+        };
+        let stored_stall = match m.config.mode {
+            Mode::MatlabLike { stall_generations, .. } => Some(stall_generations),
+            Mode::Standard => None,
+        };
+        let value_name = |v: &dyn Fn() -> Option<clap::builder::PossibleValue>| {
+            v().map_or_else(String::new, |p| p.get_name().to_string())
+        };
+        let or_none = |v: Option<String>| v.unwrap_or_else(|| "none (nsga2 has no stall stop)".to_string());
+        let differs: [(&str, Option<String>, String); 7] = [
+            ("--pop", self.pop.filter(|&p| p != m.config.pop).map(|p| p.to_string()), m.config.pop.to_string()),
+            (
+                "--algorithm",
+                self.algorithm.filter(|&a| a != m.algorithm).map(|a| value_name(&|| a.to_possible_value())),
+                value_name(&|| m.algorithm.to_possible_value()),
+            ),
+            (
+                "--tol",
+                self.tol.filter(|&t| Some(t) != stored_tol).map(|t| t.to_string()),
+                or_none(stored_tol.map(|t| t.to_string())),
+            ),
+            (
+                "--stall-generations",
+                self.stall_generations.filter(|&g| Some(g) != stored_stall).map(|g| g.to_string()),
+                or_none(stored_stall.map(|g| g.to_string())),
+            ),
+            (
+                "--final-particles",
+                self.final_particles.filter(|&n| n != m.final_particles).map(|n| n.to_string()),
+                m.final_particles.to_string(),
+            ),
+            (
+                "--replicates",
+                self.replicates.filter(|&n| n != m.replicates).map(|n| n.to_string()),
+                m.replicates.to_string(),
+            ),
+            (
+                "--selection",
+                self.selection.filter(|&s| s != m.config.selection).map(|s| value_name(&|| s.to_possible_value())),
+                value_name(&|| m.config.selection.to_possible_value()),
+            ),
+        ];
+        for (flag, given, stored) in differs {
+            if let Some(given) = given {
+                bail!(
+                    "--resume continues the run with its own settings: {flag} {given} differs from the run's {stored} (run.toml); drop the flag, or start a new run in another --out"
+                );
+            }
+        }
+        if let Some(g) = self.generations.filter(|&g| g != m.config.max_generations) {
+            if g < m.config.max_generations {
+                bail!(
+                    "--resume --generations {g}: a run can only be extended, and this one was started with --generations {}",
+                    m.config.max_generations
+                );
+            }
+            if g > MAX_GENERATIONS {
+                bail!("--generations must be at most {MAX_GENERATIONS}, got {g}");
+            }
+            if m.termination.as_deref() == Some("SpreadStalled") {
+                bail!(
+                    "--resume --generations {g}: the run stopped because the front's spread stalled (--tol), not at its generation limit; more generations would stop it again at once (start a new run with a smaller --tol)"
+                );
+            }
+            m.config.max_generations = g;
+            m.termination = None;
+        }
+        Ok(())
     }
 
     pub fn options(&self, label: &str) -> RunOptions {
@@ -148,10 +241,60 @@ pub struct OptimizeArgs {
     pub resume: bool,
 }
 
+/// With `--resume`, scenario and requirement flags may repeat the run's own command (the
+/// README's `… --resume`), but must not describe another run: they would be ignored.
+fn refuse_other_scenario(a: &OptimizeArgs, m: &Manifest) -> anyhow::Result<()> {
+    let given: Vec<&str> = a.scenario.given_flags().into_iter().chain(a.requirements.given_flags()).collect();
+    if given.is_empty() {
+        return Ok(());
+    }
+    let (scenario, _, slopes) = a.scenario.resolve_over_slopes(a.requirements.alpha_points)?;
+    let requirements = a.requirements.resolve(&a.scenario)?;
+    let mut diffs = Vec::new();
+    differing_keys("scenario", &serde_json::to_value(&scenario)?, &serde_json::to_value(&m.scenario)?, &mut diffs);
+    if slopes != m.slopes_deg {
+        diffs.push(format!("slopes_deg ({slopes:?} vs the run's {:?})", m.slopes_deg));
+    }
+    differing_keys(
+        "requirements",
+        &serde_json::to_value(&requirements)?,
+        &serde_json::to_value(&m.requirements)?,
+        &mut diffs,
+    );
+    if !diffs.is_empty() {
+        diffs.truncate(6);
+        bail!(
+            "--resume continues the run in {} with its own settings, but {} describe another run (differing: {}); give the run's own flags or none, or start a new run in another --out",
+            a.out.display(),
+            given.join(", "),
+            diffs.join(", ")
+        );
+    }
+    Ok(())
+}
+
+/// The dotted keys under `path` where `given` and `stored` differ, with both values.
+fn differing_keys(path: &str, given: &serde_json::Value, stored: &serde_json::Value, out: &mut Vec<String>) {
+    use serde_json::Value;
+    match (given, stored) {
+        (Value::Object(g), Value::Object(s)) => {
+            for key in g.keys().chain(s.keys().filter(|k| !g.contains_key(*k))) {
+                let (gv, sv) = (g.get(key).unwrap_or(&Value::Null), s.get(key).unwrap_or(&Value::Null));
+                differing_keys(&format!("{path}.{key}"), gv, sv, out);
+            }
+        }
+        _ if given != stored => out.push(format!("{path} = {given} vs the run's {stored}")),
+        _ => {}
+    }
+}
+
 pub fn run(a: OptimizeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let (manifest, kind, scenario) = if a.resume {
-        let m = read_manifest(&a.out)?;
-        (None, m.engine, m.scenario)
+        let mut m = read_manifest(&a.out)?;
+        refuse_other_scenario(&a, &m)?;
+        a.ga.apply_to_resumed(&mut m)?;
+        let (kind, scenario) = (m.engine, m.scenario.clone());
+        (Some(m), kind, scenario)
     } else {
         let (scenario, _, slopes_deg) = a.scenario.resolve_over_slopes(a.requirements.alpha_points)?;
         let mut manifest = a.ga.manifest(scenario.clone(), a.engine.engine)?;

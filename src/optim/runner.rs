@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use super::front::{final_front, write_outputs, FrontPoint};
 use super::hypervolume::hypervolume_2d;
-use super::nsga2::{load_checkpoint, save_checkpoint, Config, Nsga2, State};
+use super::nsga2::{load_checkpoint, save_checkpoint, Config, Mode, Nsga2, State};
 use super::sawtooth::{Logged, SawtoothProblem};
 use crate::engine::{BatchEvaluator, EngineKind};
 use crate::io::atomic::write_atomic;
@@ -59,6 +59,65 @@ pub struct Manifest {
     /// Requirements the designs are constrained by (`optimize --requirements`, issue 13).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub requirements: Option<Requirements>,
+}
+
+/// Smallest population (NSGA-II's tournaments and crowding need a few members), and the
+/// largest population, generation count, particle count and replicate count a run accepts:
+/// beyond these a value is a typo, not a run (a population of a billion needs tens of GB
+/// before the first generation).
+pub const MIN_POP: usize = 4;
+pub const MAX_POP: usize = 100_000;
+pub const MAX_GENERATIONS: u64 = 1_000_000;
+pub const MAX_PARTICLES: u32 = 10_000_000;
+pub const MAX_REPLICATES: u32 = 1000;
+
+impl Manifest {
+    /// The rules a new run's settings are checked by, applied to stored ones: a run.toml
+    /// edited by hand (or damaged) is refused before anything runs, naming its key.
+    pub fn validate(&self) -> Result<(), String> {
+        self.scenario.validate().map_err(|e| format!("scenario: {e}"))?;
+        let c = &self.config;
+        if !(MIN_POP..=MAX_POP).contains(&c.pop) {
+            return Err(format!("`config.pop` must lie in [{MIN_POP}, {MAX_POP}], got {}", c.pop));
+        }
+        if c.max_generations > MAX_GENERATIONS {
+            return Err(format!(
+                "`config.max_generations` must be at most {MAX_GENERATIONS}, got {}",
+                c.max_generations
+            ));
+        }
+        if let Mode::MatlabLike { pareto_fraction, tol, .. } = c.mode {
+            if !(tol > 0.0 && tol.is_finite()) {
+                return Err(format!("`config.mode.tol` must be a positive number, got {tol}"));
+            }
+            if !(pareto_fraction > 0.0 && pareto_fraction <= 1.0) {
+                return Err(format!("`config.mode.pareto_fraction` must lie in (0, 1], got {pareto_fraction}"));
+            }
+        }
+        for (name, v) in [("config.crossover_eta", c.crossover_eta), ("config.mutation_eta", c.mutation_eta)] {
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(format!("`{name}` must be a finite number >= 0, got {v}"));
+            }
+        }
+        if !(0.0..=1.0).contains(&c.crossover_prob) {
+            return Err(format!("`config.crossover_prob` must lie in [0, 1], got {}", c.crossover_prob));
+        }
+        if !(1..=MAX_PARTICLES).contains(&self.final_particles) {
+            return Err(format!("`final_particles` must lie in [1, {MAX_PARTICLES}], got {}", self.final_particles));
+        }
+        if !(1..=MAX_REPLICATES).contains(&self.replicates) {
+            return Err(format!("`replicates` must lie in [1, {MAX_REPLICATES}], got {}", self.replicates));
+        }
+        for &alpha in &self.slopes_deg {
+            let mut s = self.scenario.clone();
+            s.environment.alpha_deg = alpha;
+            s.validate().map_err(|e| format!("`slopes_deg`: slope {alpha}: {e}"))?;
+        }
+        if let Some(r) = &self.requirements {
+            r.validate()?;
+        }
+        Ok(())
+    }
 }
 
 /// How a run reports and checkpoints.
@@ -204,9 +263,23 @@ pub const RUN_KIND: &str = "optimize";
 /// Read a run's manifest (for --resume).
 pub fn read_manifest(dir: &Path) -> anyhow::Result<Manifest> {
     let path = dir.join("run.toml");
-    let text =
-        std::fs::read_to_string(&path).with_context(|| format!("--resume: no run manifest at {}", path.display()))?;
-    toml::from_str(&text).with_context(|| format!("--resume: reading {}", path.display()))
+    let text = std::fs::read_to_string(&path).with_context(|| format!("no run manifest at {}", path.display()))?;
+    let m: Manifest = toml::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
+    m.validate().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok(m)
+}
+
+/// The run manifest in `path` when the file is one (a run folder's run.toml: it has a
+/// `version` and a `[scenario]`), validated; None for any other file (e.g. a scenario config).
+pub fn manifest_in(path: &Path) -> anyhow::Result<Option<Manifest>> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let Ok(table) = text.parse::<toml::Table>() else { return Ok(None) };
+    if !(table.contains_key("version") && table.get("scenario").is_some_and(toml::Value::is_table)) {
+        return Ok(None);
+    }
+    let m: Manifest = toml::from_str(&text).with_context(|| format!("reading the run manifest {}", path.display()))?;
+    m.validate().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok(Some(m))
 }
 
 /// True when `dir` holds a finished run (its pareto.csv exists).
@@ -215,7 +288,8 @@ pub fn is_finished(dir: &Path) -> bool {
 }
 
 /// Run (or with `resume`, continue) the optimisation in `dir`. `manifest` describes a new
-/// run; with `resume` it is read from the directory instead.
+/// run; with `resume` it is the directory's own (possibly extended to more generations by
+/// the caller), read from the directory when not given.
 pub fn run(
     dir: &Path,
     manifest: Option<Manifest>,
@@ -230,13 +304,28 @@ pub fn run(
     // Owned for the whole run: a second process started into `dir` is refused, not interleaved.
     let _owned = RunDir::acquire(dir, RUN_KIND, Access::Exclusive, |d| d.join("run.toml").exists())?;
     let (mut manifest, state) = if resume {
-        let m = read_manifest(dir)?;
-        let state = load_checkpoint(&paths.checkpoint)
-            .with_context(|| format!("--resume: reading {}", paths.checkpoint.display()))?;
-        truncate_csv(&paths.evaluations, state.generation)?;
-        truncate_csv(&paths.generations, state.generation)?;
-        eprintln!("{}resuming from the checkpoint at generation {}", opts.label, state.generation);
-        (m, Some(state))
+        let m = match manifest {
+            Some(m) => m,
+            None => read_manifest(dir)?,
+        };
+        if !paths.checkpoint.exists() {
+            // killed before its first checkpoint: nothing of the run is kept but its settings
+            eprintln!(
+                "{}no checkpoint in {} yet (the run stopped before its first generation was saved): starting it again from generation 0 with its run.toml",
+                opts.label,
+                dir.display()
+            );
+            (m, None)
+        } else {
+            let state = load_checkpoint(&paths.checkpoint)
+                .with_context(|| format!("--resume: reading {}", paths.checkpoint.display()))?;
+            truncate_csv(&paths.evaluations, state.generation)?;
+            truncate_csv(&paths.generations, state.generation)?;
+            eprintln!("{}resuming from the checkpoint at generation {}", opts.label, state.generation);
+            // an extension (a larger --generations) is on disk before the first new generation
+            write_atomic(&paths.manifest, toml::to_string_pretty(&m)?.as_bytes())?;
+            (m, Some(state))
+        }
     } else {
         if paths.checkpoint.exists() {
             bail!("{} already holds a run: pass --resume to continue it, or choose another --out", dir.display());
