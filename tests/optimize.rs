@@ -7,6 +7,8 @@ use std::time::{Duration, Instant};
 
 mod common;
 
+use sawtooth::optim::runner::{EvaluationRow, GenerationRow};
+
 fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_sawtooth")
 }
@@ -61,6 +63,20 @@ fn optimize_writes_its_outputs_and_resumes_after_a_kill_to_the_same_front() {
     assert!(stdout.contains("A ") && stdout.contains("C "), "{stdout}");
     assert_eq!(rows(&full.join("generations.csv")), 14);
     assert_eq!(rows(&full.join("evaluations.csv")), 48 * 15);
+    // both logs are typed rows: every column named in the type, with its type
+    let evaluations: Vec<EvaluationRow> =
+        csv::Reader::from_path(full.join("evaluations.csv")).unwrap().deserialize().collect::<Result<_, _>>().unwrap();
+    assert_eq!(evaluations.len(), 48 * 15);
+    assert!(evaluations.iter().any(|r| r.w_spec_j_kg.is_some()));
+    for r in &evaluations {
+        // figures exactly where the design was simulated and accepted, a reason otherwise
+        assert_eq!(r.f_stroke_hz.is_some(), r.invalid.is_empty(), "{r:?}");
+        assert!(r.generation <= 14 && r.alpha_deg == 35.0 && r.compliant.is_none(), "{r:?}");
+    }
+    let generations: Vec<GenerationRow> =
+        csv::Reader::from_path(full.join("generations.csv")).unwrap().deserialize().collect::<Result<_, _>>().unwrap();
+    assert_eq!(generations.iter().map(|g| g.generation).collect::<Vec<_>>(), (1..=14).collect::<Vec<_>>());
+    assert!(generations.iter().all(|g| g.hypervolume_hz_j_kg >= 0.0 && g.evaluations > 0));
     let header = std::fs::read_to_string(full.join("pareto.csv")).unwrap();
     assert!(header.starts_with("l_c_mm,l_a_mm,l_b_mm,r_mm,omega_deg,delta_deg,v0_m_s,a_m_s2,f_stroke_hz,w_spec_j_kg,m_dot_kg_s,stroke_m,n_wire,d_avg_m"));
     assert!(rows(&full.join("pareto.csv")) >= 1);

@@ -6,6 +6,8 @@ use std::process::Command;
 
 mod common;
 use common::{assert_figure, assert_png_beside};
+use sawtooth::cli::study::{GridRow, RunRow, SummaryRow};
+use sawtooth::cli::sweep::SweepRow;
 
 fn run(args: &[&str]) -> (i32, String, String) {
     let o = Command::new(env!("CARGO_BIN_EXE_sawtooth")).args(args).output().unwrap();
@@ -51,6 +53,12 @@ fn sweep_writes_a_summary_per_angle_and_reruns_from_disk() {
     }
     let summary = std::fs::read_to_string(out.join("summary.csv")).unwrap();
     assert!(summary.lines().count() >= 4);
+    // typed rows, exact floats: each pick's figures are its angle's pareto.csv row to the bit
+    let rows: Vec<SweepRow> =
+        csv::Reader::from_reader(summary.as_bytes()).deserialize().collect::<Result<_, _>>().unwrap();
+    let c30 = rows.iter().find(|r| r.alpha_deg == 30.0 && r.pick == "C").expect("pick C at 30 deg");
+    let front = sawtooth::optim::front::read_pareto_csv(&out.join("alpha_030.00/pareto.csv")).unwrap();
+    assert!(front.iter().any(|p| p.w_spec_j_kg == c30.w_spec_j_kg && p.w_spec_se == c30.w_spec_se_j_kg), "{c30:?}");
     let svg = std::fs::read_to_string(out.join("sweep.svg")).unwrap();
     assert!(svg.starts_with("<svg"));
     assert_png_beside(&out.join("sweep.svg"));
@@ -65,6 +73,8 @@ fn sweep_writes_a_summary_per_angle_and_reruns_from_disk() {
     assert_eq!(code, 0);
     assert_eq!(first, second);
     assert_eq!(before, std::fs::metadata(out.join("alpha_030.00/evaluations.csv")).unwrap().len());
+    // the rerun's summary is the first one byte for byte (read back from exact pareto.csv)
+    assert_eq!(summary, std::fs::read_to_string(out.join("summary.csv")).unwrap());
     let _ = std::fs::remove_dir_all(&out);
 }
 
@@ -92,6 +102,14 @@ fn repeatability_and_sensitivity_write_their_tables() {
     assert!(summary.contains("w_spec_j_kg"));
     let runs = std::fs::read_to_string(rep.join("runs.csv")).unwrap();
     assert_eq!(runs.lines().count(), 4);
+    let typed: Vec<RunRow> = csv::Reader::from_reader(runs.as_bytes()).deserialize().collect::<Result<_, _>>().unwrap();
+    assert_eq!(typed.iter().map(|r| r.run).collect::<Vec<_>>(), [0, 1, 2]);
+    let stats: Vec<SummaryRow> =
+        csv::Reader::from_reader(summary.as_bytes()).deserialize().collect::<Result<_, _>>().unwrap();
+    let w = stats.iter().find(|s| s.metric == "w_spec_j_kg").expect("w_spec_j_kg row");
+    let ws: Vec<f64> = typed.iter().filter_map(|r| r.w_spec_j_kg).collect();
+    assert_eq!(w.n, ws.len());
+    assert!((w.mean - ws.iter().sum::<f64>() / ws.len() as f64).abs() <= 1e-9 * w.mean, "{w:?} vs {ws:?}");
     // each run's distance from the target is in the table, and the report calls the runs
     // "at the target" only when every one of them is
     let header: Vec<&str> = runs.lines().next().unwrap().split(',').collect();
@@ -117,6 +135,11 @@ fn repeatability_and_sensitivity_write_their_tables() {
     assert_eq!(code, 0, "{err}");
     // Table C.2's 5 x 5 grid in vacuum
     assert_eq!(std::fs::read_to_string(sens.join("grid.csv")).unwrap().lines().count(), 26);
+    let grid: Vec<GridRow> =
+        csv::Reader::from_path(sens.join("grid.csv")).unwrap().deserialize().collect::<Result<_, _>>().unwrap();
+    assert!(grid
+        .iter()
+        .all(|g| g.k_drag_per_s == 0.0 && g.w_spec_within_repeatability_ci.is_some() == g.w_spec_j_kg.is_some()));
     assert_png_beside(&sens.join("sensitivity.svg"));
     let _ = std::fs::remove_dir_all(&rep);
     let _ = std::fs::remove_dir_all(&sens);

@@ -8,12 +8,13 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Context as _};
 use clap::{Args, Subcommand};
+use serde::{Deserialize, Serialize};
 
 use super::args::{EngineArgs, ScenarioArgs};
 use super::multi::{plan_or_run, Member, Panel, PanelsPlot, Plan, Series, Study};
 use super::optimize::GaArgs;
 use crate::engine::EngineKind;
-use crate::io::atomic::write_atomic;
+use crate::io::table::write_table;
 use crate::model::Scenario;
 use crate::optim::front::{closest_to_mass_flow, FrontPoint};
 use crate::plot;
@@ -96,33 +97,98 @@ fn stats(v: &[f64]) -> (f64, f64, f64, f64) {
     (m, sd, sd / m, 1.96 * sd / n.sqrt())
 }
 
-fn point_row(p: Option<&FrontPoint>) -> String {
-    match p {
-        Some(p) => {
-            let x = p.design.to_cli_units();
-            format!(
-                "{:.6e},{:.4},{:.6e},{:.6e},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
-                p.f_stroke_hz,
-                p.w_spec_j_kg,
-                p.m_dot_kg_s,
-                p.d_avg_m,
-                p.n_wire,
-                x[0],
-                x[1],
-                x[2],
-                x[3],
-                x[4],
-                x[5],
-                x[6],
-                x[7]
-            )
+/// The front point a run is compared at (its design and figures); empty when its front
+/// holds no design.
+#[derive(Debug, Default, Clone, Copy)]
+struct Point {
+    f_stroke_hz: Option<f64>,
+    w_spec_j_kg: Option<f64>,
+    m_dot_kg_s: Option<f64>,
+    d_avg_m: Option<f64>,
+    n_wire: Option<u32>,
+    x: Option<[f64; 8]>,
+}
+
+impl Point {
+    fn of(p: Option<&FrontPoint>) -> Self {
+        match p {
+            None => Point::default(),
+            Some(p) => Point {
+                f_stroke_hz: Some(p.f_stroke_hz),
+                w_spec_j_kg: Some(p.w_spec_j_kg),
+                m_dot_kg_s: Some(p.m_dot_kg_s),
+                d_avg_m: Some(p.d_avg_m),
+                n_wire: Some(p.n_wire),
+                x: Some(p.design.to_cli_units()),
+            },
         }
-        None => ",,,,,,,,,,,,".into(),
+    }
+    fn x(&self, i: usize) -> Option<f64> {
+        self.x.map(|x| x[i])
     }
 }
 
-const POINT_HEADER: &str =
-    "f_stroke_hz,w_spec_j_kg,m_dot_kg_s,d_avg_m,n_wire,l_c_mm,l_a_mm,l_b_mm,r_mm,omega_deg,delta_deg,v0_m_s,a_m_s2";
+/// One row of runs.csv (study repeatability): a run's front point closest to the target.
+#[derive(Debug, Default, Serialize, Deserialize)]
+pub struct RunRow {
+    pub run: usize,
+    pub seed: u64,
+    pub f_stroke_hz: Option<f64>,
+    pub w_spec_j_kg: Option<f64>,
+    pub m_dot_kg_s: Option<f64>,
+    pub d_avg_m: Option<f64>,
+    pub n_wire: Option<u32>,
+    pub l_c_mm: Option<f64>,
+    pub l_a_mm: Option<f64>,
+    pub l_b_mm: Option<f64>,
+    pub r_mm: Option<f64>,
+    pub omega_deg: Option<f64>,
+    pub delta_deg: Option<f64>,
+    pub v0_m_s: Option<f64>,
+    pub a_m_s2: Option<f64>,
+    /// (m_dot - target) / target, -.
+    pub m_dot_from_target_rel: Option<f64>,
+    /// Within ±AT_TARGET_REL of the target.
+    pub at_target: Option<bool>,
+}
+
+/// One row of grid.csv (study sensitivity): a grid point's front point closest to the target.
+#[derive(Debug, Default, Serialize, Deserialize)]
+pub struct GridRow {
+    pub point: usize,
+    pub k_elastic: f64,
+    pub mu_friction: f64,
+    /// Stokes drag, 1/s (0 = vacuum).
+    pub k_drag_per_s: f64,
+    pub f_stroke_hz: Option<f64>,
+    pub w_spec_j_kg: Option<f64>,
+    pub m_dot_kg_s: Option<f64>,
+    pub d_avg_m: Option<f64>,
+    pub n_wire: Option<u32>,
+    pub l_c_mm: Option<f64>,
+    pub l_a_mm: Option<f64>,
+    pub l_b_mm: Option<f64>,
+    pub r_mm: Option<f64>,
+    pub omega_deg: Option<f64>,
+    pub delta_deg: Option<f64>,
+    pub v0_m_s: Option<f64>,
+    pub a_m_s2: Option<f64>,
+    /// W_spec inside the repeatability study's 95 % interval (with --repeatability).
+    pub w_spec_within_repeatability_ci: Option<bool>,
+}
+
+/// One row of a study's summary.csv: a metric over the runs.
+#[derive(Debug, Default, Serialize, Deserialize)]
+pub struct SummaryRow {
+    /// The figure summarised, its unit in its name (f_stroke_hz, w_spec_j_kg, m_dot_kg_s).
+    pub metric: String,
+    pub mean: f64,
+    pub sd: f64,
+    /// sd / mean, -.
+    pub cv: f64,
+    pub ci95_half_width: f64,
+    pub n: usize,
+}
 
 fn repeatability(a: RepeatabilityArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let c = &a.common;
@@ -159,7 +225,7 @@ pub fn summarise_repeatability(
     fronts: &[Vec<FrontPoint>],
     out: &mut dyn Write,
 ) -> anyhow::Result<()> {
-    let mut csv = format!("run,seed,{POINT_HEADER},m_dot_from_target_rel,at_target\n");
+    let mut rows = Vec::new();
     let (mut f, mut w, mut m) = (Vec::new(), Vec::new(), Vec::new());
     let mut far = Vec::new();
     for (i, (member, front)) in plan.members.iter().zip(fronts).enumerate() {
@@ -170,21 +236,34 @@ pub fn summarise_repeatability(
         if let (Some(p), Some(false)) = (p, at_target) {
             far.push(format!("run {i} at {:.4} kg/s", p.m_dot_kg_s));
         }
-        csv.push_str(&format!(
-            "{i},{},{},{},{}\n",
-            member.manifest.scenario.sim.seed,
-            point_row(p),
-            distance.map_or(String::new(), |d| d.to_string()),
-            at_target.map_or(String::new(), |a| a.to_string())
-        ));
+        let q = Point::of(p);
+        rows.push(RunRow {
+            run: i,
+            seed: member.manifest.scenario.sim.seed,
+            f_stroke_hz: q.f_stroke_hz,
+            w_spec_j_kg: q.w_spec_j_kg,
+            m_dot_kg_s: q.m_dot_kg_s,
+            d_avg_m: q.d_avg_m,
+            n_wire: q.n_wire,
+            l_c_mm: q.x(0),
+            l_a_mm: q.x(1),
+            l_b_mm: q.x(2),
+            r_mm: q.x(3),
+            omega_deg: q.x(4),
+            delta_deg: q.x(5),
+            v0_m_s: q.x(6),
+            a_m_s2: q.x(7),
+            m_dot_from_target_rel: distance,
+            at_target,
+        });
         if let Some(p) = p {
             f.push(p.f_stroke_hz);
             w.push(p.w_spec_j_kg);
             m.push(p.m_dot_kg_s);
         }
     }
-    write_atomic(&root.join("runs.csv"), csv.as_bytes())?;
-    let mut summary = String::from("metric,mean,sd,cv,ci95_half_width,n\n");
+    write_table(&root.join("runs.csv"), &rows)?;
+    let mut summary = Vec::new();
     if far.is_empty() {
         writeln!(
             out,
@@ -204,10 +283,10 @@ pub fn summarise_repeatability(
     }
     for (name, v) in [("f_stroke_hz", &f), ("w_spec_j_kg", &w), ("m_dot_kg_s", &m)] {
         let (mean, sd, cv, ci) = stats(v);
-        summary.push_str(&format!("{name},{mean:.6e},{sd:.6e},{cv:.6e},{ci:.6e},{}\n", v.len()));
+        summary.push(SummaryRow { metric: name.to_string(), mean, sd, cv, ci95_half_width: ci, n: v.len() });
         writeln!(out, "  {name:<12} mean {mean:.5e}  sd {sd:.3e}  CV {:.3} %  95% CI ± {ci:.3e}", cv * 100.0)?;
     }
-    write_atomic(&root.join("summary.csv"), summary.as_bytes())?;
+    write_table(&root.join("summary.csv"), &summary)?;
     // independent runs: each a point, with the mean and its 95 % interval as a band
     let panel = |y_desc: &str, v: Vec<f64>| {
         let (mean, _, _, ci) = stats(&v);
@@ -232,13 +311,12 @@ pub fn summarise_repeatability(
 /// Mean and CI half-width of W_spec from a repeatability study's summary.csv.
 fn read_ci(dir: &Path) -> anyhow::Result<(f64, f64)> {
     let path = dir.join("summary.csv");
-    let text =
-        std::fs::read_to_string(&path).with_context(|| format!("--repeatability: reading {}", path.display()))?;
-    for line in text.lines() {
-        let f: Vec<&str> = line.split(',').collect();
-        if f.first() == Some(&"w_spec_j_kg") && f.len() >= 5 {
-            let p = |s: &str| s.parse::<f64>().with_context(|| format!("{}: `{s}` is not a number", path.display()));
-            return Ok((p(f[1])?, p(f[4])?));
+    let mut reader =
+        csv::Reader::from_path(&path).with_context(|| format!("--repeatability: reading {}", path.display()))?;
+    for row in reader.deserialize::<SummaryRow>() {
+        let row = row.with_context(|| format!("--repeatability: reading {}", path.display()))?;
+        if row.metric == "w_spec_j_kg" {
+            return Ok((row.mean, row.ci95_half_width));
         }
     }
     bail!("{}: no w_spec_j_kg row", path.display())
@@ -297,7 +375,7 @@ pub fn summarise_sensitivity(
     fronts: &[Vec<FrontPoint>],
     out: &mut dyn Write,
 ) -> anyhow::Result<()> {
-    let mut csv = format!("point,k_elastic,mu_friction,k_drag,{POINT_HEADER},w_spec_within_repeatability_ci\n");
+    let mut rows = Vec::new();
     let mut w = Vec::new();
     writeln!(
         out,
@@ -308,16 +386,30 @@ pub fn summarise_sensitivity(
         let s = &member.manifest.scenario;
         let p = closest_to_mass_flow(front, t);
         let within = match (ci, p) {
-            (Some((mean, half)), Some(p)) => ((p.w_spec_j_kg - mean).abs() <= half).to_string(),
-            _ => String::new(),
+            (Some((mean, half)), Some(p)) => Some((p.w_spec_j_kg - mean).abs() <= half),
+            _ => None,
         };
-        csv.push_str(&format!(
-            "{i},{},{},{},{},{within}\n",
-            s.collision.k_elastic,
-            s.collision.mu_friction,
-            s.environment.k_drag.unwrap_or(0.0),
-            point_row(p)
-        ));
+        let q = Point::of(p);
+        rows.push(GridRow {
+            point: i,
+            k_elastic: s.collision.k_elastic,
+            mu_friction: s.collision.mu_friction,
+            k_drag_per_s: s.environment.k_drag.unwrap_or(0.0),
+            f_stroke_hz: q.f_stroke_hz,
+            w_spec_j_kg: q.w_spec_j_kg,
+            m_dot_kg_s: q.m_dot_kg_s,
+            d_avg_m: q.d_avg_m,
+            n_wire: q.n_wire,
+            l_c_mm: q.x(0),
+            l_a_mm: q.x(1),
+            l_b_mm: q.x(2),
+            r_mm: q.x(3),
+            omega_deg: q.x(4),
+            delta_deg: q.x(5),
+            v0_m_s: q.x(6),
+            a_m_s2: q.x(7),
+            w_spec_within_repeatability_ci: within,
+        });
         let wv = p.map_or(f64::NAN, |p| p.w_spec_j_kg);
         w.push(wv);
         writeln!(
@@ -327,10 +419,10 @@ pub fn summarise_sensitivity(
             s.collision.mu_friction,
             s.environment.k_drag.unwrap_or(0.0),
             wv,
-            within
+            within.map_or(String::new(), |w| w.to_string())
         )?;
     }
-    write_atomic(&root.join("grid.csv"), csv.as_bytes())?;
+    write_table(&root.join("grid.csv"), &rows)?;
     let figure = PanelsPlot {
         title: format!("Sensitivity at {t} kg/s"),
         x_desc: "grid point (see grid.csv)".into(),

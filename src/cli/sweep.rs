@@ -9,11 +9,12 @@ use std::process::ExitCode;
 
 use anyhow::bail;
 use clap::Args;
+use serde::{Deserialize, Serialize};
 
 use super::args::{EngineArgs, ScenarioArgs};
 use super::multi::{plan_or_run, Member, Panel, PanelsPlot, Plan, Series, Study};
 use super::optimize::GaArgs;
-use crate::io::atomic::write_atomic;
+use crate::io::table::write_table;
 use crate::optim::front::FrontPoint;
 use crate::optim::front::{closest_to_mass_flow, picks, TARGET_MASS_FLOW_KG_S};
 use crate::plot;
@@ -71,11 +72,34 @@ pub fn run(a: SweepArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     plan_or_run(&a.out, &plan, a.plan, out)
 }
 
+/// One row of a sweep's summary.csv: a pick (A/B/C, Table 5.2) of one angle's front.
+#[derive(Debug, Default, Serialize, Deserialize)]
+pub struct SweepRow {
+    pub alpha_deg: f64,
+    pub pick: String,
+    pub f_stroke_hz: f64,
+    pub w_spec_j_kg: f64,
+    /// Monte-Carlo standard errors of the re-evaluation.
+    pub w_spec_se_j_kg: f64,
+    pub m_dot_kg_s: f64,
+    pub m_dot_se_kg_s: f64,
+    pub d_avg_m: f64,
+    pub n_wire: u32,
+    pub l_c_mm: f64,
+    pub l_a_mm: f64,
+    pub l_b_mm: f64,
+    pub r_mm: f64,
+    pub omega_deg: f64,
+    pub delta_deg: f64,
+    pub v0_m_s: f64,
+    pub a_m_s2: f64,
+}
+
 /// summary.csv, sweep.svg and the table of a finished sweep.
 pub fn summarise(root: &Path, plan: &Plan, fronts: &[Vec<FrontPoint>], out: &mut dyn Write) -> anyhow::Result<()> {
     let angles: Vec<f64> = plan.members.iter().map(|m| m.manifest.scenario.environment.alpha_deg).collect();
     let mode = plan.members.first().map(|m| m.manifest.scenario.mode);
-    let mut csv = String::from("alpha_deg,pick,f_stroke_hz,w_spec_j_kg,w_spec_se_j_kg,m_dot_kg_s,m_dot_se_kg_s,d_avg_m,n_wire,l_c_mm,l_a_mm,l_b_mm,r_mm,omega_deg,delta_deg,v0_m_s,a_m_s2\n");
+    let mut rows = Vec::new();
     // per pick (C, then closest to the target): f_stroke, W_spec ± se, mass flow ± se
     let mut series: [Vec<f64>; 10] = Default::default();
     writeln!(out, "{:>6} {:>4} {:>12} {:>14} {:>12}", "alpha", "pick", "f [Hz e-2]", "W_spec [J/kg]", "m_dot [kg/h]")?;
@@ -83,10 +107,25 @@ pub fn summarise(root: &Path, plan: &Plan, fronts: &[Vec<FrontPoint>], out: &mut
         let ps = picks(front);
         for (name, p) in &ps {
             let x = p.design.to_cli_units();
-            csv.push_str(&format!(
-                "{alpha},{name},{:.6e},{:.4},{:.4},{:.6e},{:.3e},{:.6e},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}\n",
-                p.f_stroke_hz, p.w_spec_j_kg, p.w_spec_se, p.m_dot_kg_s, p.m_dot_se, p.d_avg_m, p.n_wire, x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]
-            ));
+            rows.push(SweepRow {
+                alpha_deg: *alpha,
+                pick: name.to_string(),
+                f_stroke_hz: p.f_stroke_hz,
+                w_spec_j_kg: p.w_spec_j_kg,
+                w_spec_se_j_kg: p.w_spec_se,
+                m_dot_kg_s: p.m_dot_kg_s,
+                m_dot_se_kg_s: p.m_dot_se,
+                d_avg_m: p.d_avg_m,
+                n_wire: p.n_wire,
+                l_c_mm: x[0],
+                l_a_mm: x[1],
+                l_b_mm: x[2],
+                r_mm: x[3],
+                omega_deg: x[4],
+                delta_deg: x[5],
+                v0_m_s: x[6],
+                a_m_s2: x[7],
+            });
             writeln!(
                 out,
                 "{alpha:>6.1} {name:>4} {:>12.3} {:>14.1} {:>12.2}",
@@ -105,7 +144,7 @@ pub fn summarise(root: &Path, plan: &Plan, fronts: &[Vec<FrontPoint>], out: &mut
             series[5 * k + 4].push(p.map_or(f64::NAN, |p| p.m_dot_se * 3600.0));
         }
     }
-    write_atomic(&root.join("summary.csv"), csv.as_bytes())?;
+    write_table(&root.join("summary.csv"), &rows)?;
     let [f_c, w_c, w_c_se, m_c, m_c_se, f_a, w_a, w_a_se, m_a, m_a_se] = series;
     let (c, a) = ("lowest W_spec (C)", "closest to 48 kg/h (A)");
     let pair = |y_desc: &str, yc: Vec<f64>, sc: Option<Vec<f64>>, ya: Vec<f64>, sa: Option<Vec<f64>>| Panel {

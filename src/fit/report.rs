@@ -1,7 +1,6 @@
 //! Outputs of `fit`: the JSON object, the stdout table, fit.csv and fit.svg (a bar chart like
 //! the thesis's Figure 4.14, drawn through `crate::plot`), files written atomically.
 
-use std::fmt::Write as _;
 use std::io::Write;
 use std::path::Path;
 
@@ -294,27 +293,33 @@ pub fn write_table(out: &mut dyn Write, r: &FitReport, meta: &Meta) -> std::io::
     Ok(())
 }
 
-/// fit.csv: one row per simulated tooth (numeric), percentages; the last bin (lost or not
-/// recovered) is in fit.json.
-pub fn to_csv(r: &FitReport, meta: &Meta) -> String {
-    let mut s = String::from(
-        "tooth,measured_mean_percent,measured_sd_percent,measured_min_percent,measured_max_percent,fitted_percent\n",
-    );
+/// One row of fit.csv: a simulated tooth (numeric), shares in percent of the loaded (or
+/// recovered) mass; the last bin (lost or not recovered) is in fit.json. Empty where the
+/// measurement has no value (e.g. the sd of a single run).
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct FitRow {
+    pub tooth: usize,
+    pub measured_mean_percent: Option<f64>,
+    pub measured_sd_percent: Option<f64>,
+    pub measured_min_percent: Option<f64>,
+    pub measured_max_percent: Option<f64>,
+    pub fitted_percent: Option<f64>,
+}
+
+/// fit.csv's rows.
+pub fn csv_rows(r: &FitReport, meta: &Meta) -> Vec<FitRow> {
     let m = &r.measured;
-    let f = |v: f64| if v.is_finite() { format!("{v}") } else { String::new() };
-    for j in 0..meta.teeth {
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{}",
-            j + 1,
-            f(100.0 * m.mean[j]),
-            f(100.0 * m.sd[j]),
-            f(100.0 * m.min[j]),
-            f(100.0 * m.max[j]),
-            f(100.0 * r.fitted[j])
-        );
-    }
-    s
+    let percent = |v: f64| (v.is_finite()).then_some(100.0 * v);
+    (0..meta.teeth)
+        .map(|j| FitRow {
+            tooth: j + 1,
+            measured_mean_percent: percent(m.mean[j]),
+            measured_sd_percent: percent(m.sd[j]),
+            measured_min_percent: percent(m.min[j]),
+            measured_max_percent: percent(m.max[j]),
+            fitted_percent: percent(r.fitted[j]),
+        })
+        .collect()
 }
 
 /// fit.svg: measured mean per tooth as bars, ±1 sd as a light band, min/max as error bars,
@@ -439,6 +444,6 @@ impl Figure for FitPlot {
 pub fn write_dir(dir: &Path, r: &FitReport, meta: &Meta, json: &Value) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("--out: cannot create directory {}", dir.display()))?;
     write_atomic(&dir.join("fit.json"), format!("{}\n", serde_json::to_string_pretty(json)?).as_bytes())?;
-    write_atomic(&dir.join("fit.csv"), to_csv(r, meta).as_bytes())?;
+    crate::io::table::write_table(&dir.join("fit.csv"), &csv_rows(r, meta))?;
     plot::write_figure_files(dir, "fit", &FitPlot::new(r, meta))
 }

@@ -5,4 +5,5 @@ pub mod config;
 pub mod measured;
 pub mod plot;
 pub mod run_dir;
+pub mod table;
 pub mod trajectories;

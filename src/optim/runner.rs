@@ -22,6 +22,7 @@ use super::sawtooth::{Logged, SawtoothProblem};
 use crate::engine::{BatchEvaluator, EngineKind};
 use crate::io::atomic::write_atomic;
 use crate::io::run_dir::{Access, RunDir};
+use crate::io::table::{csv_header, csv_text};
 use crate::model::requirements::Requirements;
 use crate::model::Scenario;
 
@@ -153,48 +154,100 @@ pub fn install_interrupt_handler() {
     });
 }
 
-fn csv_header_evaluations() -> &'static str {
-    "generation,l_c_mm,l_a_mm,l_b_mm,r_mm,omega_deg,delta_deg,v0_m_s,a_m_s2,objective_1,objective_2,violation,f_stroke_hz,w_spec_j_kg,m_dot_kg_s,stroke_m,n_wire,d_avg_m,lost_fraction,invalid,alpha_deg,m_dot_op_kg_h,p_op_w,operating_limit,compliant"
+/// One row of evaluations.csv: every design evaluated, as the optimiser ranked it. Header and
+/// row come from this one type; floats are written exactly (shortest round-trip form).
+#[derive(Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct EvaluationRow {
+    pub generation: u64,
+    pub l_c_mm: f64,
+    pub l_a_mm: f64,
+    pub l_b_mm: f64,
+    pub r_mm: f64,
+    pub omega_deg: f64,
+    pub delta_deg: f64,
+    pub v0_m_s: f64,
+    pub a_m_s2: f64,
+    /// The objectives the GA ranks by: f_stroke (Hz) and W_spec (J/kg), with the 2 Hz penalty
+    /// of Eq. 5.17-5.18, D.6's 1000003-1000007 for a rejected design, 1e12 where not simulated.
+    pub objective_f_stroke_hz: f64,
+    pub objective_w_spec_j_kg: f64,
+    /// Deb's constraint violation: geometric excess in mm beyond the tolerance, plus with
+    /// requirements their relative shortfalls (0 = feasible).
+    pub violation: f64,
+    /// The simulated figures at `alpha_deg` (empty where the design was not simulated or the
+    /// model rejects it).
+    pub f_stroke_hz: Option<f64>,
+    pub w_spec_j_kg: Option<f64>,
+    pub m_dot_kg_s: Option<f64>,
+    pub stroke_m: Option<f64>,
+    pub n_wire: Option<u32>,
+    pub d_avg_m: Option<f64>,
+    pub lost_fraction: Option<f64>,
+    /// Why the design has no figures: the model's rule (e.g. `fill_spills`), or `infeasible`.
+    pub invalid: String,
+    /// The slope shown (`sawtooth::shown_slope`), degrees.
+    pub alpha_deg: f64,
+    /// With requirements: the operating point and the verdict at that slope.
+    pub m_dot_op_kg_h: Option<f64>,
+    pub p_op_w: Option<f64>,
+    pub operating_limit: Option<String>,
+    pub compliant: Option<bool>,
 }
 
-fn evaluation_row(l: &Logged) -> String {
-    let x = l.x;
-    let mut row = format!(
-        "{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.9e},{:.9e},{:.6e}",
-        l.generation, x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], l.objectives[0], l.objectives[1], l.violation
-    );
-    match &l.evaluation {
-        Some(e) => {
-            let p = &e.performance;
-            row.push_str(&format!(
-                ",{:.9e},{},{:.9e},{:.9e},{},{:.9e},{:.6},",
-                p.f_dynamic_hz,
-                p.w_spec_j_kg.map_or(String::new(), |w| format!("{w:.9e}")),
-                p.m_dot_kg_s,
-                p.stroke_m,
-                p.n_wire,
-                e.sim.d_avg_m,
-                e.sim.lost_fraction
-            ));
+impl EvaluationRow {
+    fn of(l: &Logged) -> Self {
+        let x = l.x;
+        let e = l.evaluation.as_ref();
+        let a = l.assessment.as_ref();
+        EvaluationRow {
+            generation: l.generation,
+            l_c_mm: x[0],
+            l_a_mm: x[1],
+            l_b_mm: x[2],
+            r_mm: x[3],
+            omega_deg: x[4],
+            delta_deg: x[5],
+            v0_m_s: x[6],
+            a_m_s2: x[7],
+            objective_f_stroke_hz: l.objectives[0],
+            objective_w_spec_j_kg: l.objectives[1],
+            violation: l.violation,
+            // the frequency the objective uses (D.7's f_dynamic; equal to f_stroke below f_max)
+            f_stroke_hz: e.map(|e| e.performance.f_dynamic_hz),
+            w_spec_j_kg: e.and_then(|e| e.performance.w_spec_j_kg),
+            m_dot_kg_s: e.map(|e| e.performance.m_dot_kg_s),
+            stroke_m: e.map(|e| e.performance.stroke_m),
+            n_wire: e.map(|e| e.performance.n_wire),
+            d_avg_m: e.map(|e| e.sim.d_avg_m),
+            lost_fraction: e.map(|e| e.sim.lost_fraction),
+            invalid: match (e, &l.invalid) {
+                (Some(_), _) => String::new(),
+                (None, Some(rule)) => rule.clone(),
+                (None, None) if l.violation > 0.0 => "infeasible".to_string(),
+                (None, None) => String::new(),
+            },
+            alpha_deg: l.alpha_deg,
+            m_dot_op_kg_h: a.map(|a| a.operating_point.m_dot_kg_h),
+            p_op_w: a.map(|a| a.operating_point.p_avg_w),
+            operating_limit: a.map(|a| a.operating_point.limit.as_str().to_string()),
+            compliant: a.map(|a| a.compliant()),
         }
-        None => row.push_str(&format!(
-            ",,,,,,,,{}",
-            l.invalid.as_deref().unwrap_or(if l.violation > 0.0 { "infeasible" } else { "" })
-        )),
     }
-    // the slope shown (the worst one) and, with requirements, the verdict there
-    row.push_str(&format!(",{}", l.alpha_deg));
-    match &l.assessment {
-        Some(a) => row.push_str(&format!(
-            ",{:.6e},{:.6e},{},{}",
-            a.operating_point.m_dot_kg_h,
-            a.operating_point.p_avg_w,
-            a.operating_point.limit.as_str(),
-            a.compliant()
-        )),
-        None => row.push_str(",,,,"),
-    }
-    row
+}
+
+/// One row of generations.csv: the search's progress after each generation.
+#[derive(Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct GenerationRow {
+    pub generation: u64,
+    /// Of the feasible front w.r.t. `HV_REFERENCE` (2 Hz, 20 000 J/kg), Hz·J/kg.
+    pub hypervolume_hz_j_kg: f64,
+    /// Deb's spread of the front (-); empty while nothing is feasible.
+    pub spread: Option<f64>,
+    pub feasible_fraction: f64,
+    pub front_size: usize,
+    pub evaluations: u64,
+    /// Wall time since this process started the run, s.
+    pub elapsed_s: f64,
 }
 
 /// Keep the header and the rows of generations <= `last` (a crash may have logged a
@@ -337,17 +390,14 @@ pub fn run(
     manifest.device = engine.device();
     if state.is_none() {
         write_atomic(&paths.manifest, toml::to_string_pretty(&manifest)?.as_bytes())?;
-        write_atomic(&paths.evaluations, format!("{}\n", csv_header_evaluations()).as_bytes())?;
-        write_atomic(
-            &paths.generations,
-            b"generation,hypervolume,spread,feasible_fraction,front_size,evaluations,elapsed_s\n",
-        )?;
+        write_atomic(&paths.evaluations, csv_header::<EvaluationRow>()?.as_bytes())?;
+        write_atomic(&paths.generations, csv_header::<GenerationRow>()?.as_bytes())?;
     }
 
     let log_error: std::cell::RefCell<Option<anyhow::Error>> = std::cell::RefCell::new(None);
     let log = |rows: &[Logged]| {
-        let text: String = rows.iter().map(|r| evaluation_row(r) + "\n").collect();
-        if let Err(e) = append(&paths.evaluations, &text) {
+        let rows: Vec<EvaluationRow> = rows.iter().map(EvaluationRow::of).collect();
+        if let Err(e) = csv_text(&rows, false).and_then(|text| append(&paths.evaluations, &text)) {
             log_error.borrow_mut().get_or_insert(e);
         }
     };
@@ -391,19 +441,17 @@ pub fn run(
             return Err(e);
         }
         let hv = hypervolume_2d(&front_points(&state), HV_REFERENCE);
-        append(
-            &paths.generations,
-            &format!(
-                "{},{:.9e},{:.6e},{:.4},{},{},{:.3}\n",
-                stats.generation,
-                hv,
-                stats.spread,
-                stats.feasible_fraction,
-                stats.front_size,
-                stats.evaluations,
-                start.elapsed().as_secs_f64()
-            ),
-        )?;
+        let row = GenerationRow {
+            generation: stats.generation,
+            hypervolume_hz_j_kg: hv,
+            spread: Some(stats.spread).filter(|s| s.is_finite()),
+            feasible_fraction: stats.feasible_fraction,
+            front_size: stats.front_size,
+            evaluations: stats.evaluations,
+            // milliseconds are enough for a wall clock, and keep the column readable
+            elapsed_s: (start.elapsed().as_secs_f64() * 1e3).round() / 1e3,
+        };
+        append(&paths.generations, &csv_text(&[row], false)?)?;
         if state.generation % opts.checkpoint_every.max(1) == 0 {
             save_checkpoint(&paths.checkpoint, &state)?;
         }
