@@ -254,3 +254,26 @@ fn resume_checks_the_stored_run_and_the_flags_given_with_it() {
         let _ = std::fs::remove_dir_all(d);
     }
 }
+
+#[test]
+fn progress_goes_to_a_log_as_lines_and_quiet_is_silent() {
+    let (loud, quiet) = (tmp("progress-loud"), tmp("progress-quiet"));
+    let args = ["optimize", "--env", "lunar", "--pop", "8", "--generations", "4", "--algorithm", "nsga2"];
+    let small = ["--particles", "20", "--final-particles", "10", "--replicates", "1"];
+    // stderr is a pipe here, not a terminal: periodic lines with the generation and an ETA
+    let o = Command::new(bin()).args(args).args(small).args(["--out", loud.to_str().unwrap()]).output().unwrap();
+    ok(&o);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("generation 1/4:") && err.contains("generation 4/4:") && err.contains("elapsed"), "{err}");
+    let o = Command::new(bin())
+        .args(args)
+        .args(small)
+        .args(["--quiet", "--out", quiet.to_str().unwrap()])
+        .output()
+        .unwrap();
+    ok(&o);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("generation"), "--quiet printed: {err}");
+    let _ = std::fs::remove_dir_all(&loud);
+    let _ = std::fs::remove_dir_all(&quiet);
+}

@@ -160,6 +160,7 @@ impl Solver {
             }
             mem.evaluations += mem.pop.len() as u64;
         }
+        let screen_start = std::time::Instant::now();
         for g in 0..self.generations {
             let trials: Vec<Vec<Vec<f64>>> = members.iter_mut().map(Member::trials).collect();
             let scored = self.score(sim, models, &trials, self.screen_particles);
@@ -176,7 +177,13 @@ impl Solver {
                     .iter()
                     .map(|m| format!("{:.1}", m.pop.iter().map(|p| p.1).fold(f64::INFINITY, f64::min)))
                     .collect();
-                log(format!("calibrate: screen generation {}/{} (best {})", g + 1, self.generations, best.join(", ")));
+                log(format!(
+                    "calibrate: screen generation {}/{} (best {}), {}",
+                    g + 1,
+                    self.generations,
+                    best.join(", "),
+                    crate::io::progress::eta(screen_start.elapsed(), (g + 1) as u64, self.generations as u64)
+                ));
             }
         }
         // the polish starts from the screen's best and the model's own starts

@@ -213,7 +213,14 @@ pub fn run_all(engine: &dyn BatchEvaluator, root: &Path, plan: &Plan, opts: &Run
             .enumerate()
             .map(|(slot, &i)| {
                 let (group, m, dir) = (&group, &plan.members[i], plan.member_dir(root, i));
-                let opts = RunOptions { label: format!("{}{} ", opts.label, m.label), ..opts.clone() };
+                // the runs advance together: the first one speaks for all (N lines would interleave)
+                let others = todo.len() - 1;
+                let label = if others > 0 {
+                    format!("{}{} (+{others} more in lockstep) ", opts.label, m.label)
+                } else {
+                    format!("{}{} ", opts.label, m.label)
+                };
+                let opts = RunOptions { label, progress: opts.progress && slot == 0, ..opts.clone() };
                 scope.spawn(move || {
                     let member = group.member(slot);
                     let resume = dir.join("checkpoint.json").exists();
@@ -240,7 +247,7 @@ pub fn execute(root: &Path, plan: &Plan) -> anyhow::Result<bool> {
         Some(m) => make_engine_for(plan.engine, &m.manifest.scenario)?,
         None => return Ok(true),
     };
-    let opts = RunOptions { checkpoint_every: plan.checkpoint_every, progress: false, label: String::new() };
+    let opts = RunOptions { checkpoint_every: plan.checkpoint_every, progress: true, label: String::new() };
     let done = run_all(&engine, root, plan, &opts)?;
     if !done {
         eprintln!("interrupted: rerun the same command to resume every unfinished run");

@@ -4,6 +4,7 @@ pub mod atomic;
 pub mod config;
 pub mod measured;
 pub mod plot;
+pub mod progress;
 pub mod run_dir;
 pub mod table;
 pub mod trajectories;

@@ -125,7 +125,8 @@ impl Manifest {
 #[derive(Debug, Clone)]
 pub struct RunOptions {
     pub checkpoint_every: u64,
-    /// Progress bar (false: one stderr line per 10 generations).
+    /// Report progress on stderr: a bar on a terminal, else a line every few seconds with the
+    /// generation and an ETA (`io::progress`); false: silent (`--quiet`).
     pub progress: bool,
     /// Prefix for progress output (e.g. the sweep's angle).
     pub label: String,
@@ -420,7 +421,10 @@ pub fn run(
             s
         }
     };
-    let bar = if opts.progress {
+    let interactive = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let mut lines = crate::io::progress::Lines::new();
+    let first_generation = state.generation;
+    let bar = if opts.progress && interactive {
         let b = indicatif::ProgressBar::new(manifest.config.max_generations);
         b.set_style(
             indicatif::ProgressStyle::with_template("{prefix}{bar:30} gen {pos}/{len} {msg} eta {eta}")
@@ -461,12 +465,21 @@ pub fn run(
             stats.feasible_fraction * 100.0,
             stats.front_size
         ));
-        if !opts.progress && state.generation % 10 == 0 {
+        let max = manifest.config.max_generations;
+        if opts.progress && !interactive && lines.due(state.generation, max) {
+            let eta = crate::io::progress::eta(
+                start.elapsed(),
+                state.generation.saturating_sub(first_generation),
+                max.saturating_sub(first_generation),
+            );
+            let stall = matches!(manifest.config.mode, Mode::MatlabLike { .. });
             eprintln!(
-                "{}generation {} HV {hv:.4e} feasible {:.0}%",
+                "{}generation {}/{max}: HV {hv:.4e}, feasible {:.0} %, front {}; {eta}{}",
                 opts.label,
                 state.generation,
-                stats.feasible_fraction * 100.0
+                stats.feasible_fraction * 100.0,
+                stats.front_size,
+                if stall { " (at most: the spread stall may stop it sooner)" } else { "" }
             );
         }
         if INTERRUPTED.load(Ordering::SeqCst) {
