@@ -1,5 +1,6 @@
-// The particle kernel: one workgroup per design, its threads striding over the design's
-// particles, bounce by bounce (4.2.4), then the per-design reduction (Eq. 4.56-4.57).
+// The particle kernels (4.2.4) and the per-design reduction (Eq. 4.56-4.57): in physical mode
+// one thread per particle (`simulate_particles`, then `reduce_designs`); in listing mode one
+// workgroup per design, its threads striding over the particles bounce by bounce (`simulate`).
 // CPU twin: src/engine/kernel.rs (same function names and arguments; its header lists the
 // pairs), driven by src/engine/cpu.rs `run_particles` (the bounce loop of `simulate`) and
 // `kernel::reduce` (the reduction of `simulate`). Positions are relative to a tooth's p1 so f32 suffices.
@@ -27,6 +28,7 @@ var<workgroup> wg_bounces: atomic<u32>;
 var<workgroup> wg_advance: atomic<u32>;
 var<workgroup> wg_sum: array<f32, 64>;
 var<workgroup> wg_go: u32;
+var<workgroup> wg_steps: atomic<u32>;
 
 struct Hit {
     found: bool,
@@ -287,6 +289,10 @@ fn end_tooth(d: Design, p: Particle) -> i32 {
     return clamp(j, 1, d.teeth);
 }
 
+// Listing mode: the bounce loop of all of a design's particles together, because the
+// listing's stop (Eq. 4.50, D.1 l.328-336) is on the mean hop of the whole bounce; one
+// workgroup per design, a barrier per bounce, then the reduction. CPU twin: cpu.rs
+// `run_particles`, then kernel.rs `reduce`.
 @compute @workgroup_size(64)
 fn simulate(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let design = wid.x;
@@ -329,9 +335,63 @@ fn simulate(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_ind
         }
         if (workgroupUniformLoad(&wg_go) == 0u) { break; }
     }
+    reduce_design(design, lid, iterations);
+}
 
-    // Reduction: tooth histogram, lost and still-flying counts, impacts, distances.
-    // Rust twin: kernel.rs `reduce` (same lanes, same order of the distance sums).
+// Physical mode: each particle's rest rule is its own (4.2.4, erratum 15), so one thread
+// follows one particle to rest with no barrier, and threads map to particles, not designs
+// (issue 16: a workgroup no longer waits for its slowest particle at every bounce). Returns
+// the steps taken. Rust twin: kernel.rs `follow_particle`.
+fn follow_particle(d: Design, p: ptr<function, Particle>, index: u32) -> u32 {
+    var steps = 0u;
+    for (var bounce = 0u; bounce < ph.max_bounces; bounce++) {
+        if ((*p).state != STATE_FLYING) { break; }
+        step_particle(d, p, index, bounce);
+        steps = bounce + 1u;
+    }
+    return steps;
+}
+
+// One thread per particle of every design in the dispatch (a 2-D grid of workgroups when
+// there are more than one dimension holds); `reduce_designs` runs after it.
+@compute @workgroup_size(64)
+fn simulate_particles(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+                      @builtin(local_invocation_index) lid: u32) {
+    let flat = (wid.y * nwg.x + wid.x) * WG + lid;
+    if (flat >= ph.n_designs * ph.n_particles) { return; }
+    let design = flat / ph.n_particles;
+    let i = flat % ph.n_particles;
+    var p = particles[flat];
+    follow_particle(designs[design], &p, i);
+    particles[flat] = p;
+}
+
+// Steps a particle took in `follow_particle`, from what it left: one per impact, plus the
+// flight that lost it. Rust twin: kernel.rs `particle_steps`.
+fn particle_steps(p: Particle) -> u32 {
+    return p.bounces + select(0u, 1u, p.state == STATE_LOST);
+}
+
+// The per-design reduction after `simulate_particles`; its iterations are the bounce loop's
+// (as `run_particles` counts them: until no particle flies, at least one).
+@compute @workgroup_size(64)
+fn reduce_designs(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let design = wid.x;
+    let first = design * ph.n_particles;
+    if (lid == 0u) { atomicStore(&wg_steps, 1u); }
+    workgroupBarrier();
+    for (var i = lid; i < ph.n_particles; i += WG) {
+        atomicMax(&wg_steps, min(particle_steps(particles[first + i]), ph.max_bounces));
+    }
+    let iterations = workgroupUniformLoad(&wg_steps);
+    reduce_design(design, lid, iterations);
+}
+
+// Reduction: tooth histogram, lost and still-flying counts, impacts, distances.
+// Rust twin: kernel.rs `reduce` (same lanes, same order of the distance sums).
+fn reduce_design(design: u32, lid: u32, iterations: u32) {
+    let d = designs[design];
+    let first = design * ph.n_particles;
     if (lid == 0u) {
         atomicStore(&wg_flying, 0u);
         atomicStore(&wg_lost, 0u);

@@ -195,6 +195,10 @@ fn every_wgsl_function_has_a_rust_twin() {
         ("katan2", "fn atan2("),               // ktrig::atan2
         ("pitch", "pub pitch: [T; 2]"),        // KDesign::pitch (a field)
         ("simulate", "pub fn run_particles<"), // its bounce loop; the reduction is `reduce`
+        // one thread per particle: `follow_particle` for each (tests/twins.rs)
+        ("simulate_particles", "pub fn follow_particle<"),
+        ("reduce_designs", "pub fn particle_steps<"), // the max of particle_steps, then `reduce`
+        ("reduce_design", "pub fn reduce<"),
     ];
     let names = module.functions.iter().filter_map(|(_, f)| f.name.clone());
     let entries = module.entry_points.iter().map(|e| e.name.clone());

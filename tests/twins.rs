@@ -4,7 +4,7 @@
 //! same particles, in both precisions, both physics modes, lunar and earth.
 
 use sawtooth::engine::cpu::{kernel_design, kernel_physics, run_design, run_particles};
-use sawtooth::engine::kernel::{reduce, KOutcome};
+use sawtooth::engine::kernel::{follow_particle, init_particle, particle_steps, reduce, KOutcome};
 use sawtooth::engine::Context;
 use sawtooth::model::outcome::{from_counts, summarise, SimOutcome};
 use sawtooth::model::prepare::prepare;
@@ -77,5 +77,39 @@ fn reduction_twin_matches_the_cpu_engine_listing() {
     {
         check::<f32>(s, 51 + i as u64);
         check::<f64>(s, 61 + i as u64);
+    }
+}
+
+/// Physical mode's GPU path, `simulate_particles` (one thread follows one particle to rest)
+/// and `reduce_designs` (iterations = the most steps any particle took, at least 1), in its
+/// Rust twins, leaves every particle and the iteration count exactly as the cpu engine's
+/// bounce-by-bounce loop does.
+fn check_particle_major<T: Real + PartialEq + std::fmt::Debug>(s: &Scenario, seed: u64) {
+    let mut s = s.clone();
+    s.sim.particles = 150;
+    let ctx = Context::new(&s);
+    for design in random_valid_designs(&s, 12, seed) {
+        let prep = prepare(&s, &design).unwrap();
+        let (d, ph) = (kernel_design::<T>(&prep), kernel_physics::<T>(&ctx));
+        let (bounce_major, iterations) = run_particles::<T>(&prep, &ctx, None);
+        let mut most = 1;
+        for (i, l) in prep.launches.iter().enumerate() {
+            let mut p = init_particle(&d, &ph, [T::c(l[0]), T::c(l[1])], i as u32);
+            let steps = follow_particle(&d, &ph, &mut p, i as u32, ctx.max_bounces);
+            assert_eq!(steps, particle_steps(&p).min(ctx.max_bounces), "particle {i}");
+            most = most.max(steps);
+            let q = &bounce_major[i];
+            assert_eq!((p.state, p.bounces, p.tooth), (q.state, q.bounces, q.tooth), "particle {i}");
+            assert_eq!((p.pos, p.vel, p.hop, p.first), (q.pos, q.vel, q.hop, q.first), "particle {i}");
+        }
+        assert_eq!(most, iterations);
+    }
+}
+
+#[test]
+fn particle_major_twin_matches_the_bounce_loop_physical() {
+    for (i, s) in [Scenario::lunar(), Scenario::earth()].iter().enumerate() {
+        check_particle_major::<f32>(s, 71 + i as u64);
+        check_particle_major::<f64>(s, 81 + i as u64);
     }
 }

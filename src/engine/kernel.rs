@@ -11,7 +11,10 @@
 //! | `end_tooth`                       | [`end_tooth`]                                     |
 //! | `bounce_velocity`                 | `Restitution::bounce` (src/model/collision.rs)    |
 //! | `simulate`: bounce loop           | `run_particles` (src/engine/cpu.rs)               |
-//! | `simulate`: reduction             | [`reduce`]                                        |
+//! | `simulate_particles`              | [`follow_particle`] for each particle             |
+//! | `particle_steps`                  | [`particle_steps`]                                |
+//! | `reduce_designs`                  | max of [`particle_steps`], then [`reduce`]        |
+//! | `reduce_design` (reduction)       | [`reduce`]                                        |
 //! | `pitch(d)`                        | the field `d.pitch`                               |
 //!
 //! `init_particle` runs on the host for both engines. The shared files have their own twins:
@@ -606,6 +609,36 @@ pub struct KOutcome<T> {
     pub advance_teeth: u32,
     /// Sum of credited distances, m (listing semantics).
     pub distance_sum: T,
+}
+
+/// Physical mode: follow one particle to rest (or loss, or `max_bounces` steps), as one
+/// thread of WGSL `simulate_particles` does; returns the steps taken. `max_bounces` is the
+/// WGSL uniform's `ph.max_bounces` (the kernel's physics record does not carry it). The
+/// same particle as `run_particles` leaves it: the random draws are keyed by (particle,
+/// bounce), not by the order particles are stepped in.
+pub fn follow_particle<T: Real>(
+    d: &KDesign<T>,
+    ph: &KPhysics<T>,
+    p: &mut KParticle<T>,
+    index: u32,
+    max_bounces: u32,
+) -> u32 {
+    let mut steps = 0;
+    for bounce in 0..max_bounces {
+        if p.state != STATE_FLYING {
+            break;
+        }
+        step_particle(d, ph, p, index, bounce);
+        steps = bounce + 1;
+    }
+    steps
+}
+
+/// Steps a particle took in [`follow_particle`], from what it left: one per impact, plus the
+/// flight that lost it (WGSL `particle_steps`; `reduce_designs` takes the largest, at least 1,
+/// as the iterations of the design's bounce loop).
+pub fn particle_steps<T: Real>(p: &KParticle<T>) -> u32 {
+    p.bounces + u32::from(p.state == STATE_LOST)
 }
 
 /// The reduction at the end of WGSL `simulate`, done the way the workgroup does it: lane

@@ -29,13 +29,21 @@ pub enum AdapterChoice {
     HardwareOnly,
 }
 
+/// Threads per workgroup of every kernel (WGSL `WG`, kernel.rs `WG`).
+const WORKGROUP_SIZE: u64 = super::kernel::WG as u64;
+
 /// A batch that has not finished after this long counts as a GPU failure.
 const TIMEOUT: Duration = Duration::from_secs(120);
 
 pub struct GpuEngine {
     device: wgpu::Device,
     queue: wgpu::Queue,
+    /// Listing mode: one workgroup per design, bounce by bounce (`simulate`).
     pipeline: wgpu::ComputePipeline,
+    /// Physical mode: one thread per particle (`simulate_particles`), then the per-design
+    /// reduction (`reduce_designs`).
+    particle_pipeline: wgpu::ComputePipeline,
+    reduce_pipeline: wgpu::ComputePipeline,
     bind_layout: wgpu::BindGroupLayout,
     info: wgpu::AdapterInfo,
     limits: wgpu::Limits,
@@ -131,14 +139,18 @@ impl GpuEngine {
             bind_group_layouts: &[Some(&bind_layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("simulate"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("simulate"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let entry = |name: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(name),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(name),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let (pipeline, particle_pipeline, reduce_pipeline) =
+            (entry("simulate"), entry("simulate_particles"), entry("reduce_designs"));
         if let Some(e) = uncaptured.lock().unwrap().take() {
             bail!("GPU pipeline creation failed: {e}");
         }
@@ -146,6 +158,8 @@ impl GpuEngine {
             device,
             queue,
             pipeline,
+            particle_pipeline,
+            reduce_pipeline,
             bind_layout,
             info,
             limits,
@@ -265,7 +279,29 @@ impl GpuEngine {
         });
         let mut enc = dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("simulate") });
         enc.clear_buffer(&hist_buf, 0, None);
-        {
+        if phys.per_particle_rest != 0 {
+            // a thread per particle, then (a separate pass: the reduction reads what every
+            // particle's thread wrote) a workgroup per design
+            let groups = (particles.len() as u64).div_ceil(WORKGROUP_SIZE);
+            let per_dim = self.limits.max_compute_workgroups_per_dimension as u64;
+            let (x, y) = (groups.min(per_dim), groups.div_ceil(per_dim));
+            {
+                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("simulate_particles"),
+                    timestamp_writes: None,
+                });
+                pass.set_pipeline(&self.particle_pipeline);
+                pass.set_bind_group(0, &bind, &[]);
+                pass.dispatch_workgroups(x as u32, y as u32, 1);
+            }
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("reduce_designs"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.reduce_pipeline);
+            pass.set_bind_group(0, &bind, &[]);
+            pass.dispatch_workgroups(n as u32, 1, 1);
+        } else {
             let mut pass = enc
                 .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("simulate"), timestamp_writes: None });
             pass.set_pipeline(&self.pipeline);
