@@ -104,8 +104,26 @@ fn bad_input_names_the_field_and_exits_2() {
         "`a` = 1e300 m/s^2 is beyond any conveyor",
     );
     assert_bad_input(&["simulate", "--design", "47,46,32,43,94,11,0.84,inf"], "`a` must be a finite number");
-    assert_bad_input(&["simulate", "--design", LUNAR_C, "--k-elastic", "1.5"], "collision.k_elastic");
-    assert_bad_input(&["simulate", "--design", LUNAR_C, "--particles", "0"], "sim.particles");
+    // the message names what the user wrote: the flag, and the config file's key with its unit
+    assert_bad_input(&["simulate", "--design", LUNAR_C, "--k-elastic", "1.5"], "`[collision] k_elastic` (--k-elastic)");
+    assert_bad_input(&["simulate", "--design", LUNAR_C, "--particles", "0"], "`[sim] particles` (--particles)");
+    let dir = std::env::temp_dir().join(format!("sawtooth-cli-keys-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let config = dir.join("g.toml");
+    std::fs::write(&config, "env = \"lunar\"\n[environment]\ng_m_s2 = -1.0\n").unwrap();
+    assert_bad_input(
+        &["simulate", "--design", LUNAR_C, "--config", config.to_str().unwrap()],
+        "`[environment] g_m_s2`",
+    );
+    // an output that is an input is refused before anything is written
+    let setup = dir.join("setup.toml");
+    std::fs::copy(concat!(env!("CARGO_MANIFEST_DIR"), "/data/validation/test3.toml"), &setup).unwrap();
+    let before = std::fs::read(&setup).unwrap();
+    let s = setup.to_str().unwrap();
+    assert_bad_input(&["synth", "--setup", s, "--runs", "2", "--out", s], "is the --setup file");
+    assert_bad_input(&["simulate", "--config", s, "--particles", "5", "--trajectories", s], "is the --config file");
+    assert_eq!(std::fs::read(&setup).unwrap(), before, "the input was overwritten");
+    let _ = std::fs::remove_dir_all(&dir);
     assert_bad_input(&["simulate", "--design", LUNAR_C, "--env", "mars"], "mars");
     assert_bad_input(&["simulate", "--design", LUNAR_C, "--material", "cheese"], "cheese");
     // the figure is SVG or PNG by the extension: any other name is refused before simulating

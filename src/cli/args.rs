@@ -191,7 +191,7 @@ impl ScenarioArgs {
             s.effects.set_from_cli(spec).map_err(anyhow::Error::msg)?;
         }
         if let Err(e) = s.validate() {
-            bail!("invalid setting: {e}");
+            bail!("invalid setting: {}", in_user_terms(&e));
         }
         Ok((s, file.design()))
     }
@@ -237,6 +237,45 @@ impl ScenarioArgs {
         }
         Ok((scenario, design, slopes))
     }
+}
+
+/// The library's field names in a validation message (`environment.g`) replaced by what the
+/// user wrote: the config key with its table and unit suffix, and the flag where one exists
+/// (`[environment] g_m_s2`; `[collision] k_elastic` (--k-elastic)).
+pub fn in_user_terms(message: &str) -> String {
+    const NAMES: &[(&str, &str)] = &[
+        ("environment.g", "[environment] g_m_s2"),
+        ("environment.alpha_deg", "[environment] alpha_deg` (--alpha"),
+        ("environment.k_drag", "[environment] k_drag_per_s` (--k-drag"),
+        ("material.aor_deg", "[material] aor_deg` (--aor"),
+        ("material.bulk_density", "[material] bulk_density_kg_m3"),
+        ("collision.k_elastic", "[collision] k_elastic` (--k-elastic"),
+        ("collision.mu_friction", "[collision] mu_friction` (--mu-fric"),
+        ("sim.teeth", "[sim] teeth` (--teeth"),
+        ("sim.particles", "[sim] particles` (--particles"),
+        ("sim.max_bounces", "[sim] max_bounces` (--bounces"),
+        ("sim.random_band", "[sim] random_band"),
+        ("sim.rest_threshold", "[sim] rest_threshold_m"),
+        ("sim.launch_offset_deg", "[sim] launch_offset_deg` (--launch-offset"),
+        ("performance.conveyor_length", "[performance] conveyor_length_m"),
+        ("performance.regolith_width", "[performance] regolith_width_m"),
+        ("performance.sled_width", "[performance] sled_width_m"),
+        ("performance.sled_thickness", "[performance] sled_thickness_m"),
+        ("performance.sled_density", "[performance] sled_density_kg_m3"),
+        ("performance.downstroke_speed", "[performance] downstroke_speed_m_s"),
+        ("performance.f_max", "[performance] f_max_hz"),
+        ("performance.contraction_ratio", "[performance] contraction_ratio"),
+    ];
+    let mut m = message.to_string();
+    for (library, user) in NAMES {
+        let quoted = format!("`{library}`");
+        if m.contains(&quoted) {
+            // a flag's name closes its own parenthesis after the backtick
+            let closing = if user.contains("` (--") { ")" } else { "" };
+            m = m.replace(&quoted, &format!("`{user}{}", if closing.is_empty() { "`" } else { ")" }));
+        }
+    }
+    m
 }
 
 /// Designing to requirements (issue 13): what a design must meet.

@@ -51,6 +51,13 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         // checked before simulating: a wrong name should not cost a run
         crate::plot::Format::of(p, "--plot")?;
     }
+    if let Some(config) = &a.scenario.config {
+        for (flag, out) in [("--plot", &a.plot), ("--trajectories", &a.trajectories)] {
+            if let Some(out) = out {
+                crate::io::atomic::refuse_input_as_output(out, flag, &[("--config", config)])?;
+            }
+        }
+    }
     let trace = a.trajectories.is_some() || a.plot.is_some();
     if trace && !slopes.is_empty() {
         bail!("--trajectories and --plot draw one slope: give --alpha a single angle");

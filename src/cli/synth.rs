@@ -41,6 +41,7 @@ pub struct SynthArgs {
 }
 
 pub fn run(a: SynthArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    crate::io::atomic::refuse_input_as_output(&a.out, "--out", &[("--setup", &a.setup)])?;
     let file = ConfigFile::load(&a.setup)?;
     let mut scenario = file.scenario()?;
     let design = file.design().with_context(|| format!("{}: the setup has no [design]", a.setup.display()))?;

@@ -14,6 +14,33 @@ use anyhow::Context as _;
 /// Suffix of every temporary file this helper creates.
 pub const TMP_SUFFIX: &str = ".sawtooth-tmp";
 
+/// Refuse an output file that is one of the command's inputs (`synth --out my.toml --setup
+/// my.toml` would replace the setup with the data it made), compared by resolved path so that
+/// `./a.toml` and `a.toml` match. `out_flag` and each input's flag name the user's flags.
+pub fn refuse_input_as_output(out: &Path, out_flag: &str, inputs: &[(&str, &Path)]) -> anyhow::Result<()> {
+    let resolve = |p: &Path| -> Option<std::path::PathBuf> {
+        if let Ok(c) = std::fs::canonicalize(p) {
+            return Some(c);
+        }
+        // not there yet: its folder resolved, and its name
+        let dir = match p.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        Some(std::fs::canonicalize(dir).ok()?.join(p.file_name()?))
+    };
+    let Some(target) = resolve(out) else { return Ok(()) };
+    for (flag, input) in inputs {
+        if resolve(input).as_deref() == Some(target.as_path()) {
+            anyhow::bail!(
+                "{out_flag} {} is the {flag} file: writing it would destroy the input; choose another {out_flag}",
+                out.display()
+            );
+        }
+    }
+    Ok(())
+}
+
 /// Write `bytes` to `path` atomically.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     write_atomic_with(path, |w| Ok(w.write_all(bytes)?))
