@@ -172,9 +172,15 @@ pub fn parse(text: &str, name: &str) -> anyhow::Result<MeasuredRuns> {
         if let Some(first) = first_line.get(&id) {
             bail!("{name}:{line}: column `run`: duplicate run id `{id}` (first on line {first})");
         }
-        if teeth_g.iter().sum::<f64>() <= 0.0 {
+        let recovered: f64 = teeth_g.iter().sum();
+        if recovered <= 0.0 {
             bail!(
                 "{name}:{line}: run `{id}`: tooth masses sum to 0 g; nothing recovered, the run cannot be normalised"
+            );
+        }
+        if !recovered.is_finite() {
+            bail!(
+                "{name}:{line}: run `{id}`: tooth masses sum to more than any number holds ({recovered} g); the run cannot be normalised"
             );
         }
         first_line.insert(id.clone(), line);
@@ -300,6 +306,13 @@ impl MeasuredRuns {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_row_whose_sum_overflows_is_refused() {
+        let text = "run,tooth_1,tooth_2\na,1e308,1e308\nb,1.0,2.0\n";
+        let e = parse(text, "big.csv").unwrap_err().to_string();
+        assert!(e.contains("big.csv:2") && e.contains("run `a`") && e.contains("cannot be normalised"), "{e}");
+    }
 
     fn real(n: u32) -> MeasuredRuns {
         let path = match n {
