@@ -118,6 +118,12 @@ fn repeatability_and_sensitivity_write_their_tables() {
     let all_at = runs.lines().skip(1).all(|l| l.split(',').nth(at) == Some("true"));
     assert_eq!(out.contains("NOT at the target"), !all_at, "{out}\n{runs}");
     assert_png_beside(&rep.join("repeatability.svg"));
+    // rerunning reads the finished runs back: the same tables to the byte
+    let (code, again, err) = run(&args);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(again, out);
+    assert_eq!(std::fs::read_to_string(rep.join("summary.csv")).unwrap(), summary);
+    assert_eq!(std::fs::read_to_string(rep.join("runs.csv")).unwrap(), runs);
 
     let sens = tmp("sens");
     let mut args = vec![
