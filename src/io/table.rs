@@ -23,10 +23,18 @@ pub fn csv_header<T: Serialize + Default>() -> anyhow::Result<String> {
     Ok(text.lines().next().unwrap_or_default().to_string() + "\n")
 }
 
-/// Write the table of `rows` (header included, even with no rows) to `path` atomically.
+/// The whole table of `rows`: the header (even with no rows), then the rows.
+pub fn table_text<T: Serialize + Default>(rows: &[T]) -> anyhow::Result<String> {
+    if rows.is_empty() {
+        csv_header::<T>()
+    } else {
+        csv_text(rows, true)
+    }
+}
+
+/// Write the table of `rows` to `path` atomically.
 pub fn write_table<T: Serialize + Default>(path: &Path, rows: &[T]) -> anyhow::Result<()> {
-    let text = if rows.is_empty() { csv_header::<T>()? } else { csv_text(rows, true)? };
-    write_atomic(path, text.as_bytes())
+    write_atomic(path, table_text(rows)?.as_bytes())
 }
 
 #[cfg(test)]

@@ -63,7 +63,7 @@ pub struct Compliance {
 /// One row of pareto.csv (like Table C.6): header and row from this one type, units in
 /// every name, floats written exactly (shortest round trip) so that summaries made from the
 /// file equal those made in the run.
-#[derive(Debug, Serialize, Deserialize)]
+#[derive(Debug, Default, Serialize, Deserialize)]
 struct ParetoRow {
     l_c_mm: f64,
     l_a_mm: f64,
@@ -599,50 +599,14 @@ pub fn print_picks(
     Ok(())
 }
 
-/// Read a finished run's pareto.csv back (resuming sweeps and studies skip finished runs).
-/// pareto.csv's bytes: one header, one row per front design.
+/// pareto.csv's bytes: one header, one row per front design (`io::table`: the header from
+/// `ParetoRow`, also for an empty front).
 pub fn pareto_csv(front: &[FrontPoint]) -> anyhow::Result<Vec<u8>> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    if front.is_empty() {
-        // serde writes the header with the first row; an empty front still gets its header
-        w.write_record(PARETO_HEADER)?;
-    }
-    for p in front {
-        w.serialize(ParetoRow::from(p))?;
-    }
-    w.into_inner().map_err(|e| anyhow::anyhow!("writing pareto.csv: {e}"))
+    let rows: Vec<ParetoRow> = front.iter().map(ParetoRow::from).collect();
+    Ok(crate::io::table::table_text(&rows)?.into_bytes())
 }
 
-/// pareto.csv's columns, in order (a test checks it against `ParetoRow`).
-const PARETO_HEADER: [&str; 26] = [
-    "l_c_mm",
-    "l_a_mm",
-    "l_b_mm",
-    "r_mm",
-    "omega_deg",
-    "delta_deg",
-    "v0_m_s",
-    "a_m_s2",
-    "f_stroke_hz",
-    "w_spec_j_kg",
-    "m_dot_kg_s",
-    "stroke_m",
-    "n_wire",
-    "d_avg_m",
-    "w_spec_se_j_kg",
-    "m_dot_se_kg_s",
-    "d_avg_se_m",
-    "p_avg_w",
-    "wire_length_m",
-    "alpha_deg",
-    "f_op_hz",
-    "m_dot_op_kg_h",
-    "p_op_w",
-    "operating_limit",
-    "compliant",
-    "binding_requirement",
-];
-
+/// Read a finished run's pareto.csv back (resuming sweeps and studies skip finished runs).
 pub fn read_pareto_csv(path: &Path) -> anyhow::Result<Vec<FrontPoint>> {
     let mut r = csv::Reader::from_path(path).with_context(|| format!("reading {}", path.display()))?;
     let mut out = Vec::new();
@@ -661,6 +625,36 @@ pub fn closest_to_mass_flow(front: &[FrontPoint], target: f64) -> Option<&FrontP
 
 #[cfg(test)]
 mod tests {
+    /// pareto.csv's columns, in order: what users' scripts read.
+    const PARETO_HEADER: [&str; 26] = [
+        "l_c_mm",
+        "l_a_mm",
+        "l_b_mm",
+        "r_mm",
+        "omega_deg",
+        "delta_deg",
+        "v0_m_s",
+        "a_m_s2",
+        "f_stroke_hz",
+        "w_spec_j_kg",
+        "m_dot_kg_s",
+        "stroke_m",
+        "n_wire",
+        "d_avg_m",
+        "w_spec_se_j_kg",
+        "m_dot_se_kg_s",
+        "d_avg_se_m",
+        "p_avg_w",
+        "wire_length_m",
+        "alpha_deg",
+        "f_op_hz",
+        "m_dot_op_kg_h",
+        "p_op_w",
+        "operating_limit",
+        "compliant",
+        "binding_requirement",
+    ];
+
     use super::*;
     use crate::plot::tests::{assert_has_ticks, assert_real_png, svg_texts};
 
