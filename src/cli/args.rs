@@ -243,37 +243,37 @@ impl ScenarioArgs {
 /// user wrote: the config key with its table and unit suffix, and the flag where one exists
 /// (`[environment] g_m_s2`; `[collision] k_elastic` (--k-elastic)).
 pub fn in_user_terms(message: &str) -> String {
-    const NAMES: &[(&str, &str)] = &[
-        ("environment.g", "[environment] g_m_s2"),
-        ("environment.alpha_deg", "[environment] alpha_deg` (--alpha"),
-        ("environment.k_drag", "[environment] k_drag_per_s` (--k-drag"),
-        ("material.aor_deg", "[material] aor_deg` (--aor"),
-        ("material.bulk_density", "[material] bulk_density_kg_m3"),
-        ("collision.k_elastic", "[collision] k_elastic` (--k-elastic"),
-        ("collision.mu_friction", "[collision] mu_friction` (--mu-fric"),
-        ("sim.teeth", "[sim] teeth` (--teeth"),
-        ("sim.particles", "[sim] particles` (--particles"),
-        ("sim.max_bounces", "[sim] max_bounces` (--bounces"),
-        ("sim.random_band", "[sim] random_band"),
-        ("sim.rest_threshold", "[sim] rest_threshold_m"),
-        ("sim.launch_offset_deg", "[sim] launch_offset_deg` (--launch-offset"),
-        ("performance.conveyor_length", "[performance] conveyor_length_m"),
-        ("performance.regolith_width", "[performance] regolith_width_m"),
-        ("performance.sled_width", "[performance] sled_width_m"),
-        ("performance.sled_thickness", "[performance] sled_thickness_m"),
-        ("performance.sled_density", "[performance] sled_density_kg_m3"),
-        ("performance.downstroke_speed", "[performance] downstroke_speed_m_s"),
-        ("performance.f_max", "[performance] f_max_hz"),
-        ("performance.contraction_ratio", "[performance] contraction_ratio"),
+    // library name, config key (with its table), flag where one exists
+    const NAMES: &[(&str, &str, Option<&str>)] = &[
+        ("environment.g", "[environment] g_m_s2", None),
+        ("environment.alpha_deg", "[environment] alpha_deg", Some("--alpha")),
+        ("environment.k_drag", "[environment] k_drag_per_s", Some("--k-drag")),
+        ("material.aor_deg", "[material] aor_deg", Some("--aor")),
+        ("material.bulk_density", "[material] bulk_density_kg_m3", None),
+        ("collision.k_elastic", "[collision] k_elastic", Some("--k-elastic")),
+        ("collision.mu_friction", "[collision] mu_friction", Some("--mu-fric")),
+        ("sim.teeth", "[sim] teeth", Some("--teeth")),
+        ("sim.particles", "[sim] particles", Some("--particles")),
+        ("sim.max_bounces", "[sim] max_bounces", Some("--bounces")),
+        ("sim.random_band", "[sim] random_band", None),
+        ("sim.rest_threshold", "[sim] rest_threshold_m", None),
+        ("sim.launch_offset_deg", "[sim] launch_offset_deg", Some("--launch-offset")),
+        ("performance.conveyor_length", "[performance] conveyor_length_m", None),
+        ("performance.regolith_width", "[performance] regolith_width_m", None),
+        ("performance.sled_width", "[performance] sled_width_m", None),
+        ("performance.sled_thickness", "[performance] sled_thickness_m", None),
+        ("performance.sled_density", "[performance] sled_density_kg_m3", None),
+        ("performance.downstroke_speed", "[performance] downstroke_speed_m_s", None),
+        ("performance.f_max", "[performance] f_max_hz", None),
+        ("performance.contraction_ratio", "[performance] contraction_ratio", None),
     ];
     let mut m = message.to_string();
-    for (library, user) in NAMES {
-        let quoted = format!("`{library}`");
-        if m.contains(&quoted) {
-            // a flag's name closes its own parenthesis after the backtick
-            let closing = if user.contains("` (--") { ")" } else { "" };
-            m = m.replace(&quoted, &format!("`{user}{}", if closing.is_empty() { "`" } else { ")" }));
-        }
+    for (library, key, flag) in NAMES {
+        let user = match flag {
+            Some(flag) => format!("`{key}` ({flag})"),
+            None => format!("`{key}`"),
+        };
+        m = m.replace(&format!("`{library}`"), &user);
     }
     m
 }

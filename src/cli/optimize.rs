@@ -151,17 +151,10 @@ impl GaArgs {
             Mode::MatlabLike { stall_generations, .. } => Some(stall_generations),
             Mode::Standard => None,
         };
-        let value_name = |v: &dyn Fn() -> Option<clap::builder::PossibleValue>| {
-            v().map_or_else(String::new, |p| p.get_name().to_string())
-        };
         let or_none = |v: Option<String>| v.unwrap_or_else(|| "none (nsga2 has no stall stop)".to_string());
         let differs: [(&str, Option<String>, String); 7] = [
             ("--pop", self.pop.filter(|&p| p != m.config.pop).map(|p| p.to_string()), m.config.pop.to_string()),
-            (
-                "--algorithm",
-                self.algorithm.filter(|&a| a != m.algorithm).map(|a| value_name(&|| a.to_possible_value())),
-                value_name(&|| m.algorithm.to_possible_value()),
-            ),
+            ("--algorithm", self.algorithm.filter(|&a| a != m.algorithm).map(cli_name), cli_name(m.algorithm)),
             (
                 "--tol",
                 self.tol.filter(|&t| Some(t) != stored_tol).map(|t| t.to_string()),
@@ -184,8 +177,8 @@ impl GaArgs {
             ),
             (
                 "--selection",
-                self.selection.filter(|&s| s != m.config.selection).map(|s| value_name(&|| s.to_possible_value())),
-                value_name(&|| m.config.selection.to_possible_value()),
+                self.selection.filter(|&s| s != m.config.selection).map(cli_name),
+                cli_name(m.config.selection),
             ),
         ];
         for (flag, given, stored) in differs {
@@ -239,6 +232,11 @@ pub struct OptimizeArgs {
     /// Continue the run in --out from its checkpoint (settings come from its run.toml).
     #[arg(long)]
     pub resume: bool,
+}
+
+/// A value as the command line spells it (`matlab-like`, `permutation`).
+fn cli_name(v: impl ValueEnum) -> String {
+    v.to_possible_value().map_or_else(String::new, |p| p.get_name().to_string())
 }
 
 /// With `--resume`, scenario and requirement flags may repeat the run's own command (the
