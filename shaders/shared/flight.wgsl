@@ -123,9 +123,13 @@ fn bracketed_newton(c0: f32, ca: f32, cb: f32, k: f32, lo_in: f32, hi_in: f32, f
     var lo = lo_in;
     var hi = hi_in;
     let lo_positive = f_lo > 0.0;
-    var t = 0.5 * (lo + hi);
-    if (f_hi != f_lo) {
-        t = lo - f_lo * (hi - lo) / (f_hi - f_lo);
+    // start: the root of f's second-order expansion, else regula falsi, else the midpoint
+    let q = quadratic_roots(-0.5 * k * cb, ca + cb, c0, lo, hi);
+    var t = lo;
+    if (q.n > 0u) { t = q.t0; }
+    if (!(t > lo && t < hi)) {
+        t = 0.5 * (lo + hi);
+        if (f_hi != f_lo) { t = lo - f_lo * (hi - lo) / (f_hi - f_lo); }
     }
     if (!(t > lo && t < hi)) { t = 0.5 * (lo + hi); }
     for (var i = 0; i < 48; i++) {
@@ -134,19 +138,32 @@ fn bracketed_newton(c0: f32, ca: f32, cb: f32, k: f32, lo_in: f32, hi_in: f32, f
         let d = ca + cb * (1.0 + m);
         if (ft == 0.0) { return t; }
         if ((ft > 0.0) == lo_positive) { lo = t; } else { hi = t; }
-        var next = lo - 1.0;
-        if (d != 0.0) { next = t - ft / d; }
-        if (!(next > lo && next < hi)) { next = 0.5 * (lo + hi); }
-        if (abs(next - t) <= EPS * 4.0 * max(abs(t), 1.0e-30)) { return next; }
-        t = next;
+        // Halley: f'' = -k b e^{-kt}, f''' = -k f''
+        let d2 = -k * cb * (1.0 + m);
+        let den = 2.0 * d * d - ft * d2;
+        var halley = lo - 1.0;
+        if (den != 0.0) { halley = t - 2.0 * ft * d / den; }
+        let tol = EPS * 4.0 * max(abs(t), 1.0e-30);
+        if (halley > lo && halley < hi) {
+            // the step's error is C δ³ (C at t, so for short steps only): final once below
+            // the tolerance
+            let step = abs(halley - t);
+            let c = abs(d2 * d2 / (4.0 * d * d) + k * d2 / (6.0 * d));
+            if (step <= tol || (step <= 1.0e-3 * abs(t) && c * step * step * step <= tol)) { return halley; }
+            t = halley;
+        } else {
+            let next = 0.5 * (lo + hi);
+            if (abs(next - t) <= tol) { return next; }
+            t = next;
+        }
     }
     return t;
 }
 
 fn stokes_horizon(c0: f32, a: f32, b: f32, k: f32) -> f32 {
     let span = 40.0 / k;
-    if (a < 0.0) { return max(max((c0 + max(b, 0.0) / k) / -a, 0.0), span); }
-    if (a > 0.0) { return max(max((-c0 - min(b, 0.0) / k) / a, 0.0), span); }
+    if (a < 0.0) { return max((c0 + max(b, 0.0) / k) / -a, 0.0); }
+    if (a > 0.0) { return max((-c0 - min(b, 0.0) / k) / a, 0.0); }
     return span;
 }
 

@@ -288,6 +288,7 @@ pub fn first_hit<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bo
 /// `first_hit` for a given flight (possibly drifting: sled motion), looking no further than
 /// `t_limit`. With drift the flight's x(t) is no longer the air-frame one, so the x-window
 /// and concavity culls are skipped (they are exact only without drift).
+#[inline(always)]
 pub fn first_hit_in<T: Real>(
     d: &KDesign<T>,
     ph: &KPhysics<T>,
