@@ -547,15 +547,17 @@ pub fn print_picks(
         "{:<4} {:>12} {:>16} {:>14} {:>10} {:>7} {:>10}",
         "", "f [Hz e-2]", "W_spec [J/kg]", "m_dot [kg/h]", "l_str [mm]", "n_wire", "d_avg [mm]"
     )?;
+    // a standard error needs two replicates: with one it is NaN, shown as "n/a"
+    let se = |v: f64, digits: usize| if v.is_finite() { format!("{v:<4.digits$}") } else { "n/a ".to_string() };
     for (name, p) in picks(front) {
         writeln!(
             out,
-            "{name:<4} {:>12.3} {:>9.1} ± {:<4.1} {:>8.2} ± {:<4.2} {:>10.2} {:>7} {:>10.2}",
+            "{name:<4} {:>12.3} {:>9.1} ± {:<4} {:>8.2} ± {:<4} {:>10.2} {:>7} {:>10.2}",
             p.f_stroke_hz * 100.0,
             p.w_spec_j_kg,
-            p.w_spec_se,
+            se(p.w_spec_se, 1),
             p.m_dot_kg_s * 3600.0,
-            p.m_dot_se * 3600.0,
+            se(p.m_dot_se * 3600.0, 2),
             p.stroke_m * 1e3,
             p.n_wire,
             p.d_avg_m * 1e3
@@ -682,6 +684,22 @@ mod tests {
                 binding: (!ok).then(|| "1.4 power".to_string()),
             }),
         }
+    }
+
+    #[test]
+    fn picks_without_replicates_show_no_nan() {
+        // one replicate: no standard error to show
+        let mut p = point(30.0, 500.0, None);
+        (p.w_spec_se, p.m_dot_se) = (f64::NAN, f64::NAN);
+        let mut out = Vec::new();
+        print_picks(&mut out, &[p.clone()], "generation limit", 3).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(!text.contains("NaN"), "{text}");
+        assert!(text.contains("500.0 ± n/a"), "{text}");
+        // with replicates the standard errors are printed as before
+        let mut out = Vec::new();
+        print_picks(&mut out, &[point(30.0, 500.0, None)], "generation limit", 3).unwrap();
+        assert!(String::from_utf8(out).unwrap().contains("500.0 ± 0.1"));
     }
 
     #[test]
