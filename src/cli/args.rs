@@ -188,7 +188,7 @@ impl ScenarioArgs {
             s.sim.randomise = false;
         }
         for spec in &self.effects {
-            s.effects.set_from_cli(spec).map_err(anyhow::Error::msg)?;
+            s.effects.set_from_cli(spec).map_err(|e| anyhow::anyhow!("--effect {spec}: {e}"))?;
         }
         if let Err(e) = s.validate() {
             bail!("invalid setting: {}", in_user_terms(&e));
@@ -307,7 +307,7 @@ impl RequirementArgs {
 
     pub fn resolve(&self, scenario: &ScenarioArgs) -> anyhow::Result<Option<Requirements>> {
         if let Some(spec) = &self.requirements {
-            return load_requirements(spec).map(Some);
+            return load_requirements(spec).map(Some).context("--requirements");
         }
         let Some(path) = &scenario.config else { return Ok(None) };
         if let Some(run) = crate::optim::runner::manifest_in(path)? {

@@ -67,7 +67,7 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
             a.setup.len()
         );
     }
-    let effects = parse_effects(&a.effects)?;
+    let effects = parse_effects(&a.effects).context("--effects")?;
     if a.engine == EngineKind::Listing {
         bail!("--engine listing: the effects are in the cpu and gpu engines only; use --engine cpu or auto");
     }

@@ -67,10 +67,10 @@ pub fn run(a: FitArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     // cheap checks first: nothing is simulated before every input is known to be good
     let (params, at) = match (&a.at, &a.params) {
         (Some(list), _) => {
-            let (p, v) = parse_assignments(list)?;
+            let (p, v) = parse_assignments(list).context("--at")?;
             (Some(p), Some(v))
         }
-        (None, Some(list)) => (Some(parse_params(list)?), None),
+        (None, Some(list)) => (Some(parse_params(list).context("--params")?), None),
         (None, None) => (None, None),
     };
     a.effort.validate()?;

@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::bail;
+use anyhow::{bail, Context as _};
 use clap::{Args, ValueEnum};
 
 use super::args::{EngineArgs, RequirementArgs, ScenarioArgs};
@@ -294,13 +294,19 @@ pub fn run(a: OptimizeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         let (kind, scenario) = (m.engine, m.scenario.clone());
         (Some(m), kind, scenario)
     } else {
+        if crate::optim::runner::holds_run(&a.out) {
+            bail!(
+                "--out {} already holds a run: pass --resume to continue it, or choose another --out",
+                a.out.display()
+            );
+        }
         let (scenario, _, slopes_deg) = a.scenario.resolve_over_slopes(a.requirements.alpha_points)?;
         let mut manifest = a.ga.manifest(scenario.clone(), a.engine.engine)?;
         manifest.slopes_deg = slopes_deg;
         manifest.requirements = a.requirements.resolve(&a.scenario)?;
         (Some(manifest), a.engine.engine, scenario)
     };
-    let engine = make_engine_for(kind, &scenario)?;
+    let engine = make_engine_for(kind, &scenario).with_context(|| format!("--engine {}", kind.name()))?;
     let outcome = run_optimisation(&a.out, manifest, a.resume, &engine, &a.ga.options(""))?;
     if outcome.interrupted {
         return Ok(ExitCode::from(130));

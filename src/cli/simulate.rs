@@ -41,7 +41,7 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let (scenario, file_design, slopes) = a.scenario.resolve_over_slopes(a.requirements.alpha_points)?;
     let requirements = a.requirements.resolve(&a.scenario)?;
     let design = match (&a.design, file_design) {
-        (Some(s), _) => Design::parse_cli(s).map_err(anyhow::Error::msg)?,
+        (Some(s), _) => Design::parse_cli(s).map_err(|e| anyhow::anyhow!("--design: {e}"))?,
         (None, Some(d)) => d,
         (None, None) => {
             bail!("no design: pass --design l_c,l_a,l_b,r,omega_deg,delta_deg,v0,a or a config file with [design]")
@@ -70,7 +70,8 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
             "--trajectories and --plot record every flight, which only the CPU engines do: use --engine cpu or listing"
         );
     }
-    let engine = make_engine_for(a.engine.engine, &scenario)?;
+    let engine =
+        make_engine_for(a.engine.engine, &scenario).with_context(|| format!("--engine {}", a.engine.engine.name()))?;
     if !slopes.is_empty() {
         return over_slopes(out, &scenario, &design, engine.as_ref(), &slopes, requirements.as_ref(), a.json);
     }

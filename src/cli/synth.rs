@@ -46,7 +46,7 @@ pub fn run(a: SynthArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let mut scenario = file.scenario()?;
     let design = file.design().with_context(|| format!("{}: the setup has no [design]", a.setup.display()))?;
     for spec in &a.effects {
-        scenario.effects.set_from_cli(spec).map_err(anyhow::Error::msg)?;
+        scenario.effects.set_from_cli(spec).map_err(|e| anyhow::anyhow!("--effect {spec}: {e}"))?;
     }
     scenario.validate().map_err(|e| anyhow::anyhow!("invalid setting: {e}"))?;
     let resolution = a.resolution_g.or(file.measurement.as_ref().and_then(|m| m.scale_resolution_g)).unwrap_or(0.01);

@@ -90,10 +90,10 @@ pub fn parse_effects(list: &str) -> anyhow::Result<Vec<EffectKind>> {
     let mut out = Vec::new();
     for name in list.split(',').map(str::trim) {
         let Some(e) = EffectKind::from_name(name) else {
-            bail!("--effects: unknown effect `{name}` (known: all, {})", known_effects());
+            bail!("unknown effect `{name}` (known: all, {})", known_effects());
         };
         if out.contains(&e) {
-            bail!("--effects: effect `{name}` given twice");
+            bail!("effect `{name}` given twice");
         }
         out.push(e);
     }
@@ -621,16 +621,16 @@ pub fn diagnose(
     log: &mut dyn FnMut(String),
 ) -> anyhow::Result<Diagnosis> {
     if conditions.is_empty() {
-        bail!("--data/--setup: at least one condition is required");
+        bail!("at least one measured condition is required");
     }
     for c in &conditions {
         let n = c.runs.runs.len();
         if n < 2 {
-            bail!("--data {}: has {n} run(s); the diagnosis needs at least 2 (their spread is the measurement's uncertainty)", c.data);
+            bail!("measured data {}: has {n} run(s); the diagnosis needs at least 2 (their spread is the measurement's uncertainty)", c.data);
         }
         if c.runs.teeth > c.teeth() {
             bail!(
-                "--data {} has {} teeth but the setup simulates only {} (sim.teeth): raise sim.teeth in {}",
+                "measured data {} has {} teeth but the setup simulates only {} (sim.teeth): raise sim.teeth in {}",
                 c.data,
                 c.runs.teeth,
                 c.teeth(),
@@ -641,14 +641,14 @@ pub fn diagnose(
             bail!("{}: measurement.scale_resolution_g must be > 0, got {}", c.setup, c.resolution_g);
         }
         if c.runs.runs.iter().any(|r| r.recovered_g() <= 0.0) {
-            bail!("--data {}: every run needs a positive recovered mass", c.data);
+            bail!("measured data {}: every run needs a positive recovered mass", c.data);
         }
     }
     if settings.bootstrap < 2 {
-        bail!("--bootstrap must be >= 2, got {}", settings.bootstrap);
+        bail!("settings.bootstrap (resamples) must be >= 2, got {}", settings.bootstrap);
     }
     if settings.rescore_streams < 1 {
-        bail!("--rescore-streams must be >= 1, got 0");
+        bail!("settings.rescore_streams must be >= 1, got 0");
     }
     let effort = settings.effort;
     let seed = effort.seed;

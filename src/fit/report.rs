@@ -442,7 +442,7 @@ impl Figure for FitPlot {
 
 /// fit.json, fit.csv and fit.svg into `dir` (created if missing).
 pub fn write_dir(dir: &Path, r: &FitReport, meta: &Meta, json: &Value) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("--out: cannot create directory {}", dir.display()))?;
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create the output folder {}", dir.display()))?;
     write_atomic(&dir.join("fit.json"), format!("{}\n", serde_json::to_string_pretty(json)?).as_bytes())?;
     crate::io::table::write_table(&dir.join("fit.csv"), &csv_rows(r, meta))?;
     plot::write_figure_files(dir, "fit", &FitPlot::new(r, meta))

@@ -150,19 +150,19 @@ impl RequirementsTable {
     }
 }
 
-/// `--requirements NAME|FILE`: a preset by name, or the `[requirements]` table of a TOML file
-/// (a scenario config file may hold it beside its other tables).
+/// Requirements by name (a preset) or from the `[requirements]` table of a TOML file (a
+/// scenario config file may hold it beside its other tables); the CLI's `--requirements`.
 pub fn load_requirements(spec: &str) -> anyhow::Result<Requirements> {
     if let Some(r) = Requirements::preset(spec) {
         return Ok(r);
     }
     let path = Path::new(spec);
     if !path.exists() {
-        bail!("--requirements {spec}: neither a preset (known: {PRESET_TABLE_2_2}) nor an existing file");
+        bail!("requirements `{spec}`: neither a preset (known: {PRESET_TABLE_2_2}) nor an existing file");
     }
     let file = ConfigFile::load(path)?;
     let table =
-        file.requirements.with_context(|| format!("--requirements {spec}: the file has no [requirements] table"))?;
+        file.requirements.with_context(|| format!("requirements `{spec}`: the file has no [requirements] table"))?;
     table.requirements(&path.display().to_string()).with_context(|| format!("in {}", path.display()))
 }
 

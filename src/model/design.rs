@@ -88,7 +88,7 @@ impl Design {
         let parts: Vec<&str> = s.split(',').map(str::trim).collect();
         if parts.len() != 8 {
             return Err(format!(
-                "--design needs 8 comma-separated values l_c,l_a,l_b,r,omega_deg,delta_deg,v0,a \
+                "a design needs 8 comma-separated values l_c,l_a,l_b,r,omega_deg,delta_deg,v0,a \
                  (mm,mm,mm,mm,deg,deg,m/s,m/s^2); got {}",
                 parts.len()
             ));
@@ -99,7 +99,7 @@ impl Design {
             v[i] = p.parse::<f64>().map_err(|_| format!("design field `{name}` ({unit}): `{p}` is not a number"))?;
         }
         let d = Self::from_cli_units(v);
-        d.check_sensible(|i| format!("--design field `{}`", VARIABLES[i].0))?;
+        d.check_sensible(|i| format!("design field `{}`", VARIABLES[i].0))?;
         Ok(d)
     }
 

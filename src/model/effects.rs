@@ -342,22 +342,22 @@ impl Effects {
         self.active_kinds().into_iter().map(EffectKind::name).collect()
     }
 
-    /// Parse `NAME=p1[,p2]` (CLI): impact-scatter=SIGMA_DEG, launch-spread=SPEED,ANGLE_DEG,
+    /// Parse `NAME=p1[,p2]` (the CLI's and config's text form; errors name the effect, the
+    /// caller names where the text came from): impact-scatter=SIGMA_DEG, launch-spread=SPEED,ANGLE_DEG,
     /// polydisperse=SIGMA_LN, sled-motion=DELAY_S,RETURN_SPEED_M_S,
     /// quadratic-drag=DIAMETER_M,DENSITY_KG_M3.
     pub fn set_from_cli(&mut self, spec: &str) -> Result<(), String> {
-        let (name, params) = spec
-            .split_once('=')
-            .ok_or_else(|| format!("--effect `{spec}`: expected NAME=PARAMS, e.g. impact-scatter=5"))?;
+        let (name, params) =
+            spec.split_once('=').ok_or_else(|| format!("`{spec}`: expected NAME=PARAMS, e.g. impact-scatter=5"))?;
         let kind = EffectKind::from_name(name)
-            .ok_or_else(|| format!("--effect: unknown effect `{name}` (known: {})", known_effects()))?;
+            .ok_or_else(|| format!("unknown effect `{name}` (known: {})", known_effects()))?;
         let values: Vec<f64> = params
             .split(',')
-            .map(|p| p.trim().parse::<f64>().map_err(|_| format!("--effect {name}: `{p}` is not a number")))
+            .map(|p| p.trim().parse::<f64>().map_err(|_| format!("effect {name}: `{p}` is not a number")))
             .collect::<Result<_, _>>()?;
         let n = kind.param_names().len();
         if values.len() != n {
-            return Err(format!("--effect {name} takes {n} value(s) ({}), got {}", kind.cli_form(), values.len()));
+            return Err(format!("effect {name} takes {n} value(s) ({}), got {}", kind.cli_form(), values.len()));
         }
         kind.apply(self, &values);
         self.validate()

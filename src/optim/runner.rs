@@ -337,6 +337,11 @@ pub fn manifest_in(path: &Path) -> anyhow::Result<Option<Manifest>> {
 }
 
 /// True when `dir` holds a finished run (its pareto.csv exists).
+/// True when `dir` holds a started run (its checkpoint): a new run there is refused.
+pub fn holds_run(dir: &Path) -> bool {
+    Paths::new(dir).checkpoint.exists()
+}
+
 pub fn is_finished(dir: &Path) -> bool {
     dir.join("pareto.csv").exists() && read_manifest(dir).is_ok_and(|m| m.termination.is_some())
 }
@@ -353,7 +358,7 @@ pub fn run(
 ) -> anyhow::Result<RunOutcome> {
     let paths = Paths::new(dir);
     if resume && !paths.manifest.exists() {
-        bail!("--resume: no run manifest at {}", paths.manifest.display());
+        bail!("no run to resume: no run manifest at {}", paths.manifest.display());
     }
     // Owned for the whole run: a second process started into `dir` is refused, not interleaved.
     let _owned = RunDir::acquire(dir, RUN_KIND, Access::Exclusive, |d| d.join("run.toml").exists())?;
@@ -372,7 +377,7 @@ pub fn run(
             (m, None)
         } else {
             let state = load_checkpoint(&paths.checkpoint)
-                .with_context(|| format!("--resume: reading {}", paths.checkpoint.display()))?;
+                .with_context(|| format!("resuming: reading {}", paths.checkpoint.display()))?;
             truncate_csv(&paths.evaluations, state.generation)?;
             truncate_csv(&paths.generations, state.generation)?;
             eprintln!("{}resuming from the checkpoint at generation {}", opts.label, state.generation);
@@ -382,7 +387,7 @@ pub fn run(
         }
     } else {
         if paths.checkpoint.exists() {
-            bail!("{} already holds a run: pass --resume to continue it, or choose another --out", dir.display());
+            bail!("{} already holds a run: resume it, or start the new run in another folder", dir.display());
         }
         let m = manifest.context("a new run needs its settings")?;
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;

@@ -83,7 +83,7 @@ impl GpuEngine {
         let adapter = adapter.ok_or_else(|| match choice {
             AdapterChoice::Any => anyhow!(
                 "no Vulkan adapter found: install a GPU driver, or Mesa's software Vulkan \
-                 (`apt-get install mesa-vulkan-drivers libvulkan1`), or use --engine cpu"
+                 (`apt-get install mesa-vulkan-drivers libvulkan1`), or use the cpu engine"
             ),
             AdapterChoice::HardwareOnly => anyhow!("no hardware GPU adapter"),
         })?;
