@@ -1,5 +1,6 @@
-//! `sawtooth optimize` end to end: outputs, and a run killed mid-way (SIGKILL) that resumes
-//! to the identical front of an uninterrupted run with the same seed.
+//! `sawtooth optimize` end to end: outputs, and a run killed mid-way (SIGKILL) or stopped by
+//! Ctrl-C (SIGINT) that resumes to the identical front of an uninterrupted run with the same
+//! seed.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -117,8 +118,41 @@ fn optimize_writes_its_outputs_and_resumes_after_a_kill_to_the_same_front() {
         std::fs::read_to_string(full.join("evaluations.csv")).unwrap(),
         std::fs::read_to_string(cut.join("evaluations.csv")).unwrap()
     );
+
+    // Ctrl-C: the run stops after the generation it is in, with a checkpoint of it (saved
+    // at the stop: the periodic ones come every 5 generations here), exit 130
+    let int = tmp("int");
+    let child = Command::new(bin())
+        .args(ARGS)
+        .args(["--out", int.to_str().unwrap(), "--checkpoint-every", "5"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t = Instant::now();
+    while rows(&int.join("generations.csv")) < 3 && t.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let sent = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(sent.success());
+    let o = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{stderr}");
+    let logged = rows(&int.join("generations.csv")) as u64;
+    assert!(logged < 14, "the run finished before Ctrl-C ({logged} generations)");
+    let checkpoint: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(int.join("checkpoint.json")).unwrap()).unwrap();
+    assert_eq!(checkpoint["generation"].as_u64(), Some(logged), "the checkpoint holds the last logged generation");
+    assert!(stderr.contains(&format!("interrupted: checkpoint saved at generation {logged}")), "{stderr}");
+    assert!(!int.join("pareto.csv").exists(), "an interrupted run writes no front");
+    run_to_end(&int, &["--resume"]);
+    for f in ["pareto.csv", "evaluations.csv"] {
+        let a = std::fs::read_to_string(full.join(f)).unwrap();
+        assert_eq!(a, std::fs::read_to_string(int.join(f)).unwrap(), "{f} differs after Ctrl-C + resume");
+    }
     let _ = std::fs::remove_dir_all(&full);
     let _ = std::fs::remove_dir_all(&cut);
+    let _ = std::fs::remove_dir_all(&int);
 }
 
 #[test]

@@ -4,6 +4,8 @@
 //!   whole-generation batch evaluation and exact checkpoint/resume.
 //! - [`hypervolume`]: exact 2-D hypervolume, the quality measure used by the tests.
 //! - [`test_problems`]: ZDT1, ZDT2 and BNH with their known Pareto fronts.
+//! - [`observe`]: the loop that drives a solver and the observers of its side jobs
+//!   (checkpoints, Ctrl-C); [`runner`] adds the run folder's logs and progress.
 
 pub mod hypervolume;
 pub mod nsga2;
@@ -16,5 +18,6 @@ pub use nsga2::{
 };
 pub mod front;
 pub mod lockstep;
+pub mod observe;
 pub mod runner;
 pub mod sawtooth;

@@ -6,10 +6,11 @@
 //! checkpoint.json (atomic, every N generations and on Ctrl-C), and at the end pareto.csv
 //! (re-evaluated with more particles, with Monte-Carlo standard errors), pareto.svg.
 
+use std::cell::RefCell;
 use std::fs::OpenOptions;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::rc::Rc;
 use std::time::Instant;
 
 use anyhow::{bail, Context as _};
@@ -17,7 +18,8 @@ use serde::{Deserialize, Serialize};
 
 use super::front::{final_front, write_outputs, FrontPoint};
 use super::hypervolume::hypervolume_2d;
-use super::nsga2::{load_checkpoint, save_checkpoint, Config, Mode, Nsga2, State};
+use super::nsga2::{load_checkpoint, save_checkpoint, Config, GenerationStats, Mode, Nsga2, State};
+use super::observe::{drive, install_interrupt_handler, Checkpoints, Ending, Flow, Interrupt, Observer};
 use super::sawtooth::{Logged, SawtoothProblem};
 use crate::engine::{BatchEvaluator, EngineKind};
 use crate::io::atomic::write_atomic;
@@ -142,17 +144,6 @@ pub struct RunOutcome {
     pub generations: u64,
     /// Stopped by Ctrl-C (checkpoint saved; front empty).
     pub interrupted: bool,
-}
-
-/// Set by the Ctrl-C handler: every running optimisation saves its checkpoint and stops.
-pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
-
-/// Install the Ctrl-C handler once (later calls are no-ops).
-pub fn install_interrupt_handler() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| {
-        let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
-    });
 }
 
 /// One row of evaluations.csv: every design evaluated, as the optimiser ranked it. Header and
@@ -292,6 +283,121 @@ fn front_points(state: &State) -> Vec<[f64; 2]> {
         .collect()
 }
 
+/// Ends the run with the first error the problem met appending to evaluations.csv.
+struct EvaluationErrors(Rc<RefCell<Option<anyhow::Error>>>);
+
+impl Observer for EvaluationErrors {
+    fn observe(&mut self, _: &State, _: &GenerationStats) -> anyhow::Result<Flow> {
+        match self.0.borrow_mut().take() {
+            Some(e) => Err(e),
+            None => Ok(Flow::Continue),
+        }
+    }
+}
+
+/// A row of generations.csv per generation.
+struct GenerationsCsv {
+    path: PathBuf,
+    start: Instant,
+}
+
+impl Observer for GenerationsCsv {
+    fn observe(&mut self, state: &State, stats: &GenerationStats) -> anyhow::Result<Flow> {
+        let row = GenerationRow {
+            generation: stats.generation,
+            hypervolume_hz_j_kg: hypervolume_2d(&front_points(state), HV_REFERENCE),
+            spread: Some(stats.spread).filter(|s| s.is_finite()),
+            feasible_fraction: stats.feasible_fraction,
+            front_size: stats.front_size,
+            evaluations: stats.evaluations,
+            // milliseconds are enough for a wall clock, and keep the column readable
+            elapsed_s: (self.start.elapsed().as_secs_f64() * 1e3).round() / 1e3,
+        };
+        append(&self.path, &csv_text(&[row], false)?)?;
+        Ok(Flow::Continue)
+    }
+}
+
+/// A progress bar on a terminal; off one, a line at the start, every 10 s and at the end
+/// (`io::progress`); nothing with `opts.progress` off.
+struct Progress {
+    bar: indicatif::ProgressBar,
+    lines: crate::io::progress::Lines,
+    on: bool,
+    interactive: bool,
+    label: String,
+    max: u64,
+    first_generation: u64,
+    start: Instant,
+    /// The spread stall may end the run before `max` (the ETA is an upper bound).
+    may_stall: bool,
+}
+
+impl Progress {
+    fn new(opts: &RunOptions, config: &Config, generation: u64, start: Instant) -> Self {
+        let interactive = std::io::IsTerminal::is_terminal(&std::io::stderr());
+        let bar = if opts.progress && interactive {
+            let b = indicatif::ProgressBar::new(config.max_generations);
+            b.set_style(
+                indicatif::ProgressStyle::with_template("{prefix}{bar:30} gen {pos}/{len} {msg} eta {eta}")
+                    .expect("valid template"),
+            );
+            b.set_prefix(opts.label.clone());
+            b.set_position(generation);
+            b
+        } else {
+            indicatif::ProgressBar::hidden()
+        };
+        Progress {
+            bar,
+            lines: crate::io::progress::Lines::new(),
+            on: opts.progress,
+            interactive,
+            label: opts.label.clone(),
+            max: config.max_generations,
+            first_generation: generation,
+            start,
+            may_stall: matches!(config.mode, Mode::MatlabLike { .. }),
+        }
+    }
+}
+
+impl Observer for Progress {
+    fn observe(&mut self, state: &State, stats: &GenerationStats) -> anyhow::Result<Flow> {
+        let hv = hypervolume_2d(&front_points(state), HV_REFERENCE);
+        self.bar.set_position(state.generation);
+        self.bar.set_message(format!(
+            "HV {hv:.4e} feasible {:.0}% front {}",
+            stats.feasible_fraction * 100.0,
+            stats.front_size
+        ));
+        let max = self.max;
+        if self.on && !self.interactive && self.lines.due(state.generation, max) {
+            let eta = crate::io::progress::eta(
+                self.start.elapsed(),
+                state.generation.saturating_sub(self.first_generation),
+                max.saturating_sub(self.first_generation),
+            );
+            eprintln!(
+                "{}generation {}/{max}: HV {hv:.4e}, feasible {:.0} %, front {}; {eta}{}",
+                self.label,
+                state.generation,
+                stats.feasible_fraction * 100.0,
+                stats.front_size,
+                if self.may_stall { " (at most: the spread stall may stop it sooner)" } else { "" }
+            );
+        }
+        Ok(Flow::Continue)
+    }
+    fn finish(&mut self, _: &State, ending: Ending) -> anyhow::Result<()> {
+        match ending {
+            Ending::Stopped => self.bar.abandon(),
+            Ending::Terminated(_) => self.bar.finish_and_clear(),
+        }
+        Ok(())
+    }
+}
+
 /// Paths of a run directory.
 struct Paths {
     manifest: PathBuf,
@@ -400,11 +506,16 @@ pub fn run(
         write_atomic(&paths.generations, csv_header::<GenerationRow>()?.as_bytes())?;
     }
 
-    let log_error: std::cell::RefCell<Option<anyhow::Error>> = std::cell::RefCell::new(None);
-    let log = |rows: &[Logged]| {
-        let rows: Vec<EvaluationRow> = rows.iter().map(EvaluationRow::of).collect();
-        if let Err(e) = csv_text(&rows, false).and_then(|text| append(&paths.evaluations, &text)) {
-            log_error.borrow_mut().get_or_insert(e);
+    // evaluations.csv is appended by the problem as it evaluates; a write error surfaces
+    // after the generation (`EvaluationErrors`)
+    let log_error: Rc<RefCell<Option<anyhow::Error>>> = Rc::default();
+    let log = {
+        let (path, log_error) = (paths.evaluations.clone(), log_error.clone());
+        move |rows: &[Logged]| {
+            let rows: Vec<EvaluationRow> = rows.iter().map(EvaluationRow::of).collect();
+            if let Err(e) = csv_text(&rows, false).and_then(|text| append(&path, &text)) {
+                log_error.borrow_mut().get_or_insert(e);
+            }
         }
     };
     let mut problem = SawtoothProblem {
@@ -426,70 +537,19 @@ pub fn run(
             s
         }
     };
-    let interactive = std::io::IsTerminal::is_terminal(&std::io::stderr());
-    let mut lines = crate::io::progress::Lines::new();
-    let first_generation = state.generation;
-    let bar = if opts.progress && interactive {
-        let b = indicatif::ProgressBar::new(manifest.config.max_generations);
-        b.set_style(
-            indicatif::ProgressStyle::with_template("{prefix}{bar:30} gen {pos}/{len} {msg} eta {eta}")
-                .expect("valid template"),
-        );
-        b.set_prefix(opts.label.clone());
-        b.set_position(state.generation);
-        b
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    let termination = loop {
-        if let Some(t) = ga.should_stop(&state) {
-            break format!("{t:?}");
-        }
-        let stats = ga.step(&mut state, &mut problem);
-        if let Some(e) = log_error.borrow_mut().take() {
-            return Err(e);
-        }
-        let hv = hypervolume_2d(&front_points(&state), HV_REFERENCE);
-        let row = GenerationRow {
-            generation: stats.generation,
-            hypervolume_hz_j_kg: hv,
-            spread: Some(stats.spread).filter(|s| s.is_finite()),
-            feasible_fraction: stats.feasible_fraction,
-            front_size: stats.front_size,
-            evaluations: stats.evaluations,
-            // milliseconds are enough for a wall clock, and keep the column readable
-            elapsed_s: (start.elapsed().as_secs_f64() * 1e3).round() / 1e3,
-        };
-        append(&paths.generations, &csv_text(&[row], false)?)?;
-        if state.generation % opts.checkpoint_every.max(1) == 0 {
-            save_checkpoint(&paths.checkpoint, &state)?;
-        }
-        bar.set_position(state.generation);
-        bar.set_message(format!(
-            "HV {hv:.4e} feasible {:.0}% front {}",
-            stats.feasible_fraction * 100.0,
-            stats.front_size
-        ));
-        let max = manifest.config.max_generations;
-        if opts.progress && !interactive && lines.due(state.generation, max) {
-            let eta = crate::io::progress::eta(
-                start.elapsed(),
-                state.generation.saturating_sub(first_generation),
-                max.saturating_sub(first_generation),
-            );
-            let stall = matches!(manifest.config.mode, Mode::MatlabLike { .. });
-            eprintln!(
-                "{}generation {}/{max}: HV {hv:.4e}, feasible {:.0} %, front {}; {eta}{}",
-                opts.label,
-                state.generation,
-                stats.feasible_fraction * 100.0,
-                stats.front_size,
-                if stall { " (at most: the spread stall may stop it sooner)" } else { "" }
-            );
-        }
-        if INTERRUPTED.load(Ordering::SeqCst) {
-            save_checkpoint(&paths.checkpoint, &state)?;
-            bar.abandon();
+    let mut errors = EvaluationErrors(log_error);
+    let mut generations = GenerationsCsv { path: paths.generations.clone(), start };
+    let mut checkpoints = Checkpoints { path: paths.checkpoint.clone(), every: opts.checkpoint_every };
+    let mut progress = Progress::new(opts, &manifest.config, state.generation, start);
+    let ending = drive(
+        &ga,
+        &mut state,
+        &mut problem,
+        &mut [&mut errors, &mut generations, &mut checkpoints, &mut progress, &mut Interrupt],
+    )?;
+    let termination = match ending {
+        Ending::Terminated(t) => format!("{t:?}"),
+        Ending::Stopped => {
             eprintln!(
                 "{}interrupted: checkpoint saved at generation {}; continue with --resume",
                 opts.label, state.generation
@@ -504,8 +564,6 @@ pub fn run(
             });
         }
     };
-    save_checkpoint(&paths.checkpoint, &state)?;
-    bar.finish_and_clear();
     drop(problem);
     let front = final_front(engine, &manifest, &state)?;
     write_outputs(dir, &front, &paths.evaluations)?;
