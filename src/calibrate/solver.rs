@@ -196,17 +196,18 @@ impl Solver {
             })
             .collect();
         let screened: Vec<u64> = members.iter().map(|m| m.evaluations).collect();
-        self.polish_from(sim, models, starts, &screened)
+        self.polish_from(sim, models, starts, &screened, log)
     }
 
-    /// The polish stage alone, from each model's starts (at least one each).
-    pub fn polish(&self, sim: &Simulator, models: &[Model]) -> anyhow::Result<Vec<Fit>> {
+    /// The polish stage alone, from each model's starts (at least one each). `log` receives
+    /// progress lines.
+    pub fn polish(&self, sim: &Simulator, models: &[Model], log: &mut dyn FnMut(String)) -> anyhow::Result<Vec<Fit>> {
         self.check(sim, models)?;
         if models.iter().any(|m| m.starts.is_empty()) {
             bail!("the polish needs a start for every model");
         }
         let starts = models.iter().map(|m| m.starts.iter().map(|x| m.space.to_unit(x)).collect()).collect();
-        self.polish_from(sim, models, starts, &vec![0; models.len()])
+        self.polish_from(sim, models, starts, &vec![0; models.len()], log)
     }
 
     fn polish_from(
@@ -215,6 +216,7 @@ impl Solver {
         models: &[Model],
         starts: Vec<Vec<Vec<f64>>>,
         evaluations: &[u64],
+        log: &mut dyn FnMut(String),
     ) -> anyhow::Result<Vec<Fit>> {
         let n = models.len();
         let mut evaluations = evaluations.to_vec();
@@ -240,13 +242,28 @@ impl Solver {
         }
         // compass search
         let mut steps = vec![self.first_step; n];
-        for _ in 0..self.polish_iterations {
+        let (polish_start, mut lines) = (std::time::Instant::now(), crate::io::progress::Lines::new());
+        let total = self.polish_iterations as u64;
+        let best_of = |current: &[(Vec<f64>, f64, Bins)]| {
+            let mut b: Vec<String> = current.iter().take(6).map(|c| format!("{:.1}", c.1)).collect();
+            if current.len() > 6 {
+                b.push(format!("... {} models", current.len()));
+            }
+            b.join(", ")
+        };
+        let mut done = 0;
+        for k in 1..=total {
             let probes: Vec<Vec<Vec<f64>>> = current
                 .iter()
                 .zip(&steps)
                 .map(|((u, _, _), step)| if *step >= self.min_step { compass_points(u, *step) } else { Vec::new() })
                 .collect();
             if probes.iter().all(Vec::is_empty) {
+                log(format!(
+                    "calibrate: polish done after {done}/{total} iterations (every step below the minimum, best {}), {}",
+                    best_of(&current),
+                    crate::io::progress::eta(polish_start.elapsed(), 0, 0)
+                ));
                 break;
             }
             let scored = self.score(sim, models, &probes, self.particles);
@@ -263,6 +280,15 @@ impl Solver {
                 // expand after a success (the screen's best can lie several steps away),
                 // contract after a failure
                 steps[m] = if moved { (steps[m] * 2.0).min(MAX_STEP) } else { steps[m] * 0.5 };
+            }
+            done = k;
+            if lines.due(k, total) {
+                log(format!(
+                    "calibrate: polish iteration {k}/{total} (best {}), {}{}",
+                    best_of(&current),
+                    crate::io::progress::eta(polish_start.elapsed(), k, total),
+                    if k < total { " (at most: the search stops once every step is below the minimum)" } else { "" }
+                ));
             }
         }
         let mut fits = Vec::with_capacity(n);
@@ -446,7 +472,10 @@ mod tests {
             min_step: MIN_STEP,
             seed: 2,
         };
-        let fits = solver.polish(&sim, &models).unwrap();
+        let mut lines = Vec::new();
+        let fits = solver.polish(&sim, &models, &mut |l| lines.push(l)).unwrap();
+        // a progress line at the first iteration (and at the last, when the search gets there)
+        assert!(lines[0].starts_with("calibrate: polish iteration 1/3 (best "), "{lines:?}");
         assert_eq!(fits.len(), 5);
         let calls = engine.calls.lock().unwrap().clone();
         // one call for the five starts, then one per iteration with both probes of each
@@ -457,6 +486,6 @@ mod tests {
         }
         // a model without a start is refused
         let bare = [Model { space: &space, targets: &targets[0], starts: vec![] }];
-        assert!(solver.polish(&sim, &bare).unwrap_err().to_string().contains("start"));
+        assert!(solver.polish(&sim, &bare, &mut |_| {}).unwrap_err().to_string().contains("start"));
     }
 }

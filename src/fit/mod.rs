@@ -347,7 +347,7 @@ pub fn fit(
     });
     let uncertainty = (settings.bootstrap > 0).then(|| {
         log(format!("fit: bootstrap, {} replicates refitted in lockstep", settings.bootstrap));
-        bootstrap(&sim, &space, &solver, condition, &main, settings.bootstrap)
+        bootstrap(&sim, &space, &solver, condition, &main, settings.bootstrap, log)
     });
     let uncertainty = uncertainty.transpose()?;
     Ok(report(
@@ -375,6 +375,7 @@ fn bootstrap(
     condition: &Condition,
     full: &crate::calibrate::Fit,
     replicates: usize,
+    log: &mut dyn FnMut(String),
 ) -> anyhow::Result<Uncertainty> {
     let n = condition.runs.runs.len();
     let mut rng = ChaCha8Rng::seed_from_u64(solver.seed ^ 0xB007_5742);
@@ -399,7 +400,7 @@ fn bootstrap(
     // a resample's optimum lies near the full data's: finer steps than the main polish's,
     // down to 1/4000 of the box
     let refine = Solver { first_step: MIN_STEP * 4.0, min_step: 2.5e-4, ..*solver };
-    let refits = refine.polish(sim, &models)?;
+    let refits = refine.polish(sim, &models, log)?;
     let values: Vec<Vec<f64>> = refits.iter().map(|r| r.x.clone()).collect();
     let d = space.dim();
     let column = |j: usize| values.iter().map(|v| v[j]).collect::<Vec<f64>>();
