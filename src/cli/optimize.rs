@@ -306,7 +306,7 @@ pub fn run(a: OptimizeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         manifest.requirements = a.requirements.resolve(&a.scenario)?;
         (Some(manifest), a.engine.engine, scenario)
     };
-    let engine = make_engine_for(kind, &scenario).with_context(|| format!("--engine {}", kind.name()))?;
+    let engine = make_engine_for(kind, &scenario).context("--engine")?;
     let outcome = run_optimisation(&a.out, manifest, a.resume, &engine, &a.ga.options(""))?;
     if outcome.interrupted {
         return Ok(ExitCode::from(130));

@@ -70,8 +70,7 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
             "--trajectories and --plot record every flight, which only the CPU engines do: use --engine cpu or listing"
         );
     }
-    let engine =
-        make_engine_for(a.engine.engine, &scenario).with_context(|| format!("--engine {}", a.engine.engine.name()))?;
+    let engine = make_engine_for(a.engine.engine, &scenario).context("--engine")?;
     if !slopes.is_empty() {
         return over_slopes(out, &scenario, &design, engine.as_ref(), &slopes, requirements.as_ref(), a.json);
     }

@@ -229,18 +229,6 @@ pub enum EngineKind {
     Auto,
 }
 
-impl EngineKind {
-    /// The name users give it (`--engine NAME`, `engine = "NAME"` in run.toml).
-    pub fn name(self) -> &'static str {
-        match self {
-            EngineKind::Listing => "listing",
-            EngineKind::Cpu => "cpu",
-            EngineKind::Gpu => "gpu",
-            EngineKind::Auto => "auto",
-        }
-    }
-}
-
 /// The CPU engines, which cannot fail to start. Use `make_engine` for `gpu` and `auto`.
 pub fn particle_engine(kind: EngineKind) -> Box<dyn Engine> {
     match kind {
@@ -275,13 +263,15 @@ pub fn cpu_only_effects(e: &crate::model::effects::Effects) -> Vec<&'static str>
 pub fn make_engine_for(kind: EngineKind, scenario: &Scenario) -> anyhow::Result<Box<dyn Engine>> {
     if scenario.effects.any() && kind == EngineKind::Listing {
         let active = scenario.effects.active().join(", ");
-        anyhow::bail!("the effects ({active}) are in the cpu and gpu engines only: use the cpu engine");
+        anyhow::bail!("the listing engine does not model the effects ({active}): they are in the cpu and gpu engines only; use the cpu engine");
     }
     let cpu_only = cpu_only_effects(&scenario.effects);
     if !cpu_only.is_empty() {
         let list = cpu_only.join(", ");
         match kind {
-            EngineKind::Gpu => anyhow::bail!("{list} are in the cpu engine only: use the cpu engine"),
+            EngineKind::Gpu => anyhow::bail!(
+                "the gpu engine does not model {list}: they are in the cpu engine only; use the cpu engine"
+            ),
             EngineKind::Auto => {
                 eprintln!("engine auto: {list} are in the cpu engine only, using it");
                 return Ok(particle_engine(EngineKind::Cpu));
