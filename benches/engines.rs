@@ -1,11 +1,13 @@
 //! Criterion bench: one batch of 64 designs around lunar solution C (±5 %), 100 particles,
 //! up to 100 bounces, each engine on the same batch. Throughput is in particle-bounces.
+//! And the preparation every engine pays (validity, fill, launch points), one design at a
+//! time, over a GA generation's random valid designs.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use sawtooth::engine::gpu::{AdapterChoice, GpuEngine};
 use sawtooth::engine::{particle_engine, BatchEvaluator, EngineKind};
-use sawtooth::model::sampling::neighbourhood;
-use sawtooth::model::{Design, Scenario};
+use sawtooth::model::sampling::{neighbourhood, random_valid_designs};
+use sawtooth::model::{prepare, Design, Scenario};
 
 fn engines(c: &mut Criterion) {
     for (label, scenario, centre) in [
@@ -35,5 +37,17 @@ fn engines(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, engines);
+fn preparation(c: &mut Criterion) {
+    let mut group = c.benchmark_group("prepare");
+    for (label, scenario) in [("lunar", Scenario::lunar()), ("earth", Scenario::earth())] {
+        let designs = random_valid_designs(&scenario, 200, 1);
+        group.throughput(Throughput::Elements(designs.len() as u64));
+        group.bench_function(format!("{label}/200-random-designs"), |b| {
+            b.iter(|| designs.iter().map(|d| prepare(&scenario, d).is_ok() as usize).sum::<usize>())
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, engines, preparation);
 criterion_main!(benches);

@@ -325,7 +325,7 @@ pub fn first_hit_in<T: Real>(
         let s = dot(q, d.t_base); // along the base from this frame's p1
         let s_global_lo = -kf * d.pitch_len;
         if s >= s_global_lo && s <= d.base_length + s_global_lo {
-            let j = (to_index((s / d.pitch_len).floor()) + k).clamp(0, d.teeth - 1);
+            let j = (to_index((s / d.pitch_len).kfloor()) + k).clamp(0, d.teeth - 1);
             best = Hit { found: true, t, pos: q, tooth: j, surface: SURFACE_BASE };
         }
         break;
@@ -345,8 +345,8 @@ pub fn first_hit_in<T: Real>(
     let reach = (fl.v0[0].abs() + fl.drift[0].abs()) * horizon;
     let (x_end, x_start) = if drifting { (p.pos[0] + reach, p.pos[0] - reach) } else { (x_end, p.pos[0]) };
     let (xmin, xmax) = if x_end >= x_start { (x_start, x_end) } else { (x_end, x_start) };
-    let lo = ((xmin - d.ext_max) / d.pitch[0]).ceil().max(T::c(-1e9)).min(T::c(1e9));
-    let hi = ((xmax - d.ext_min) / d.pitch[0]).floor().max(T::c(-1e9)).min(T::c(1e9));
+    let lo = ((xmin - d.ext_max) / d.pitch[0]).kceil().max(T::c(-1e9)).min(T::c(1e9));
+    let hi = ((xmax - d.ext_min) / d.pitch[0]).kfloor().max(T::c(-1e9)).min(T::c(1e9));
     let j_lo = (lo.to_i64().unwrap_or(0) + k as i64).clamp(0, d.teeth as i64 - 1) as i32;
     let j_hi = (hi.to_i64().unwrap_or(0) + k as i64).clamp(0, d.teeth as i64 - 1) as i32;
     if (lo.to_i64().unwrap_or(0) + k as i64) > d.teeth as i64 - 1 || (hi.to_i64().unwrap_or(0) + k as i64) < 0 {
@@ -595,7 +595,7 @@ pub fn to_index<T: Real>(x: T) -> i32 {
 /// `end_tooth`.
 #[inline(always)]
 pub fn end_tooth<T: Real>(d: &KDesign<T>, p: &KParticle<T>) -> i32 {
-    let j = p.tooth + to_index(((p.pos[0] - d.p2[0]) / d.pitch[0]).floor()) + 1;
+    let j = p.tooth + to_index(((p.pos[0] - d.p2[0]) / d.pitch[0]).kfloor()) + 1;
     j.clamp(1, d.teeth)
 }
 

@@ -39,42 +39,63 @@ pub struct ExactBoundary {
     /// Arc from angle a2 (at p2) counter-clockwise to a4 (at p4), a4 > a2.
     pub a2: f64,
     pub a4: f64,
+    /// The arc's end directions from the centre, p2 - p3 and p4 - p3 (the vectors a2 and a4
+    /// are the angles of): membership is decided by their cross products, not by an `atan2`
+    /// per candidate point (which was a fifth of the preparation).
+    pub to_p2: V2,
+    pub to_p4: V2,
+}
+
+fn cross(a: V2, b: V2) -> f64 {
+    a[0] * b[1] - a[1] * b[0]
 }
 
 impl ExactBoundary {
     /// Crossing-number test of the closed curve: straight edges plus the arc, counting
     /// crossings of the ray from `p` towards +x (O(1) per point instead of O(arc points)).
+    ///
+    /// Written without data-dependent branches (`&` and `^` on the tests, not `if`): Halton
+    /// candidates fall in and out at random, so branches on them mispredicted about half the
+    /// time. An edge the ray misses still computes its crossing x, unused (a horizontal
+    /// edge's is ±inf or NaN, which no test takes).
     pub fn contains(&self, p: V2) -> bool {
         let mut inside = false;
-        let n = self.straight.len();
-        for i in 0..n - 1 {
-            let (a, b) = (self.straight[i], self.straight[i + 1]);
-            if (a[1] > p[1]) != (b[1] > p[1]) {
-                let x = a[0] + (p[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
-                if p[0] < x {
-                    inside = !inside;
-                }
-            }
+        for e in self.straight.windows(2) {
+            let (a, b) = (e[0], e[1]);
+            let x = a[0] + (p[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
+            inside ^= ((a[1] > p[1]) != (b[1] > p[1])) & (p[0] < x);
         }
         let dy = p[1] - self.centre[1];
         let h2 = self.radius * self.radius - dy * dy;
-        if h2 > 0.0 {
-            let h = h2.sqrt();
-            for x in [self.centre[0] - h, self.centre[0] + h] {
-                if x <= p[0] {
-                    continue;
-                }
-                let mut ang = dy.atan2(x - self.centre[0]);
-                while ang < self.a2 {
-                    ang += 2.0 * std::f64::consts::PI;
-                }
-                // a ray through an arc end point is measure-zero for Halton points
-                if ang < self.a4 {
-                    inside = !inside;
-                }
-            }
+        let h = h2.max(0.0).sqrt();
+        for x in [self.centre[0] - h, self.centre[0] + h] {
+            // a ray through an arc end point is measure-zero for Halton points
+            inside ^= (h2 > 0.0) & (x > p[0]) & self.on_arc([x - self.centre[0], dy]);
         }
         inside
+    }
+
+    /// Whether direction `u` from the centre lies on the arc, angle in [a2, a4): for an arc
+    /// of at most half a turn, u is counter-clockwise of p2's direction and clockwise of
+    /// p4's; a longer arc is everything but the complementary arc [a4, a2 + 2π).
+    #[inline(always)]
+    fn on_arc(&self, u: V2) -> bool {
+        if self.a4 - self.a2 <= std::f64::consts::PI {
+            (cross(self.to_p2, u) >= 0.0) & (cross(u, self.to_p4) > 0.0)
+        } else {
+            !((cross(self.to_p4, u) >= 0.0) & (cross(u, self.to_p2) > 0.0))
+        }
+    }
+
+    /// The same membership by the arc's angles (one `atan2` per crossing): the definition
+    /// [`ExactBoundary::on_arc`] is checked against.
+    #[cfg(test)]
+    fn on_arc_by_angle(&self, u: V2) -> bool {
+        let mut ang = u[1].atan2(u[0]);
+        while ang < self.a2 {
+            ang += 2.0 * std::f64::consts::PI;
+        }
+        ang < self.a4
     }
 }
 
@@ -244,7 +265,16 @@ pub fn build_fill(
         }
         straight.push(p_fill);
         straight.push(p2_1);
-        ExactBoundary { straight, centre: profile.p3, radius: profile.radius, a2, a4 }
+        let from_centre = |q: V2| [q[0] - profile.p3[0], q[1] - profile.p3[1]];
+        ExactBoundary {
+            straight,
+            centre: profile.p3,
+            radius: profile.radius,
+            a2,
+            a4,
+            to_p2: from_centre(profile.p2),
+            to_p4: from_centre(profile.p4),
+        }
     });
     Ok(Fill { surface_angle, p_fill, polygon, area, exact })
 }
@@ -286,7 +316,10 @@ pub fn in_polygon(p: V2, poly: &[V2]) -> bool {
     inside
 }
 
-/// Van der Corput radical inverse of `i` in `base`.
+/// Van der Corput radical inverse of `i` in `base`. Inlined so that the launch points' bases
+/// 2 and 3 are constants: the digit loop's `%` and `/` then compile to shifts and multiplies
+/// instead of 64-bit divisions (same digits, same sum, in the same order).
+#[inline(always)]
 pub fn radical_inverse(mut i: u64, base: u64) -> f64 {
     let inv = 1.0 / base as f64;
     let mut f = inv;
@@ -297,6 +330,14 @@ pub fn radical_inverse(mut i: u64, base: u64) -> f64 {
         f *= inv;
     }
     r
+}
+
+/// [`radical_inverse`] in base 2 by reversing the bits: its digits' weights are powers of
+/// two, so for i < 2^53 the loop's sum is exact and equals the reversed bits scaled by 2^-64.
+#[inline(always)]
+pub fn radical_inverse_2(i: u64) -> f64 {
+    debug_assert!(i < 1 << 53);
+    i.reverse_bits() as f64 * (-64f64).exp2()
 }
 
 /// Launch points (Eq. 4.37, listing lines 185-209): Halton bases 2 and 3 with the first
@@ -326,7 +367,7 @@ pub fn launch_points(
     let mut i = 1u64;
     while out.len() < n && i <= limit {
         let (u, v) = match sampling {
-            LaunchPoints::Halton => (radical_inverse(i, 2), radical_inverse(i, 3)),
+            LaunchPoints::Halton => (radical_inverse_2(i), radical_inverse(i, 3)),
             LaunchPoints::Random => {
                 let w = seed_word(seed);
                 (
@@ -367,6 +408,56 @@ mod tests {
         assert_eq!(radical_inverse(3, 2), 0.75);
         assert!((radical_inverse(1, 3) - 1.0 / 3.0).abs() < 1e-15);
         assert!((radical_inverse(5, 3) - (2.0 / 3.0 + 1.0 / 9.0)).abs() < 1e-15);
+    }
+
+    #[test]
+    fn base_2_by_bit_reversal_is_the_digit_loop_to_the_bit() {
+        for i in (0..100_000u64).chain([(1 << 53) - 1, 123_456_789_012_345]) {
+            assert_eq!(radical_inverse_2(i).to_bits(), radical_inverse(i, 2).to_bits(), "{i}");
+        }
+    }
+
+    /// Membership by cross products with the arc's end directions decides as the angle form
+    /// does, over circle points of fills at every slope of the rig (all but points within
+    /// rounding of an end ray, which Halton candidates do not meet).
+    #[test]
+    fn arc_membership_by_cross_products_matches_the_angles() {
+        use crate::model::{
+            geometry::{check_design, Profile},
+            Design,
+        };
+        let d = Design::lunar_solution_c();
+        let mut fills = 0;
+        for alpha in [0.0, 10.0, 20.0, 35.0, 40.0] {
+            let prof = Profile::new(&d, check_design(&d).unwrap(), alpha, 10);
+            let ang = (alpha + 18.434 + d.delta_deg).to_radians();
+            let Ok(f) = build_fill(&prof, 1.625, &d, ang, 58.0, PhysicsMode::Physical) else { continue };
+            let b = f.exact.unwrap();
+            for i in 1..20_000u64 {
+                let phi = 2.0 * std::f64::consts::PI * radical_inverse(i, 3);
+                let u = [b.radius * phi.cos(), b.radius * phi.sin()];
+                assert_eq!(b.on_arc(u), b.on_arc_by_angle(u), "alpha {alpha}, direction {phi}");
+            }
+            fills += 1;
+        }
+        assert!(fills >= 2, "{fills}"); // solution C spills at some of these slopes
+                                        // arcs shorter and longer than half a turn (the two branches), and one across ±π
+        for (a2, a4) in [(-0.5f64, 2.0f64), (-1.0, 3.5), (2.0, 6.0)] {
+            let b = ExactBoundary {
+                straight: vec![],
+                centre: [0.0, 0.0],
+                radius: 1.0,
+                a2,
+                a4,
+                to_p2: [a2.cos(), a2.sin()],
+                to_p4: [a4.cos(), a4.sin()],
+            };
+            for i in 1..20_000u64 {
+                let phi = 2.0 * std::f64::consts::PI * radical_inverse(i, 3);
+                let u = [phi.cos(), phi.sin()];
+                assert_eq!(b.on_arc(u), b.on_arc_by_angle(u), "arc [{a2}, {a4}), direction {phi}");
+            }
+        }
     }
 
     #[test]
