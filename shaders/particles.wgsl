@@ -54,7 +54,7 @@ fn randomise_launch(d: Design, p: ptr<function, Particle>, index: u32, bounce: u
     var apply = false;
     if (ph.randomise == RANDOMISE_FIRST_LAUNCH) { apply = bounce == 0u; }
     if (ph.randomise == RANDOMISE_EVERY_LAUNCH) { apply = true; }
-    let spread = (*p).surface == SURFACE_NONE && (d.launch_speed_spread > 0.0 || d.launch_angle_sigma > 0.0);
+    let spread = LAUNCH_SPREAD && (*p).surface == SURFACE_NONE && (d.launch_speed_spread > 0.0 || d.launch_angle_sigma > 0.0);
     if (!apply && !spread) { return; }
     var fa = 1.0;
     var fs = 1.0;
@@ -254,7 +254,7 @@ fn step_particle(d: Design, p: ptr<function, Particle>, index: u32, bounce: u32)
     let v_in = flight_vel(fl, hit.t);
     let n_true = normal_of(d, hit.surface);
     var v_out = bounce_velocity(d, v_in, n_true);
-    if (d.scatter_sigma > 0.0) {
+    if (IMPACT_SCATTER && d.scatter_sigma > 0.0) {
         // impact-scatter effect (CPU twin: kernel.rs step_particle): the tilt is admissible
         // when the grain arrives against the tilted facet and leaves the true surface
         let sc = ksin_cos(d.scatter_sigma * normal01(ph.seed, index, bounce, DRAW_SCATTER));

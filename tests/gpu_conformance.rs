@@ -304,3 +304,59 @@ fn the_rust_reduction_twin_reproduces_the_kernel_s() {
         g.describe()
     );
 }
+
+/// The kernel's path switches (src/engine/gpu/paths.rs) only compile out what no record of a
+/// dispatch takes: the pipeline built for the records' own paths leaves every particle and
+/// outcome bit for bit as the general kernel does, in vacuum and with drag, both physics
+/// modes, with the kernel's effects off and on.
+#[test]
+fn path_switches_change_no_result() {
+    use sawtooth::engine::cpu::{kernel_design, kernel_physics};
+    use sawtooth::engine::gpu::layout::{GpuDesign, GpuParticle, GpuPhysics};
+    use sawtooth::engine::gpu::paths::KernelPaths;
+    use sawtooth::engine::kernel::init_particle;
+    use sawtooth::engine::Context;
+    use sawtooth::model::prepare::prepare;
+    use sawtooth::model::sampling::random_valid_designs;
+    let Some(g) = gpu() else { return };
+    let with_effects = |mut s: Scenario| {
+        for spec in ["launch-spread=0.2,5", "impact-scatter=8", "polydisperse=0.3"] {
+            s.effects.set_from_cli(spec).unwrap();
+        }
+        s
+    };
+    let cases = [
+        Scenario::lunar(),
+        Scenario::earth(),
+        Scenario::lunar().into_listing_compat(),
+        Scenario::earth().into_listing_compat(),
+        with_effects(Scenario::lunar()),
+        with_effects(Scenario::earth()),
+    ];
+    let mut variants = std::collections::HashSet::new();
+    for (k, mut s) in cases.into_iter().enumerate() {
+        s.sim.particles = 100;
+        let ctx = Context::new(&s);
+        let kp = kernel_physics::<f32>(&ctx);
+        let (mut designs, mut parts) = (Vec::new(), Vec::new());
+        for design in random_valid_designs(&s, 6, 90 + k as u64) {
+            let prep = prepare(&s, &design).unwrap();
+            let kd = kernel_design::<f32>(&prep);
+            designs.push(GpuDesign::new(&kd, &kp));
+            parts.extend(
+                (prep.launches.iter().enumerate())
+                    .map(|(j, l)| GpuParticle::from(&init_particle(&kd, &kp, [l[0] as f32, l[1] as f32], j as u32))),
+            );
+        }
+        let phys = GpuPhysics::from_kernel(&kp, ctx.max_bounces, s.sim.particles, designs.len() as u32, s.sim.teeth);
+        let own = KernelPaths::of(&designs, &parts);
+        assert_ne!(own, KernelPaths::ALL, "case {k}: some path is unused");
+        variants.insert(own);
+        let (o1, h1, p1) = g.dispatch_raw_with(&phys, &designs, &parts, own).unwrap();
+        let (o2, h2, p2) = g.dispatch_raw_with(&phys, &designs, &parts, KernelPaths::ALL).unwrap();
+        assert_eq!(bytemuck::cast_slice::<_, u8>(&o1), bytemuck::cast_slice::<_, u8>(&o2), "case {k}: outcomes");
+        assert_eq!(h1, h2, "case {k}: histograms");
+        assert_eq!(bytemuck::cast_slice::<_, u8>(&p1), bytemuck::cast_slice::<_, u8>(&p2), "case {k}: particles");
+    }
+    assert!(variants.len() >= 3, "{variants:?}");
+}

@@ -187,6 +187,7 @@ fn every_wgsl_function_has_a_rust_twin() {
     let stand_ins = [
         ("flight_pos", "fn pos("),             // Flight::pos
         ("flight_vel", "fn vel("),             // Flight::vel
+        ("flight_drag", "fn drag("),           // Flight::drag (the path switches are GPU-only)
         ("expm1_", ".exp_m1()"),               // num_traits::Float::exp_m1 (WGSL has none)
         ("log1p_", ".ln_1p()"),                // num_traits::Float::ln_1p (WGSL has none)
         ("bounce_velocity", "fn bounce("),     // Restitution::bounce

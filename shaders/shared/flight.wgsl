@@ -1,7 +1,8 @@
 // Closed-form flights and their line crossings. Twin of src/model/flight.rs (f32): each
 // function here has a Rust function of the same name and arguments there (`relax`,
 // `push_root`, `quadratic_roots`, `stokes_f`, `bracketed_newton`, `stokes_horizon`) or a
-// `Flight` method (`flight_pos` = Flight::pos, `flight_vel` = Flight::vel, `time_at_x`,
+// `Flight` method (`flight_pos` = Flight::pos, `flight_vel` = Flight::vel, `flight_drag` =
+// Flight::drag, `time_at_x`,
 // `y_at_x`, `line_crossings`); `expm1_`/`log1p_` stand in for Rust's exp_m1/ln_1p.
 // `Roots` is Rust's `Roots<T>` = [Option<T>; 2].
 
@@ -34,12 +35,21 @@ fn log1p_(x: f32) -> f32 {
     return log(1.0 + x);
 }
 
+// Whether a flight has Stokes drag. The path switches (shared/constants.wgsl) answer without
+// looking when the pipeline was built for one kind of flight only, which compiles the other
+// kind's code out. Rust twin: `Flight::drag`.
+fn flight_drag(f: Flight) -> bool {
+    if (!VACUUM_FLIGHTS) { return true; }
+    if (!DRAG_FLIGHTS) { return false; }
+    return f.k > 0.0;
+}
+
 fn relax(k: f32, t: f32) -> f32 {
     return -expm1_(-k * t) / k;
 }
 
 fn flight_pos(f: Flight, t: f32) -> vec2<f32> {
-    if (f.k > 0.0) {
+    if (flight_drag(f)) {
         let e = relax(f.k, t);
         let vinf = -f.g / f.k;
         return vec2<f32>(f.p0.x + f.v0.x * e, f.p0.y + vinf * t + (f.v0.y - vinf) * e);
@@ -48,7 +58,7 @@ fn flight_pos(f: Flight, t: f32) -> vec2<f32> {
 }
 
 fn flight_vel(f: Flight, t: f32) -> vec2<f32> {
-    if (f.k > 0.0) {
+    if (flight_drag(f)) {
         let e = exp(-f.k * t);
         let vinf = -f.g / f.k;
         return vec2<f32>(f.v0.x * e, vinf + (f.v0.y - vinf) * e);
@@ -63,7 +73,7 @@ fn time_at_x(f: Flight, x: f32) -> f32 {
         if (dx == 0.0) { return 0.0; }
         return INF;
     }
-    if (f.k > 0.0) {
+    if (flight_drag(f)) {
         let q = 1.0 - f.k * dx / vx;
         if (q <= 0.0) { return INF; }
         return -log(q) / f.k;
@@ -77,7 +87,7 @@ fn y_at_x(f: Flight, x: f32) -> vec2<f32> {
     if (vx == 0.0) { return vec2<f32>(0.0, 0.0); }
     let e = (x - f.p0.x) / vx;
     if (e < 0.0) { return vec2<f32>(0.0, 0.0); }
-    if (f.k > 0.0) {
+    if (flight_drag(f)) {
         let q = 1.0 - f.k * e;
         if (q <= 0.0) { return vec2<f32>(0.0, 0.0); }
         let t = -log(q) / f.k;
@@ -174,7 +184,7 @@ fn line_crossings(f: Flight, a: vec2<f32>, n: vec2<f32>, departing: bool, t_min:
     if (!departing) { c0 = dot(n, f.p0 - a); }
     let nv = dot(n, f.v0);
     var r = Roots(0u, 0.0, 0.0);
-    if (f.k <= 0.0) {
+    if (!flight_drag(f)) {
         let c1 = nv;
         let c2 = -0.5 * f.g * n.y;
         if (departing) {

@@ -12,6 +12,8 @@
 //! name and arguments here (`relax`, `quadratic_roots`, `push_root`, `stokes_f`,
 //! `bracketed_newton`, `stokes_horizon`), or a method of [`Flight`] where the WGSL function
 //! takes the flight first (`flight_pos` = [`Flight::pos`], `flight_vel` = [`Flight::vel`],
+//! `flight_drag` = [`Flight::drag`], which on the GPU also reads the path switches of
+//! src/engine/gpu/paths.rs,
 //! `time_at_x`, `y_at_x`, `line_crossings`); WGSL `expm1_`/`log1p_` stand in for the
 //! [`Real`] methods `exp_m1`/`ln_1p`, which WGSL lacks. The Rust side adds only the
 //! sled-motion `drift` (cpu-only effect).

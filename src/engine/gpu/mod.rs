@@ -2,9 +2,11 @@
 
 pub mod compose;
 pub mod layout;
+pub mod paths;
 pub mod shaders;
 pub mod validate;
 
+use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -14,6 +16,7 @@ use rayon::prelude::*;
 use wgpu::util::DeviceExt;
 
 use self::layout::{GpuDesign, GpuOutcome, GpuParticle, GpuPhysics};
+use self::paths::KernelPaths;
 use super::cpu::{kernel_design, kernel_physics, CpuEngine, Precision};
 use super::kernel::{init_particle, STATE_LOST, STATE_RESTING};
 use super::{cpu_only_effects, finish_outcome, BatchEvaluator, Context, Evaluation, FlightRecord, ParticleEngine, Run};
@@ -38,11 +41,12 @@ const TIMEOUT: Duration = Duration::from_secs(120);
 pub struct GpuEngine {
     device: wgpu::Device,
     queue: wgpu::Queue,
-    /// Listing mode: one workgroup per design, bounce by bounce (`simulate`).
-    pipeline: wgpu::ComputePipeline,
-    /// Physical mode: one thread per particle (`simulate_particles`), then the per-design
-    /// reduction (`reduce_designs`).
-    particle_pipeline: wgpu::ComputePipeline,
+    module: wgpu::ShaderModule,
+    pipeline_layout: wgpu::PipelineLayout,
+    /// The simulation pipelines of each variant of the kernel's optional paths used so far
+    /// (built on first use; see `paths.rs`).
+    simulators: Mutex<HashMap<KernelPaths, Arc<Simulators>>>,
+    /// Physical mode's per-design reduction (`reduce_designs`), the same for every variant.
     reduce_pipeline: wgpu::ComputePipeline,
     bind_layout: wgpu::BindGroupLayout,
     info: wgpu::AdapterInfo,
@@ -55,6 +59,33 @@ pub struct GpuEngine {
     cpu_only_designs: AtomicUsize,
     /// Whether the warning about such designs has been printed (once per engine).
     warned_cpu_only: AtomicBool,
+}
+
+/// The simulation pipelines of one variant of the kernel's optional paths.
+struct Simulators {
+    /// Listing mode: one workgroup per design, bounce by bounce (`simulate`).
+    simulate: wgpu::ComputePipeline,
+    /// Physical mode: one thread per particle (`simulate_particles`), then `reduce_designs`.
+    simulate_particles: wgpu::ComputePipeline,
+}
+
+/// A compute pipeline of `module`'s entry point `name`, with the path switches `paths`.
+fn compute_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    name: &str,
+    paths: KernelPaths,
+) -> wgpu::ComputePipeline {
+    let constants = paths.constants();
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(name),
+        layout: Some(layout),
+        module,
+        entry_point: Some(name),
+        compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() },
+        cache: None,
+    })
 }
 
 /// What one simulated design returns: its outcome and, when asked for, every particle.
@@ -139,26 +170,27 @@ impl GpuEngine {
             bind_group_layouts: &[Some(&bind_layout)],
             immediate_size: 0,
         });
-        let entry = |name: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(name),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(name),
-                compilation_options: Default::default(),
-                cache: None,
-            })
+        // the general kernel now, so that a pipeline the driver rejects fails here
+        let general = Simulators {
+            simulate: compute_pipeline(&device, &pipeline_layout, &module, "simulate", KernelPaths::ALL),
+            simulate_particles: compute_pipeline(
+                &device,
+                &pipeline_layout,
+                &module,
+                "simulate_particles",
+                KernelPaths::ALL,
+            ),
         };
-        let (pipeline, particle_pipeline, reduce_pipeline) =
-            (entry("simulate"), entry("simulate_particles"), entry("reduce_designs"));
+        let reduce_pipeline = compute_pipeline(&device, &pipeline_layout, &module, "reduce_designs", KernelPaths::ALL);
         if let Some(e) = uncaptured.lock().unwrap().take() {
             bail!("GPU pipeline creation failed: {e}");
         }
         Ok(GpuEngine {
             device,
             queue,
-            pipeline,
-            particle_pipeline,
+            module,
+            pipeline_layout,
+            simulators: Mutex::new(HashMap::from([(KernelPaths::ALL, Arc::new(general))])),
             reduce_pipeline,
             bind_layout,
             info,
@@ -194,6 +226,21 @@ impl GpuEngine {
         self.cpu_only_designs.load(Ordering::Relaxed)
     }
 
+    /// The simulation pipelines for `paths`, built on first use (inside the caller's error
+    /// scope: a variant the driver rejects fails that dispatch, which then runs on the cpu
+    /// engine).
+    fn simulators(&self, paths: KernelPaths) -> Arc<Simulators> {
+        let mut cache = self.simulators.lock().unwrap();
+        cache
+            .entry(paths)
+            .or_insert_with(|| {
+                let build =
+                    |name: &str| compute_pipeline(&self.device, &self.pipeline_layout, &self.module, name, paths);
+                Arc::new(Simulators { simulate: build("simulate"), simulate_particles: build("simulate_particles") })
+            })
+            .clone()
+    }
+
     /// Designs per dispatch: workgroups per dimension and storage binding size respected.
     fn chunk_designs(&self, n_particles: u32, teeth: u32) -> usize {
         let per_design_particles = n_particles as u64 * std::mem::size_of::<GpuParticle>() as u64;
@@ -213,7 +260,21 @@ impl GpuEngine {
         designs: &[GpuDesign],
         particles: &[GpuParticle],
     ) -> anyhow::Result<(Vec<GpuOutcome>, Vec<u32>, Vec<GpuParticle>)> {
-        let r = self.run_chunk(phys, designs, particles, true)?;
+        self.dispatch_raw_with(phys, designs, particles, KernelPaths::of(designs, particles))
+    }
+
+    /// [`GpuEngine::dispatch_raw`] with the kernel's path switches given instead of taken
+    /// from the records (tests/gpu_conformance.rs: switching off the paths no record takes
+    /// changes nothing).
+    #[doc(hidden)]
+    pub fn dispatch_raw_with(
+        &self,
+        phys: &GpuPhysics,
+        designs: &[GpuDesign],
+        particles: &[GpuParticle],
+        paths: KernelPaths,
+    ) -> anyhow::Result<(Vec<GpuOutcome>, Vec<u32>, Vec<GpuParticle>)> {
+        let r = self.run_chunk(phys, designs, particles, true, paths)?;
         Ok((r.outcomes, r.histogram, r.particles.unwrap_or_default()))
     }
 
@@ -223,12 +284,14 @@ impl GpuEngine {
         designs: &[GpuDesign],
         particles: &[GpuParticle],
         want_particles: bool,
+        paths: KernelPaths,
     ) -> anyhow::Result<ChunkResult> {
         let t_chunk = std::time::Instant::now();
         let dev = &self.device;
         let n = designs.len();
         let scope = dev.push_error_scope(wgpu::ErrorFilter::Validation);
         let oom = dev.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let sim = self.simulators(paths);
         let uniform = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("physics"),
             contents: bytemuck::bytes_of(phys),
@@ -290,7 +353,7 @@ impl GpuEngine {
                     label: Some("simulate_particles"),
                     timestamp_writes: None,
                 });
-                pass.set_pipeline(&self.particle_pipeline);
+                pass.set_pipeline(&sim.simulate_particles);
                 pass.set_bind_group(0, &bind, &[]);
                 pass.dispatch_workgroups(x as u32, y as u32, 1);
             }
@@ -304,7 +367,7 @@ impl GpuEngine {
         } else {
             let mut pass = enc
                 .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("simulate"), timestamp_writes: None });
-            pass.set_pipeline(&self.pipeline);
+            pass.set_pipeline(&sim.simulate);
             pass.set_bind_group(0, &bind, &[]);
             pass.dispatch_workgroups(n as u32, 1, 1);
         }
@@ -465,7 +528,9 @@ impl GpuEngine {
             );
         }
         let phys = GpuPhysics { n_designs: chunk.len() as u32, ..key };
-        match self.run_chunk(&phys, &designs, &particles, want_particles) {
+        // only the paths these records take are compiled in (paths.rs)
+        let paths = KernelPaths::of(&designs, &particles);
+        match self.run_chunk(&phys, &designs, &particles, want_particles, paths) {
             Ok(r) => chunk
                 .iter()
                 .enumerate()
