@@ -9,7 +9,10 @@
 //! Each switch of [`shared::WGSL_PATH_SWITCHES`](super::super::shared) is a WGSL
 //! pipeline-overridable constant; a dispatch's pipeline is built with a switch off exactly
 //! when none of the dispatch's records takes that path, by the kernel's own tests on the same
-//! records, so switching paths off never changes a result.
+//! records, so no particle follows different physics. The f32 rounding may still move: with a
+//! path gone a driver may fuse other multiply-adds (lavapipe does), which changed how 1 grain
+//! of 6400 ended on the 64-design listing-mode batch (tests/gpu_conformance.rs
+//! `path_switches_change_no_result`).
 
 use super::layout::{GpuDesign, GpuParticle};
 use crate::engine::shared::{DRAG_FLIGHTS, IMPACT_SCATTER, LAUNCH_SPREAD, VACUUM_FLIGHTS};
