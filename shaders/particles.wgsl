@@ -64,25 +64,38 @@ fn randomise_launch(d: Design, p: ptr<function, Particle>, index: u32, bounce: u
     }
     let v = vec2<f32>((*p).vel_x, (*p).vel_y);
     var speed = sqrt(v.x * v.x + v.y * v.y) * fs;
-    if ((*p).surface == SURFACE_NONE) {
-        var ang = katan2(v.y, v.x);
+    // One katan2 and one ksin_cos serve both kinds of launch (lanes that disagree run both
+    // sides of a branch); the first launch's angle is global, a rebound's from the departed
+    // surface's tangent.
+    let first = (*p).surface == SURFACE_NONE;
+    let n = normal_of(d, (*p).surface);
+    let t = vec2<f32>(n.y, -n.x);
+    var y = dot(v, n);
+    var x = dot(v, t);
+    if (first) {
+        y = v.y;
+        x = v.x;
+    }
+    var ang = katan2(y, x);
+    if (first) {
         if (ang < 0.0) { ang += 2.0 * PI; }
         if (spread) {
             // launch-spread effect: earlier (slower) departures and a jittered direction
             speed *= 1.0 - d.launch_speed_spread * uniform01(ph.seed, index, bounce, DRAW_LAUNCH_SPEED);
             ang += d.launch_angle_sigma * normal01(ph.seed, index, bounce, DRAW_LAUNCH_ANGLE);
         }
-        let sc = ksin_cos(ang * fa);
-        (*p).vel_x = speed * sc.y;
-        (*p).vel_y = speed * sc.x;
+        ang = ang * fa;
     } else {
-        let n = normal_of(d, (*p).surface);
-        let t = vec2<f32>(n.y, -n.x);
         let eps = 1.0e-6;
-        let ang = clamp(katan2(dot(v, n), dot(v, t)) * fa, eps, PI - eps);
-        let sc = ksin_cos(ang);
-        let s = sc.x;
-        let c = sc.y;
+        ang = clamp(ang * fa, eps, PI - eps);
+    }
+    let sc = ksin_cos(ang);
+    let s = sc.x;
+    let c = sc.y;
+    if (first) {
+        (*p).vel_x = speed * c;
+        (*p).vel_y = speed * s;
+    } else {
         (*p).vel_x = speed * (c * t.x + s * n.x);
         (*p).vel_y = speed * (c * t.y + s * n.y);
     }
@@ -199,12 +212,17 @@ fn first_hit(d: Design, p: Particle, bounce: u32) -> Hit {
             let xb = max(a.x, b.x) + margin;
             var t_lo = INF;
             var t_hi = INF;
-            if (vel.x > 0.0) {
-                t_lo = time_at_x(fl, max(xa, pos.x));
-                t_hi = time_at_x(fl, xb);
-            } else if (vel.x < 0.0) {
-                t_lo = time_at_x(fl, min(xb, pos.x));
-                t_hi = time_at_x(fl, xa);
+            if (vel.x > 0.0 || vel.x < 0.0) {
+                // the window's ends in the direction of flight, then one time_at_x for each
+                // (lanes flying both ways would otherwise run both pairs)
+                var x_in = max(xa, pos.x);
+                var x_out = xb;
+                if (vel.x < 0.0) {
+                    x_in = min(xb, pos.x);
+                    x_out = xa;
+                }
+                t_lo = time_at_x(fl, x_in);
+                t_hi = time_at_x(fl, x_out);
             } else if (pos.x >= xa && pos.x <= xb) {
                 t_lo = 0.0;
             }

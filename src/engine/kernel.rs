@@ -221,8 +221,16 @@ pub fn randomise_launch<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KPart
         (T::one(), T::one())
     };
     let mut speed = (p.vel[0] * p.vel[0] + p.vel[1] * p.vel[1]).sqrt() * fs;
-    if p.surface == SURFACE_NONE {
-        let mut ang = p.vel[1].katan2(p.vel[0]);
+    // One atan2 and one sincos serve both kinds of launch, the branches only choosing what
+    // goes in and comes out: a SIMD machine (lavapipe, a GPU warp) whose lanes disagree runs
+    // both sides of a branch, and each side held an atan2 and a sincos.
+    let first = p.surface == SURFACE_NONE;
+    let n = normal_of(d, p.surface);
+    let t = [n[1], -n[0]];
+    // the first launch's angle is global, a rebound's from the departed surface's tangent
+    let (y, x) = if first { (p.vel[1], p.vel[0]) } else { (dot(p.vel, n), dot(p.vel, t)) };
+    let mut ang = y.katan2(x);
+    if first {
         if ang < T::zero() {
             ang = ang + two * T::PI(); // listing keeps angles in [0, 2π)
         }
@@ -232,17 +240,13 @@ pub fn randomise_launch<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KPart
                 * (T::one() - ph.launch_speed_spread * T::c(uniform01(ph.seed, index, bounce, DRAW_LAUNCH_SPEED)));
             ang = ang + ph.launch_angle_sigma * T::c(normal01(ph.seed, index, bounce, DRAW_LAUNCH_ANGLE));
         }
-        let (s, c) = (ang * fa).ksin_cos();
-        p.vel = [speed * c, speed * s];
+        ang = ang * fa;
     } else {
-        let n = normal_of(d, p.surface);
-        let t = [n[1], -n[0]];
         let eps = T::c(1e-6);
-        let ang = dot(p.vel, n).katan2(dot(p.vel, t)) * fa;
-        let ang = ang.max(eps).min(T::PI() - eps);
-        let (s, c) = ang.ksin_cos();
-        p.vel = [speed * (c * t[0] + s * n[0]), speed * (c * t[1] + s * n[1])];
+        ang = (ang * fa).max(eps).min(T::PI() - eps);
     }
+    let (s, c) = ang.ksin_cos();
+    p.vel = if first { [speed * c, speed * s] } else { [speed * (c * t[0] + s * n[0]), speed * (c * t[1] + s * n[1])] };
 }
 
 #[inline(always)]
@@ -325,7 +329,7 @@ pub fn first_hit_in<T: Real>(
         let s = dot(q, d.t_base); // along the base from this frame's p1
         let s_global_lo = -kf * d.pitch_len;
         if s >= s_global_lo && s <= d.base_length + s_global_lo {
-            let j = (to_index((s / d.pitch_len).kfloor()) + k).clamp(0, d.teeth - 1);
+            let j = (to_index((s / d.pitch_len).floor()) + k).clamp(0, d.teeth - 1);
             best = Hit { found: true, t, pos: q, tooth: j, surface: SURFACE_BASE };
         }
         break;
@@ -345,8 +349,8 @@ pub fn first_hit_in<T: Real>(
     let reach = (fl.v0[0].abs() + fl.drift[0].abs()) * horizon;
     let (x_end, x_start) = if drifting { (p.pos[0] + reach, p.pos[0] - reach) } else { (x_end, p.pos[0]) };
     let (xmin, xmax) = if x_end >= x_start { (x_start, x_end) } else { (x_end, x_start) };
-    let lo = ((xmin - d.ext_max) / d.pitch[0]).kceil().max(T::c(-1e9)).min(T::c(1e9));
-    let hi = ((xmax - d.ext_min) / d.pitch[0]).kfloor().max(T::c(-1e9)).min(T::c(1e9));
+    let lo = ((xmin - d.ext_max) / d.pitch[0]).ceil().max(T::c(-1e9)).min(T::c(1e9));
+    let hi = ((xmax - d.ext_min) / d.pitch[0]).floor().max(T::c(-1e9)).min(T::c(1e9));
     let j_lo = (lo.to_i64().unwrap_or(0) + k as i64).clamp(0, d.teeth as i64 - 1) as i32;
     let j_hi = (hi.to_i64().unwrap_or(0) + k as i64).clamp(0, d.teeth as i64 - 1) as i32;
     if (lo.to_i64().unwrap_or(0) + k as i64) > d.teeth as i64 - 1 || (hi.to_i64().unwrap_or(0) + k as i64) < 0 {
@@ -375,10 +379,11 @@ pub fn first_hit_in<T: Real>(
             let (xa, xb) = (a[0].min(b[0]) - margin, a[0].max(b[0]) + margin);
             let (t_lo, t_hi) = if drifting {
                 (T::zero(), T::infinity())
-            } else if fl.v0[0] > T::zero() {
-                (fl.time_at_x(xa.max(p.pos[0])), fl.time_at_x(xb))
-            } else if fl.v0[0] < T::zero() {
-                (fl.time_at_x(xb.min(p.pos[0])), fl.time_at_x(xa))
+            } else if fl.v0[0] > T::zero() || fl.v0[0] < T::zero() {
+                // the window's ends in the direction of flight, then one time_at_x for each
+                // (as the WGSL does: lanes flying both ways would run both pairs)
+                let (x_in, x_out) = if fl.v0[0] < T::zero() { (xb.min(p.pos[0]), xa) } else { (xa.max(p.pos[0]), xb) };
+                (fl.time_at_x(x_in), fl.time_at_x(x_out))
             } else if p.pos[0] >= xa && p.pos[0] <= xb {
                 (T::zero(), T::infinity())
             } else {
@@ -595,7 +600,7 @@ pub fn to_index<T: Real>(x: T) -> i32 {
 /// `end_tooth`.
 #[inline(always)]
 pub fn end_tooth<T: Real>(d: &KDesign<T>, p: &KParticle<T>) -> i32 {
-    let j = p.tooth + to_index(((p.pos[0] - d.p2[0]) / d.pitch[0]).kfloor()) + 1;
+    let j = p.tooth + to_index(((p.pos[0] - d.p2[0]) / d.pitch[0]).floor()) + 1;
     j.clamp(1, d.teeth)
 }
 

@@ -14,36 +14,6 @@ pub trait Real: Float + FloatConst + Default + Send + Sync + std::fmt::Debug + '
     fn ksin_cos(self) -> (Self, Self);
     /// atan2 as the kernels compute it (see `ktrig`).
     fn katan2(self, x: Self) -> Self;
-    /// `floor`, the same value to the bit, inlined: for the baseline x86-64 target (no
-    /// SSE4.1 `roundsd`) std's floor and ceil are calls into a software routine, which took
-    /// 4 % of the `cpu` engine's time.
-    fn kfloor(self) -> Self;
-    /// `ceil`, the same value to the bit (see [`Real::kfloor`]).
-    fn kceil(self) -> Self;
-}
-
-/// floor and ceil by truncation: below 2^(mantissa bits) the integer conversion is exact,
-/// at and above it (and for ±inf, NaN) every float is already integral. The result takes the
-/// argument's sign, as IEEE's does for a zero result (ceil(-0.5) = -0.0).
-macro_rules! round_by_truncation {
-    ($t:ty, $int:ty, $exact_below:expr) => {
-        #[inline(always)]
-        fn kfloor(self) -> Self {
-            if self.is_nan() || self.abs() >= $exact_below {
-                return self;
-            }
-            let t = self as $int as $t;
-            (if t > self { t - 1.0 } else { t }).copysign(self)
-        }
-        #[inline(always)]
-        fn kceil(self) -> Self {
-            if self.is_nan() || self.abs() >= $exact_below {
-                return self;
-            }
-            let t = self as $int as $t;
-            (if t < self { t + 1.0 } else { t }).copysign(self)
-        }
-    };
 }
 
 impl Real for f32 {
@@ -63,7 +33,6 @@ impl Real for f32 {
     fn katan2(self, x: Self) -> Self {
         ktrig::atan2(self, x)
     }
-    round_by_truncation!(f32, i32, 8_388_608.0); // 2^23
 }
 
 impl Real for f64 {
@@ -83,7 +52,6 @@ impl Real for f64 {
     fn katan2(self, x: Self) -> Self {
         self.atan2(x)
     }
-    round_by_truncation!(f64, i64, 4_503_599_627_370_496.0); // 2^52
 }
 
 /// f32 trigonometry of the kernels, written out so the GPU and the CPU twin run the same
@@ -149,51 +117,6 @@ pub mod ktrig {
                 worst = worst.max((a - (yy as f64).atan2(xx as f64)).abs());
             }
             assert!(worst < 1e-6, "{worst}");
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::Real;
-
-    /// kfloor and kceil are std's floor and ceil to the bit (sign of zero included) over
-    /// random magnitudes, halves, integers, the exactness limits, infinities and NaN.
-    #[test]
-    fn truncation_rounding_is_std_rounding_to_the_bit() {
-        use rand::{Rng, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        let mut xs: Vec<f64> = vec![
-            0.0,
-            -0.0,
-            0.5,
-            -0.5,
-            1.0,
-            -1.0,
-            2.5,
-            -2.5,
-            4_503_599_627_370_495.5,
-            -4_503_599_627_370_495.5,
-            4_503_599_627_370_496.0,
-            9.1e15,
-            -9.1e15,
-            1e300,
-            f64::MIN_POSITIVE,
-            -f64::MIN_POSITIVE,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::NAN,
-        ];
-        for _ in 0..200_000 {
-            let e: i32 = rng.random_range(-30..60);
-            xs.push(rng.random_range(-1.0..1.0) * 2f64.powi(e));
-        }
-        for &x in &xs {
-            assert_eq!(x.kfloor().to_bits(), x.floor().to_bits(), "floor {x:e}");
-            assert_eq!(x.kceil().to_bits(), x.ceil().to_bits(), "ceil {x:e}");
-            let y = x as f32;
-            assert_eq!(y.kfloor().to_bits(), y.floor().to_bits(), "f32 floor {y:e}");
-            assert_eq!(y.kceil().to_bits(), y.ceil().to_bits(), "f32 ceil {y:e}");
         }
     }
 }
