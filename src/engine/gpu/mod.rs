@@ -265,7 +265,7 @@ impl GpuEngine {
 
     /// [`GpuEngine::dispatch_raw`] with the kernel's path switches given instead of taken
     /// from the records (tests/gpu_conformance.rs: switching off the paths no record takes
-    /// changes nothing).
+    /// leaves the particles as the general kernel does, up to the driver's f32 rounding).
     #[doc(hidden)]
     pub fn dispatch_raw_with(
         &self,
