@@ -99,6 +99,7 @@ fn state_of(code: u32) -> ParticleState {
 /// The bounce loop (4.2.4) over one design, generic over precision: every particle as the
 /// kernel leaves it, and the iterations run. The twin of the bounce loop of WGSL `simulate`
 /// (its reduction's twin is `kernel::reduce`).
+#[inline(always)]
 pub fn run_particles<T: Real>(
     prep: &Prepared,
     ctx: &Context,
@@ -153,6 +154,7 @@ pub fn run_particles<T: Real>(
 }
 
 /// [`run_particles`] with each particle's end state, in f64.
+#[inline(always)]
 pub fn run_design<T: Real>(prep: &Prepared, ctx: &Context, trace: Option<&mut Vec<FlightRecord>>) -> Run {
     let d = kernel_design::<T>(prep);
     let (parts, iterations) = run_particles::<T>(prep, ctx, trace);
@@ -188,9 +190,104 @@ impl ParticleEngine for CpuEngine {
         }
     }
     fn run(&self, prep: &Prepared, ctx: &Context, trace: Option<&mut Vec<FlightRecord>>) -> Run {
+        #[cfg(target_arch = "x86_64")]
+        if x86_64_v3::available() {
+            // SAFETY: the CPU has every feature the function is compiled for (checked above).
+            return match self.precision {
+                Precision::F64 => unsafe { x86_64_v3::run_design::<f64>(prep, ctx, trace) },
+                Precision::F32 => unsafe { x86_64_v3::run_design::<f32>(prep, ctx, trace) },
+            };
+        }
         match self.precision {
             Precision::F64 => run_design::<f64>(prep, ctx, trace),
             Precision::F32 => run_design::<f32>(prep, ctx, trace),
         }
+    }
+}
+
+/// The bounce loop compiled a second time for x86-64-v3 (AVX2, FMA, BMI1/2, SSE4.1-4.2,
+/// ...), taken at run time on CPUs that have it: every kernel function is inlined into
+/// [`x86_64_v3::run_design`], so all of it gets three-operand instructions and inline
+/// `floor`/`ceil` (calls into libm on the x86-64 baseline). The results are the same to the
+/// bit: Rust never contracts `a * b + c` into a fused multiply-add, so the features change
+/// which instructions compute each IEEE operation, not the operations.
+#[cfg(target_arch = "x86_64")]
+mod x86_64_v3 {
+    use super::*;
+
+    pub fn available() -> bool {
+        std::is_x86_feature_detected!("avx2")
+            && std::is_x86_feature_detected!("fma")
+            && std::is_x86_feature_detected!("bmi1")
+            && std::is_x86_feature_detected!("bmi2")
+            && std::is_x86_feature_detected!("lzcnt")
+            && std::is_x86_feature_detected!("movbe")
+            && std::is_x86_feature_detected!("popcnt")
+            && std::is_x86_feature_detected!("sse4.2")
+    }
+
+    #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,movbe,popcnt,sse3,ssse3,sse4.1,sse4.2")]
+    pub fn run_design<T: Real>(prep: &Prepared, ctx: &Context, trace: Option<&mut Vec<FlightRecord>>) -> Run {
+        super::run_design::<T>(prep, ctx, trace)
+    }
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests {
+    use super::*;
+    use crate::model::effects::{ImpactScatter, LaunchSpread, Polydisperse, SizeForm, TiltForm};
+    use crate::model::sampling::random_valid_designs;
+    use crate::model::{prepare, Scenario};
+
+    /// A particle's end as bits: state, end point, first impact, bounces.
+    type EndBits = (ParticleState, [u64; 2], Option<[u64; 2]>, u32);
+
+    fn bits(run: &Run) -> Vec<EndBits> {
+        let b = |v: [f64; 2]| [v[0].to_bits(), v[1].to_bits()];
+        run.particles.iter().map(|p| (p.state, b(p.end), p.first_impact.map(b), p.bounces)).collect()
+    }
+
+    /// The x86-64-v3 compilation of the bounce loop leaves every particle as the baseline
+    /// compilation does, to the bit: both environments and modes, with the effects of both
+    /// engines on, in f64 and f32.
+    #[test]
+    fn the_x86_64_v3_build_gives_the_baseline_bits() {
+        if !x86_64_v3::available() {
+            eprintln!("skipped: this CPU lacks x86-64-v3, so only the baseline build runs here");
+            return;
+        }
+        let with_effects = |mut s: Scenario| {
+            s.effects.impact_scatter = Some(ImpactScatter { sigma_deg: 3.0, form: TiltForm::default() });
+            s.effects.launch_spread = Some(LaunchSpread { speed_spread: 0.2, angle_sigma_deg: 5.0 });
+            s.effects.polydisperse = Some(Polydisperse { sigma_ln: 0.4, form: SizeForm::default() });
+            s
+        };
+        let mut listing_mode = Scenario::lunar();
+        listing_mode.mode = PhysicsMode::Listing;
+        let scenarios = [
+            Scenario::lunar(),
+            Scenario::earth(),
+            listing_mode,
+            with_effects(Scenario::lunar()),
+            with_effects(Scenario::earth()),
+        ];
+        let mut flights = 0;
+        for (i, mut s) in scenarios.into_iter().enumerate() {
+            s.sim.particles = 200;
+            let ctx = Context::new(&s);
+            for d in random_valid_designs(&s, 6, 40 + i as u64) {
+                let prep = prepare(&s, &d).unwrap();
+                // SAFETY: the CPU has x86-64-v3 (checked above).
+                let (v3, v3_f32) = unsafe {
+                    (x86_64_v3::run_design::<f64>(&prep, &ctx, None), x86_64_v3::run_design::<f32>(&prep, &ctx, None))
+                };
+                let (base, base_f32) = (run_design::<f64>(&prep, &ctx, None), run_design::<f32>(&prep, &ctx, None));
+                assert_eq!(bits(&v3), bits(&base), "scenario {i}, design {d:?}");
+                assert_eq!(bits(&v3_f32), bits(&base_f32), "f32: scenario {i}, design {d:?}");
+                assert_eq!((v3.iterations, v3_f32.iterations), (base.iterations, base_f32.iterations));
+                flights += base.particles.iter().map(|p| p.bounces as usize).sum::<usize>();
+            }
+        }
+        assert!(flights > 10_000, "the batches flew {flights} flights");
     }
 }

@@ -201,6 +201,7 @@ pub fn init_particle<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, launch: [T; 2], 
 /// only, erratum 5): the angle measured from the departed surface's tangent is multiplied
 /// and kept inside (0, π), so a randomised rebound never points into that surface
 /// (erratum 24).
+#[inline(always)]
 pub fn randomise_launch<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KParticle<T>, index: u32, bounce: u32) {
     let apply = match ph.randomise {
         RANDOMISE_FIRST_LAUNCH => bounce == 0,
@@ -284,6 +285,7 @@ fn contact<T: Real>(d: &KDesign<T>, pos: [T; 2], vel: [T; 2], a: [T; 2], b: [T; 
 /// catch chords of the teeth the flight can reach (4.2.4-4.2.5; the first tooth's catch is
 /// ignored on the first flight). The base-line crossing bounds the flight: every tooth
 /// segment lies above the base, so nothing after it can be hit.
+#[inline(always)]
 pub fn first_hit<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &KParticle<T>, bounce: u32) -> Hit<T> {
     let fl = Flight { p0: p.pos, v0: p.vel, g: ph.g, k: p.k_drag, drift: [T::zero(); 2] };
     first_hit_in(d, ph, p, &fl, bounce, T::infinity())
@@ -524,6 +526,7 @@ fn first_hit_piecewise<T: Real>(
 }
 
 /// One flight and bounce of one particle (one iteration of the bounce loop, 4.2.4).
+#[inline(always)]
 pub fn step_particle<T: Real>(
     d: &KDesign<T>,
     ph: &KPhysics<T>,

@@ -56,6 +56,7 @@ impl<T: Real> Restitution<T> {
     }
 
     /// Rebound velocity for impact velocity `v` on a surface with unit normal `n` (into the air).
+    #[inline(always)]
     pub fn bounce(&self, v: [T; 2], n: [T; 2]) -> [T; 2] {
         let vn_s = v[0] * n[0] + v[1] * n[1]; // Eq. 4.47
         let vn = [vn_s * n[0], vn_s * n[1]];
