@@ -264,6 +264,7 @@ pub fn quadratic_roots<T: Real>(c2: T, c1: T, c0: T, t_min: T, t_max: T) -> Root
 /// regula-falsi start and plain Newton took 8.1). Fixed maximum iteration count, as a shader
 /// needs. WGSL twin: `bracketed_newton`.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub fn bracketed_newton<T: Real>(c0: T, ca: T, cb: T, k: T, mut lo: T, mut hi: T, f_lo: T, f_hi: T) -> T {
     let lo_positive = f_lo > T::zero();
     // start: the root of f with E(t) = (1 - e^{-kt})/k expanded to second order,
