@@ -36,6 +36,35 @@ fn same_seed_same_output_different_seed_different_output() {
     assert_ne!(run("5"), run("6"));
 }
 
+/// `bench` says what each engine ran on (for the cpu engine: which compilation of its
+/// bounce loop, chosen at run time), so a timing can be traced to its build.
+#[test]
+fn bench_names_each_engines_device() {
+    let args = [
+        "bench",
+        "--env",
+        "lunar",
+        "--designs",
+        "4",
+        "--particles",
+        "20",
+        "--repeats",
+        "1",
+        "--engines",
+        "listing,cpu",
+    ];
+    let (code, out, err) = sawtooth(&args);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("listing: listing engine on the host CPU"), "{out}");
+    let cpu = out.lines().find(|l| l.starts_with("cpu: cpu engine on the host CPU")).unwrap_or_else(|| panic!("{out}"));
+    assert!(cpu.ends_with("x86-64-v3 build)") || cpu.ends_with("baseline build)"), "{cpu}");
+    let (code, out, err) = sawtooth(&[&args[..], &["--json"]].concat());
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(v["devices"]["cpu"].as_str().is_some_and(|d| d.contains("build")), "{v}");
+    assert!(v["devices"]["listing"].as_str().is_some(), "{v}");
+}
+
 #[test]
 fn example_configs_run() {
     for f in ["examples/lunar_solution_c.toml", "examples/earth_solution_c.toml", "examples/validation_test3.toml"] {

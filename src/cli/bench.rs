@@ -222,10 +222,11 @@ pub fn run(a: BenchArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
             t.elapsed().as_secs_f64()
         })
         .fold(f64::INFINITY, f64::min);
-    let mut results = Vec::new();
+    let (mut results, mut devices) = (Vec::new(), Vec::new());
     for k in &a.engines {
         let engine = make_engine(*k)?;
         results.push(measure(&engine, &scenario, &designs, a.repeats));
+        devices.push(engine.device());
     }
     let rate = |m: &Measurement| m.particle_bounces / m.seconds;
     let base = results.iter().find(|m| m.engine == "listing").map(rate);
@@ -248,6 +249,7 @@ pub fn run(a: BenchArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
             "threads": rayon::current_num_threads(),
             "prepare_seconds_per_batch": prepare_s,
             "sample": format!("{:?}", a.sample).to_lowercase(),
+            "devices": results.iter().zip(&devices).map(|(m, d)| (m.engine.to_string(), json!(d))).collect::<serde_json::Map<_, _>>(),
         });
         writeln!(out, "{}", serde_json::to_string_pretty(&v)?).context("writing output")?;
     } else {
@@ -278,6 +280,9 @@ pub fn run(a: BenchArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
                 rate(m),
                 ratio
             )?;
+        }
+        for (m, d) in results.iter().zip(&devices) {
+            writeln!(out, "{}: {d}", m.engine)?;
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -182,6 +182,15 @@ pub fn run_design<T: Real>(prep: &Prepared, ctx: &Context, trace: Option<&mut Ve
     Run { particles, iterations }
 }
 
+/// Which compilation of the bounce loop runs on this CPU, for run manifests and `bench`.
+pub fn build() -> &'static str {
+    #[cfg(target_arch = "x86_64")]
+    if x86_64_v3::available() {
+        return "x86-64-v3 build";
+    }
+    "baseline build"
+}
+
 impl ParticleEngine for CpuEngine {
     fn name(&self) -> &'static str {
         match self.precision {

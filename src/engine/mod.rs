@@ -169,6 +169,14 @@ impl BatchEvaluator for cpu::CpuEngine {
     fn backend(&self) -> &'static str {
         ParticleEngine::name(self)
     }
+    fn device(&self) -> String {
+        format!(
+            "{} engine on the host CPU ({} threads, {})",
+            self.backend(),
+            rayon::current_num_threads(),
+            cpu::build()
+        )
+    }
     fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
         evaluate_batch(self, scenario, designs)
     }
