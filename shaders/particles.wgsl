@@ -262,6 +262,13 @@ fn bounce_velocity(d: Design, v: vec2<f32>, n: vec2<f32>) -> vec2<f32> {
 
 fn step_particle(d: Design, p: ptr<function, Particle>, index: u32, bounce: u32) {
     randomise_launch(d, p, index, bounce);
+    fly_particle(d, p, index, bounce);
+}
+
+// The flight from the (randomised) launch velocity to the next impact, and the bounce there.
+// Rust twin: kernel.rs `fly_particle` (the cpu engine randomises a whole bounce's launches
+// before flying any of them).
+fn fly_particle(d: Design, p: ptr<function, Particle>, index: u32, bounce: u32) {
     let hit = first_hit(d, *p, bounce);
     if (!hit.found) {
         (*p).state = STATE_LOST;

@@ -116,11 +116,17 @@ pub fn run_particles<T: Real>(
     let mut iterations = 0;
     for bounce in 0..ctx.max_bounces {
         let (mut flying, mut hop_sum, mut hop_n) = (0usize, 0.0f64, 0usize);
+        // every launch of this bounce first, then every flight (`fly_particle` says why)
+        for (i, p) in parts.iter_mut().enumerate() {
+            if p.state == STATE_FLYING {
+                randomise_launch(&d, &ph, p, i as u32, bounce);
+            }
+        }
         for (i, p) in parts.iter_mut().enumerate() {
             if p.state != STATE_FLYING {
                 continue;
             }
-            let flown = step_particle(&d, &ph, p, i as u32, bounce);
+            let flown = fly_particle(&d, &ph, p, i as u32, bounce);
             if let Some(tr) = trace.as_deref_mut() {
                 let origin = [T::c(flown.from_tooth as f64) * d.pitch[0], T::c(flown.from_tooth as f64) * d.pitch[1]];
                 tr.push(FlightRecord {

@@ -8,6 +8,7 @@
 //! | `randomise_launch`, `hop_ok`      | same names here                                   |
 //! | `contact`, `flies_over`           | same names here                                   |
 //! | `first_hit`, `step_particle`      | same names here (plus the cpu-only effects)       |
+//! | `fly_particle`                    | same name here                                    |
 //! | `end_tooth`                       | [`end_tooth`]                                     |
 //! | `bounce_velocity`                 | `Restitution::bounce` (src/model/collision.rs)    |
 //! | `simulate`: bounce loop           | `run_particles` (src/engine/cpu.rs)               |
@@ -535,6 +536,22 @@ pub fn step_particle<T: Real>(
     bounce: u32,
 ) -> Flown<T> {
     randomise_launch(d, ph, p, index, bounce);
+    fly_particle(d, ph, p, index, bounce)
+}
+
+/// [`step_particle`] after the launch randomisation: the flight from the launch velocity to
+/// the next impact, and the bounce there. The cpu engine's bounce loop randomises a whole
+/// bounce's launches first and then flies them (`run_particles`): the same operations per
+/// particle, so the same bits, and the libm calls of the randomisation run back to back
+/// instead of between two branchy flight searches (lunar batch −9 %, BENCHMARKS.md).
+#[inline(always)]
+pub fn fly_particle<T: Real>(
+    d: &KDesign<T>,
+    ph: &KPhysics<T>,
+    p: &mut KParticle<T>,
+    index: u32,
+    bounce: u32,
+) -> Flown<T> {
     let flown = Flown { from_tooth: p.tooth, from: p.pos, vel: p.vel, t: T::zero() };
     let (hit, fl, piece_start) = if ph.sled_speed > T::zero() || ph.qd_step > T::zero() {
         first_hit_piecewise(d, ph, p, bounce)
