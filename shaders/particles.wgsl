@@ -23,12 +23,8 @@ const WG: u32 = 64u; // Rust twin: kernel.rs `WG` (the reduction's lanes)
 
 var<workgroup> wg_flying: atomic<u32>;
 var<workgroup> wg_hop_n: atomic<u32>;
-var<workgroup> wg_lost: atomic<u32>;
-var<workgroup> wg_bounces: atomic<u32>;
-var<workgroup> wg_advance: atomic<u32>;
 var<workgroup> wg_sum: array<f32, 64>;
 var<workgroup> wg_go: u32;
-var<workgroup> wg_steps: atomic<u32>;
 
 struct Hit {
     found: bool,
@@ -360,7 +356,9 @@ fn simulate(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_ind
         }
         if (workgroupUniformLoad(&wg_go) == 0u) { break; }
     }
-    reduce_design(design, lid, iterations);
+    // the reduction reads every lane's particles
+    storageBarrier();
+    if (lid == 0u) { reduce_design(design, iterations); }
 }
 
 // Physical mode: each particle's rest rule is its own (4.2.4, erratum 15), so one thread
@@ -397,57 +395,50 @@ fn particle_steps(p: Particle) -> u32 {
     return p.bounces + select(0u, 1u, p.state == STATE_LOST);
 }
 
-// The per-design reduction after `simulate_particles`; its iterations are the bounce loop's
-// (as `run_particles` counts them: until no particle flies, at least one).
+// The per-design reduction after `simulate_particles`, one thread per design; its
+// iterations are the bounce loop's (as `run_particles` counts them: until no particle flies,
+// at least one). Rust twin: the max of kernel.rs `particle_steps`, then `reduce`.
 @compute @workgroup_size(64)
-fn reduce_designs(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let design = wid.x;
+fn reduce_designs(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let design = gid.x;
+    if (design >= ph.n_designs) { return; }
     let first = design * ph.n_particles;
-    if (lid == 0u) { atomicStore(&wg_steps, 1u); }
-    workgroupBarrier();
-    for (var i = lid; i < ph.n_particles; i += WG) {
-        atomicMax(&wg_steps, min(particle_steps(particles[first + i]), ph.max_bounces));
+    var iterations = 1u;
+    for (var i = 0u; i < ph.n_particles; i++) {
+        iterations = max(iterations, min(particle_steps(particles[first + i]), ph.max_bounces));
     }
-    let iterations = workgroupUniformLoad(&wg_steps);
-    reduce_design(design, lid, iterations);
+    reduce_design(design, iterations);
 }
 
-// Reduction: tooth histogram, lost and still-flying counts, impacts, distances.
-// Rust twin: kernel.rs `reduce` (same lanes, same order of the distance sums).
-fn reduce_design(design: u32, lid: u32, iterations: u32) {
+// Reduction of one design in one thread: tooth histogram, lost and still-flying counts,
+// impacts, distances. Rust twin: kernel.rs `reduce`, the same loops in the same order: lane l
+// of WG sums particles l, l + WG, ..., then the lanes' sums are added in lane order (the
+// order of the workgroup that did this before, kept so the f32 sums keep their bits). One
+// thread needs no barrier or workgroup atomic, and on lavapipe it is as fast.
+fn reduce_design(design: u32, iterations: u32) {
     let d = designs[design];
     let first = design * ph.n_particles;
-    if (lid == 0u) {
-        atomicStore(&wg_flying, 0u);
-        atomicStore(&wg_lost, 0u);
-        atomicStore(&wg_bounces, 0u);
-        atomicStore(&wg_advance, 0u);
-    }
-    workgroupBarrier();
-    var dist = 0.0;
-    for (var i = lid; i < ph.n_particles; i += WG) {
-        var p = particles[first + i];
-        atomicAdd(&wg_bounces, p.bounces);
-        if (p.state == STATE_LOST) {
-            atomicAdd(&wg_lost, 1u);
-            continue;
+    var out = Outcome(iterations, 0u, 0u, 0u, 0u, 0.0, 0u, 0u);
+    for (var lane = 0u; lane < WG; lane++) {
+        var dist = 0.0;
+        for (var i = lane; i < ph.n_particles; i += WG) {
+            var p = particles[first + i];
+            out.bounce_sum += p.bounces;
+            if (p.state == STATE_LOST) {
+                out.lost += 1u;
+                continue;
+            }
+            if (p.state == STATE_FLYING && p.bounces > 0u && p.hop < ph.rest_threshold) {
+                p.state = STATE_RESTING; // listing mode: hopping below l_limit when the loop stopped
+                particles[first + i] = p;
+            }
+            if (p.state == STATE_FLYING) { out.flying += 1u; }
+            let j = end_tooth(d, p);
+            atomicAdd(&histogram[design * ph.teeth_hist + u32(j - 1)], 1u);
+            out.advance_teeth += u32(j - 1);
+            if (j > 1) { dist += d.pitch_x * f32(j - 1) + d.p4_x; } // listing D.1 l.347-351
         }
-        if (p.state == STATE_FLYING && p.bounces > 0u && p.hop < ph.rest_threshold) {
-            p.state = STATE_RESTING; // listing mode: hopping below l_limit when the loop stopped
-            particles[first + i] = p;
-        }
-        if (p.state == STATE_FLYING) { atomicAdd(&wg_flying, 1u); }
-        let j = end_tooth(d, p);
-        atomicAdd(&histogram[design * ph.teeth_hist + u32(j - 1)], 1u);
-        atomicAdd(&wg_advance, u32(j - 1));
-        if (j > 1) { dist += d.pitch_x * f32(j - 1) + d.p4_x; } // listing D.1 l.347-351
+        out.distance_sum += dist;
     }
-    wg_sum[lid] = dist;
-    workgroupBarrier();
-    if (lid == 0u) {
-        var total = 0.0;
-        for (var i = 0u; i < WG; i++) { total += wg_sum[i]; }
-        outcomes[design] = Outcome(iterations, atomicLoad(&wg_lost), atomicLoad(&wg_flying), atomicLoad(&wg_bounces),
-                                   atomicLoad(&wg_advance), total, 0u, 0u);
-    }
+    outcomes[design] = out;
 }

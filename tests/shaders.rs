@@ -29,7 +29,7 @@ fn broken_shaders_are_rejected_with_naga_s_message() {
             "fn to_index(x: f32) -> i32 {\n    return i32(clamp(x, -1.0e9, 1.0e9));",
             "return u32(clamp(x, -1.0e9, 1.0e9));",
         ),
-        ("atomicAdd(&wg_lost, 1u);", "atomicAdd(&wg_lost, NOT_A_CONSTANT);"),
+        ("atomicAdd(&wg_hop_n, 1u);", "atomicAdd(&wg_hop_n, NOT_A_CONSTANT);"),
     ];
     for (anchor, broken) in cases {
         assert!(src.contains(anchor), "anchor {anchor:?} not in the kernel");

@@ -15,7 +15,7 @@
 //! | `simulate_particles`              | [`follow_particle`] for each particle             |
 //! | `particle_steps`                  | [`particle_steps`]                                |
 //! | `reduce_designs`                  | max of [`particle_steps`], then [`reduce`]        |
-//! | `reduce_design` (reduction)       | [`reduce`]                                        |
+//! | `reduce_design` (one design)      | [`reduce`]                                        |
 //! | `pitch(d)`                        | the field `d.pitch`                               |
 //!
 //! `init_particle` runs on the host for both engines. The shared files have their own twins:
@@ -667,9 +667,10 @@ pub fn particle_steps<T: Real>(p: &KParticle<T>) -> u32 {
     p.bounces + u32::from(p.state == STATE_LOST)
 }
 
-/// The reduction at the end of WGSL `simulate`, done the way the workgroup does it: lane
-/// `l` of [`WG`] takes particles l, l + WG, ... and sums its own distances, then the lanes'
-/// sums are added in lane order. Particles still flying with a hop below the rest threshold
+/// The reduction of one design, WGSL `reduce_design` (one thread per design, at the end of
+/// `simulate` and in `reduce_designs`), with the same loops: lane `l` of [`WG`] takes
+/// particles l, l + WG, ... and sums its own distances, then the lanes' sums are added in
+/// lane order. Particles still flying with a hop below the rest threshold
 /// are marked resting (listing mode: the loop stopped on the mean hop), as the kernel
 /// writes them back. `histogram` (one bin per tooth) is added to.
 pub fn reduce<T: Real>(

@@ -344,7 +344,7 @@ impl GpuEngine {
         enc.clear_buffer(&hist_buf, 0, None);
         if phys.per_particle_rest != 0 {
             // a thread per particle, then (a separate pass: the reduction reads what every
-            // particle's thread wrote) a workgroup per design
+            // particle's thread wrote) a thread per design
             let groups = (particles.len() as u64).div_ceil(WORKGROUP_SIZE);
             let per_dim = self.limits.max_compute_workgroups_per_dimension as u64;
             let (x, y) = (groups.min(per_dim), groups.div_ceil(per_dim));
@@ -363,7 +363,7 @@ impl GpuEngine {
             });
             pass.set_pipeline(&self.reduce_pipeline);
             pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(n as u32, 1, 1);
+            pass.dispatch_workgroups((n as u64).div_ceil(WORKGROUP_SIZE) as u32, 1, 1);
         } else {
             let mut pass = enc
                 .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("simulate"), timestamp_writes: None });
