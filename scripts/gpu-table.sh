@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# The GPU tables of BENCHMARKS.md in one command, for a machine with a GPU: conformance
+# first (GPU against the CPU twin; stops here when a tolerance fails), then the pop-1000
+# generations and issue 2's 64-design batches, each engine side by side in one process,
+# printed as one Markdown table with the devices the engines ran on.
+# Usage: bash scripts/gpu-table.sh [REPEATS]   (at least 2, default 3; prints Markdown on stdout)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+repeats=${1:-3}
+# the best of the repeats is taken, and a kernel's first run includes its shader compilation
+if ! [[ $repeats =~ ^[0-9]+$ ]] || ((repeats < 2)); then
+    echo "gpu-table.sh: REPEATS must be a whole number of at least 2 (the first run of each kernel compiles it), got '$repeats'" >&2
+    exit 2
+fi
+cargo build --release --locked --bin sawtooth >&2
+st=target/release/sawtooth
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+$st conformance --designs 50 >&2
+
+n=0
+for env in lunar earth; do
+    for batch in "--designs 1000 --sample random" "" "--compat-listing"; do
+        n=$((n + 1))
+        # shellcheck disable=SC2086 # the batch's flags are words
+        $st bench --env $env $batch --engines listing,cpu,gpu --repeats "$repeats" --json > "$work/$n.json"
+    done
+done
+
+python3 - "$work" "$repeats" <<'EOF'
+import json, pathlib, sys
+work, repeats = pathlib.Path(sys.argv[1]), sys.argv[2]
+runs = [json.loads(p.read_text()) for p in sorted(work.glob("*.json"), key=lambda p: int(p.stem))]
+print(f"best of {repeats} repeats per engine; seconds per batch, preparation included; ratios of")
+print("particle-bounces per second, as `bench` prints them")
+print()
+print("| batch | listing | cpu | gpu | cpu / listing | gpu / cpu |")
+print("|---|---|---|---|---|---|")
+for r in runs:
+    s, rate = r["seconds_per_batch"], r["particle_bounces_per_s"]
+    mode = "" if r["mode"] == "physical" else ", listing mode"
+    size = "pop 1000" if r["designs"] == 1000 and r["sample"] == "random" else f'{r["designs"]} designs'
+    print(f'| {r["env"]}, {size}{mode} | {s["listing"]:.4g} s | {s["cpu"] * 1e3:.4g} ms '
+          f'| {s["gpu"] * 1e3:.4g} ms | {rate["cpu"] / rate["listing"]:.1f}× | **{rate["gpu"] / rate["cpu"]:.2f}×** |')
+print()
+for engine, device in runs[0]["devices"].items():
+    print(f"- {engine}: {device}")
+EOF
