@@ -543,7 +543,7 @@ pub fn step_particle<T: Real>(
 /// the next impact, and the bounce there. The cpu engine's bounce loop randomises a whole
 /// bounce's launches first and then flies them (`run_particles`): the same operations per
 /// particle, so the same bits, and the libm calls of the randomisation run back to back
-/// instead of between two branchy flight searches (lunar batch −9 %, BENCHMARKS.md).
+/// instead of between two branchy flight searches (lunar batches −7 to −8 %, BENCHMARKS.md).
 #[inline(always)]
 pub fn fly_particle<T: Real>(
     d: &KDesign<T>,
