@@ -12,8 +12,13 @@ if ! [[ $repeats =~ ^[0-9]+$ ]] || ((repeats < 2)); then
     echo "gpu-table.sh: REPEATS must be a whole number of at least 2 (the first run of each kernel compiles it), got '$repeats'" >&2
     exit 2
 fi
-cargo build --release --locked --bin sawtooth >&2
-st=target/release/sawtooth
+# SAWTOOTH_BIN: a sawtooth binary to use instead of building one (the test suite's)
+if [[ -n ${SAWTOOTH_BIN:-} ]]; then
+    st=$SAWTOOTH_BIN
+else
+    cargo build --release --locked --bin sawtooth >&2
+    st=target/release/sawtooth
+fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 

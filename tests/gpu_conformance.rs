@@ -362,3 +362,54 @@ fn path_switches_change_no_result() {
     }
     assert!(variants.len() >= 3, "{variants:?}");
 }
+
+/// scripts/gpu-table.sh, the one command README gives for a GPU machine, runs conformance and
+/// prints BENCHMARKS.md's GPU table: six batches, each with three timings and two ratios,
+/// and the device of each engine. (Here on whatever adapter the suite has, two repeats.)
+#[test]
+fn the_gpu_table_script_prints_every_batch() {
+    if gpu().is_none() {
+        return;
+    }
+    let out = std::process::Command::new("bash")
+        .args([concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/gpu-table.sh"), "2"])
+        .env("SAWTOOTH_BIN", env!("CARGO_BIN_EXE_sawtooth"))
+        .output()
+        .expect("run bash");
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("conformance: PASS"), "{stderr}");
+    let rows: Vec<&str> = stdout.lines().filter(|l| l.starts_with("| lunar") || l.starts_with("| earth")).collect();
+    let batches: Vec<&str> = rows.iter().map(|r| r.split('|').nth(1).unwrap().trim()).collect();
+    assert_eq!(
+        batches,
+        [
+            "lunar, pop 1000",
+            "lunar, 64 designs",
+            "lunar, 64 designs, listing mode",
+            "earth, pop 1000",
+            "earth, 64 designs",
+            "earth, 64 designs, listing mode"
+        ],
+        "{stdout}"
+    );
+    for r in &rows {
+        let cells: Vec<&str> = r.split('|').map(str::trim).filter(|c| !c.is_empty()).collect();
+        assert_eq!(cells.len(), 6, "{r}");
+        for ratio in &cells[4..] {
+            let x: f64 = ratio.trim_matches('*').trim_end_matches('×').parse().unwrap_or_else(|_| panic!("{r}"));
+            assert!(x > 0.0 && x.is_finite(), "{r}");
+        }
+    }
+    for engine in ["listing", "cpu", "gpu"] {
+        assert!(stdout.lines().any(|l| l.starts_with(&format!("- {engine}: "))), "{stdout}");
+    }
+    // fewer than two repeats would time the shader compilation: refused
+    let one = std::process::Command::new("bash")
+        .args([concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/gpu-table.sh"), "1"])
+        .env("SAWTOOTH_BIN", env!("CARGO_BIN_EXE_sawtooth"))
+        .output()
+        .expect("run bash");
+    assert_eq!(one.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&one.stderr).contains("REPEATS must be a whole number of at least 2"));
+}
