@@ -65,6 +65,22 @@ fn bench_names_each_engines_device() {
     assert!(v["devices"]["listing"].as_str().is_some(), "{v}");
 }
 
+/// `bench` refuses a batch it cannot time, naming the flag: no designs, no repetitions, no
+/// particles (it used to run an empty batch, or one repetition for `--repeats 0`).
+#[test]
+fn bench_refuses_what_it_cannot_time() {
+    for (flag, says) in [
+        ("--designs", "'--designs <DESIGNS>'"),
+        ("--repeats", "'--repeats <REPEATS>'"),
+        ("--particles", "`[sim] particles` (--particles)"),
+    ] {
+        let (code, out, err) = sawtooth(&["bench", "--engines", "cpu", flag, "0"]);
+        assert_eq!(code, 2, "{flag} 0: {out}{err}");
+        assert!(err.contains(says), "{flag} 0: {err}");
+        assert!(out.is_empty(), "{flag} 0 printed a table: {out}");
+    }
+}
+
 #[test]
 fn example_configs_run() {
     for f in ["examples/lunar_solution_c.toml", "examples/earth_solution_c.toml", "examples/validation_test3.toml"] {
