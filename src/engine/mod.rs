@@ -276,12 +276,13 @@ pub fn make_engine_for(kind: EngineKind, scenario: &Scenario) -> anyhow::Result<
     let cpu_only = cpu_only_effects(&scenario.effects);
     if !cpu_only.is_empty() {
         let list = cpu_only.join(", ");
+        let (they, are) = if cpu_only.len() == 1 { ("it is", "is") } else { ("they are", "are") };
         match kind {
-            EngineKind::Gpu => anyhow::bail!(
-                "the gpu engine does not model {list}: they are in the cpu engine only; use the cpu engine"
-            ),
+            EngineKind::Gpu => {
+                anyhow::bail!("the gpu engine does not model {list}: {they} in the cpu engine only; use the cpu engine")
+            }
             EngineKind::Auto => {
-                eprintln!("engine auto: {list} are in the cpu engine only, using it");
+                eprintln!("engine auto: {list} {are} in the cpu engine only, using it");
                 return Ok(particle_engine(EngineKind::Cpu));
             }
             _ => {}

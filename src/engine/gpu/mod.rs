@@ -454,8 +454,9 @@ impl GpuEngine {
             let cpu_only = cpu_only_effects(&ctx.effects);
             if !cpu_only.is_empty() {
                 if !self.warned_cpu_only.swap(true, Ordering::Relaxed) {
+                    let (are, them) = if cpu_only.len() == 1 { ("is", "it") } else { ("are", "them") };
                     eprintln!(
-                        "warning: gpu engine: {} are in the cpu engine only; designs that switch them on run on the cpu engine (f32)",
+                        "warning: gpu engine: {} {are} in the cpu engine only; designs that switch {them} on run on the cpu engine (f32)",
                         cpu_only.join(", ")
                     );
                 }
