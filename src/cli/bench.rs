@@ -71,21 +71,29 @@ pub struct Measurement {
     pub particle_bounces: f64,
 }
 
-/// Time `engine` on the batch; the best of `repeats` runs.
-pub fn measure(engine: &dyn BatchEvaluator, scenario: &Scenario, designs: &[Design], repeats: u32) -> Measurement {
-    if engine.backend() == "gpu" {
-        // the first dispatch of each kernel variant compiles its pipeline: not the batch's time
-        engine.evaluate(scenario, designs);
+/// The best wall time of `repeats` runs of `run` (at least one), and the last run's result.
+/// An engine that compiles its kernels on first use runs once untimed first: the compilation
+/// is not the batch's time.
+fn best_of<R>(engine: &dyn BatchEvaluator, repeats: u32, mut run: impl FnMut() -> R) -> (f64, R) {
+    if engine.compiles_on_first_use() {
+        run();
     }
     let mut best = f64::INFINITY;
-    let mut pb = 0.0;
+    let mut last = None;
     for _ in 0..repeats.max(1) {
         let t = Instant::now();
-        let res = engine.evaluate(scenario, designs);
+        let r = run();
         best = best.min(t.elapsed().as_secs_f64());
-        pb = res.iter().flatten().map(|e| e.sim.mean_bounces * scenario.sim.particles as f64).sum();
+        last = Some(r);
     }
-    Measurement { engine: engine.backend(), seconds: best, particle_bounces: pb }
+    (best, last.expect("at least one run"))
+}
+
+/// Time `engine` on the batch; the best of `repeats` runs.
+pub fn measure(engine: &dyn BatchEvaluator, scenario: &Scenario, designs: &[Design], repeats: u32) -> Measurement {
+    let (seconds, res) = best_of(engine, repeats, || engine.evaluate(scenario, designs));
+    let pb = res.iter().flatten().map(|e| e.sim.mean_bounces * scenario.sim.particles as f64).sum();
+    Measurement { engine: engine.backend(), seconds, particle_bounces: pb }
 }
 
 /// The groups of one calibration generation (see `BenchArgs::calibration`).
@@ -158,20 +166,15 @@ fn run_calibration(a: &BenchArgs, dir: &std::path::Path, out: &mut dyn Write) ->
     let mut rows = Vec::new();
     for k in &a.engines {
         let engine = make_engine(*k)?;
-        if engine.backend() == "gpu" {
-            engine.evaluate_groups(&groups); // compiles the kernels (see `measure`)
-        }
-        let mut best = f64::INFINITY;
-        for _ in 0..a.repeats {
-            let t = Instant::now();
-            let r = engine.evaluate_groups(&groups);
-            best = best.min(t.elapsed().as_secs_f64());
-            anyhow::ensure!(
-                r.len() == groups.len(),
-                "the engine returned {} results for {} groups",
-                r.len(),
-                groups.len()
-            );
+        let mut short = None; // a run that returned the wrong number of results
+        let (best, _) = best_of(&engine, a.repeats, || {
+            let n = engine.evaluate_groups(&groups).len();
+            if n != groups.len() {
+                short = Some(n);
+            }
+        });
+        if let Some(n) = short {
+            anyhow::bail!("the engine returned {n} results for {} groups", groups.len());
         }
         rows.push((engine.backend(), best));
     }

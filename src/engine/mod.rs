@@ -113,6 +113,11 @@ pub trait BatchEvaluator: Sync {
         format!("{} engine on the host CPU ({} threads)", self.backend(), rayon::current_num_threads())
     }
     fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>>;
+    /// Whether a first evaluation also compiles kernels (the gpu engine builds a pipeline per
+    /// kernel variant on first use), so that a timing runs the batch once untimed first.
+    fn compiles_on_first_use(&self) -> bool {
+        false
+    }
     /// Several (scenario, designs) groups, e.g. the populations of several conveyor angles.
     /// The GPU runs them as one job when their batch-wide physics is the same (per-design
     /// physics such as restitution, drag and effect parameters may differ; `GpuEngine::run_jobs`).
@@ -266,6 +271,13 @@ pub fn cpu_only_effects(e: &crate::model::effects::Effects) -> Vec<&'static str>
     v
 }
 
+/// "X is in the cpu engine only" or "X, Y are in the cpu engine only": what the messages about
+/// [`cpu_only_effects`] say, in one place.
+pub fn in_cpu_engine_only(cpu_only: &[&str]) -> String {
+    let verb = if cpu_only.len() == 1 { "is" } else { "are" };
+    format!("{} {verb} in the cpu engine only", cpu_only.join(", "))
+}
+
 /// The engine for a scenario: the effects of issue 5 live in the `cpu` and `gpu` kernels;
 /// the `listing` port (the thesis's algorithm) refuses a scenario that switches one on.
 pub fn make_engine_for(kind: EngineKind, scenario: &Scenario) -> anyhow::Result<Box<dyn Engine>> {
@@ -275,14 +287,11 @@ pub fn make_engine_for(kind: EngineKind, scenario: &Scenario) -> anyhow::Result<
     }
     let cpu_only = cpu_only_effects(&scenario.effects);
     if !cpu_only.is_empty() {
-        let list = cpu_only.join(", ");
-        let (they, are) = if cpu_only.len() == 1 { ("it is", "is") } else { ("they are", "are") };
+        let only = in_cpu_engine_only(&cpu_only);
         match kind {
-            EngineKind::Gpu => {
-                anyhow::bail!("the gpu engine does not model {list}: {they} in the cpu engine only; use the cpu engine")
-            }
+            EngineKind::Gpu => anyhow::bail!("{only}, not in the gpu engine; use the cpu engine"),
             EngineKind::Auto => {
-                eprintln!("engine auto: {list} {are} in the cpu engine only, using it");
+                eprintln!("engine auto: {only}, using it");
                 return Ok(particle_engine(EngineKind::Cpu));
             }
             _ => {}
@@ -328,6 +337,9 @@ impl BatchEvaluator for Box<dyn Engine> {
     }
     fn device(&self) -> String {
         self.as_ref().device()
+    }
+    fn compiles_on_first_use(&self) -> bool {
+        self.as_ref().compiles_on_first_use()
     }
     fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
         self.as_ref().evaluate(scenario, designs)

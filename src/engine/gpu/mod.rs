@@ -454,10 +454,9 @@ impl GpuEngine {
             let cpu_only = cpu_only_effects(&ctx.effects);
             if !cpu_only.is_empty() {
                 if !self.warned_cpu_only.swap(true, Ordering::Relaxed) {
-                    let (are, them) = if cpu_only.len() == 1 { ("is", "it") } else { ("are", "them") };
                     eprintln!(
-                        "warning: gpu engine: {} {are} in the cpu engine only; designs that switch {them} on run on the cpu engine (f32)",
-                        cpu_only.join(", ")
+                        "warning: gpu engine: {}; designs with such an effect run on the cpu engine (f32)",
+                        super::in_cpu_engine_only(&cpu_only)
                     );
                 }
                 on_cpu.push(i);
@@ -607,6 +606,10 @@ impl BatchEvaluator for GpuEngine {
     }
     fn device(&self) -> String {
         self.describe()
+    }
+    /// Each kernel variant's pipeline is built on its first dispatch (`simulators`).
+    fn compiles_on_first_use(&self) -> bool {
+        true
     }
     /// The whole generation in one job (split only where device limits demand it).
     fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
