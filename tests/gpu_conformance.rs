@@ -371,11 +371,14 @@ fn the_gpu_table_script_prints_every_batch() {
     if gpu().is_none() {
         return;
     }
-    let out = std::process::Command::new("bash")
-        .args([concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/gpu-table.sh"), "1"])
-        .env("SAWTOOTH_BIN", env!("CARGO_BIN_EXE_sawtooth"))
-        .output()
-        .expect("run bash");
+    let script = |repeats: &str| {
+        std::process::Command::new("bash")
+            .args([concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/gpu-table.sh"), repeats])
+            .env("SAWTOOTH_BIN", env!("CARGO_BIN_EXE_sawtooth"))
+            .output()
+            .expect("run bash")
+    };
+    let out = script("1");
     let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("conformance: PASS"), "{stderr}");
@@ -406,11 +409,7 @@ fn the_gpu_table_script_prints_every_batch() {
     }
     // a repeat count that is not a whole number of at least one is refused before anything runs
     for bad in ["0", "two"] {
-        let refused = std::process::Command::new("bash")
-            .args([concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/gpu-table.sh"), bad])
-            .env("SAWTOOTH_BIN", env!("CARGO_BIN_EXE_sawtooth"))
-            .output()
-            .expect("run bash");
+        let refused = script(bad);
         assert_eq!(refused.status.code(), Some(2), "{bad}");
         let err = String::from_utf8_lossy(&refused.stderr);
         assert!(err.contains("REPEATS must be a whole number of at least 1") && !err.contains("conformance"), "{err}");
