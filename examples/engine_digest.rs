@@ -1,7 +1,8 @@
 //! A digest of every bit the `cpu` engine leaves: each particle's state, end point, first
 //! impact and bounce count, and every flight of a traced design, over random valid designs
-//! of both environments, both modes and each effect, in f64 and f32. A change to the kernel
-//! that claims "the same bits" prints the same digests before and after.
+//! of both environments, both modes, each effect and both kinds of launch point, in f64 and
+//! f32. A change to the kernel or the preparation that claims "the same bits" prints the
+//! same digests before and after.
 //!
 //! cargo run --release --example engine_digest [DESIGNS]
 
@@ -11,6 +12,7 @@ use sawtooth::model::effects::{
     ImpactScatter, LaunchSpread, MotionDirection, Polydisperse, QuadraticDrag, SizeForm, SledMotion, TiltForm,
 };
 use sawtooth::model::sampling::random_valid_designs;
+use sawtooth::model::scenario::LaunchPoints;
 use sawtooth::model::{prepare, PhysicsMode, Scenario};
 
 /// FNV-1a over 64-bit words.
@@ -42,7 +44,13 @@ fn main() {
             if env == "earth" {
                 m.effects.quadratic_drag = Some(QuadraticDrag { diameter_m: 150e-6, density_kg_m3: 2500.0 });
             }
-            cases.push((format!("{env} {mode:?} sled-motion{}", if env == "earth" { "+quadratic-drag" } else { "" }), m));
+            cases.push((
+                format!("{env} {mode:?} sled-motion{}", if env == "earth" { "+quadratic-drag" } else { "" }),
+                m,
+            ));
+            let mut r = s.clone();
+            r.sim.launch_points = LaunchPoints::Random;
+            cases.push((format!("{env} {mode:?} random launch points"), r));
         }
     }
     for (name, s) in cases {

@@ -5,6 +5,7 @@
 //! - [`io`]: configuration files, trajectory CSV, the flight plot.
 //! - [`plot`]: the one plotting layer every figure goes through (SVG or PNG).
 //! - [`cli`]: the thin command-line layer.
+//! - [`x86_64_v3`]: hot loops compiled a second time for AVX2 CPUs, same bits.
 
 pub mod calibrate;
 pub mod cli;
@@ -15,3 +16,4 @@ pub mod io;
 pub mod model;
 pub mod optim;
 pub mod plot;
+pub mod x86_64_v3;

@@ -220,26 +220,13 @@ impl ParticleEngine for CpuEngine {
     }
 }
 
-/// The bounce loop compiled a second time for x86-64-v3 (AVX2, FMA, BMI1/2, SSE4.1-4.2,
-/// ...), taken at run time on CPUs that have it: every kernel function is inlined into
-/// [`x86_64_v3::run_design`], so all of it gets three-operand instructions and inline
-/// `floor`/`ceil` (calls into libm on the x86-64 baseline). The results are the same to the
-/// bit: Rust never contracts `a * b + c` into a fused multiply-add, so the features change
-/// which instructions compute each IEEE operation, not the operations.
+/// The bounce loop compiled a second time for x86-64-v3 (see [`crate::x86_64_v3`]): every
+/// kernel function is inlined into [`x86_64_v3::run_design`], so all of it gets the
+/// features; the results are the same to the bit (tested below).
 #[cfg(target_arch = "x86_64")]
 mod x86_64_v3 {
     use super::*;
-
-    pub fn available() -> bool {
-        std::is_x86_feature_detected!("avx2")
-            && std::is_x86_feature_detected!("fma")
-            && std::is_x86_feature_detected!("bmi1")
-            && std::is_x86_feature_detected!("bmi2")
-            && std::is_x86_feature_detected!("lzcnt")
-            && std::is_x86_feature_detected!("movbe")
-            && std::is_x86_feature_detected!("popcnt")
-            && std::is_x86_feature_detected!("sse4.2")
-    }
+    pub use crate::x86_64_v3::available;
 
     #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,movbe,popcnt,sse3,ssse3,sse4.1,sse4.2")]
     pub fn run_design<T: Real>(prep: &Prepared, ctx: &Context, trace: Option<&mut Vec<FlightRecord>>) -> Run {

@@ -53,24 +53,37 @@ fn cross(a: V2, b: V2) -> f64 {
 impl ExactBoundary {
     /// Crossing-number test of the closed curve: straight edges plus the arc, counting
     /// crossings of the ray from `p` towards +x (O(1) per point instead of O(arc points)).
+    #[inline(always)]
+    pub fn contains(&self, p: V2) -> bool {
+        self.contains_lanes(&[p[0]], &[p[1]])[0]
+    }
+
+    /// [`ExactBoundary::contains`] for `L` points at once, with the same operations per
+    /// point: the loops over the points are innermost, so the compiler runs them on SIMD
+    /// lanes (`launch_points` tests its candidates eight at a time).
     ///
     /// Written without data-dependent branches (`&` and `^` on the tests, not `if`): Halton
     /// candidates fall in and out at random, so branches on them mispredicted about half the
     /// time. An edge the ray misses still computes its crossing x, unused (a horizontal
     /// edge's is ±inf or NaN, which no test takes).
-    pub fn contains(&self, p: V2) -> bool {
-        let mut inside = false;
+    #[inline(always)]
+    pub fn contains_lanes<const L: usize>(&self, px: &[f64; L], py: &[f64; L]) -> [bool; L] {
+        let mut inside = [false; L];
         for e in self.straight.windows(2) {
             let (a, b) = (e[0], e[1]);
-            let x = a[0] + (p[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
-            inside ^= ((a[1] > p[1]) != (b[1] > p[1])) & (p[0] < x);
+            for l in 0..L {
+                let x = a[0] + (py[l] - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
+                inside[l] ^= ((a[1] > py[l]) != (b[1] > py[l])) & (px[l] < x);
+            }
         }
-        let dy = p[1] - self.centre[1];
-        let h2 = self.radius * self.radius - dy * dy;
-        let h = h2.max(0.0).sqrt();
-        for x in [self.centre[0] - h, self.centre[0] + h] {
-            // a ray through an arc end point is measure-zero for Halton points
-            inside ^= (h2 > 0.0) & (x > p[0]) & self.on_arc([x - self.centre[0], dy]);
+        for l in 0..L {
+            let dy = py[l] - self.centre[1];
+            let h2 = self.radius * self.radius - dy * dy;
+            let h = h2.max(0.0).sqrt();
+            for x in [self.centre[0] - h, self.centre[0] + h] {
+                // a ray through an arc end point is measure-zero for Halton points
+                inside[l] ^= (h2 > 0.0) & (x > px[l]) & self.on_arc([x - self.centre[0], dy]);
+            }
         }
         inside
     }
@@ -236,7 +249,9 @@ pub fn build_fill(
 
     let (a2, a4) = profile.catch_arc_angles();
     let arc = |angle: f64| [profile.p3[0] + profile.radius * angle.cos(), profile.p3[1] + profile.radius * angle.sin()];
-    let mut polygon = vec![p4_1];
+    // p4, [p1_2], p_fill, then the arc
+    let mut polygon = Vec::with_capacity(3 + PHYSICAL_ARC_POINTS.max(10));
+    polygon.push(p4_1);
     if p_fill[0] > p1_2[0] {
         polygon.push(p1_2);
     }
@@ -332,6 +347,32 @@ pub fn radical_inverse(mut i: u64, base: u64) -> f64 {
     r
 }
 
+/// [`radical_inverse`] of `first`, `first + 1`, … (`L` of them) in `base`, to the same bits:
+/// every lane runs as many digit steps as the largest index has digits, and a step past a
+/// lane's last digit adds `f * 0.0 = +0.0`, which leaves a non-negative sum unchanged. The
+/// common trip count lets the compiler run the lanes as SIMD.
+#[inline(always)]
+pub fn radical_inverse_lanes<const L: usize>(first: u32, base: u32) -> [f64; L] {
+    let inv = 1.0 / base as f64;
+    let mut digits = 0;
+    let mut last = first as u64 + L as u64 - 1;
+    while last > 0 {
+        last /= base as u64;
+        digits += 1;
+    }
+    let mut i: [u32; L] = std::array::from_fn(|l| first + l as u32);
+    let mut f = inv;
+    let mut r = [0.0; L];
+    for _ in 0..digits {
+        for l in 0..L {
+            r[l] += f * (i[l] % base) as f64;
+            i[l] /= base;
+        }
+        f *= inv;
+    }
+    r
+}
+
 /// [`radical_inverse`] in base 2 by reversing the bits: its digits' weights are powers of
 /// two, so for i < 2^53 the loop's sum is exact and equals the reversed bits scaled by 2^-64.
 #[inline(always)]
@@ -352,6 +393,37 @@ pub fn launch_points(
     sampling: LaunchPoints,
     seed: u64,
 ) -> Result<Vec<V2>, Invalid> {
+    #[cfg(target_arch = "x86_64")]
+    if crate::x86_64_v3::available() {
+        // SAFETY: the CPU has every feature the function is compiled for (checked above).
+        return unsafe { x86_64_v3_launch_points(fill, n, mode, sampling, seed) };
+    }
+    launch_points_inlined(fill, n, mode, sampling, seed)
+}
+
+/// [`launch_points`] compiled for x86-64-v3 ([`crate::x86_64_v3`]): the candidate tests run
+/// on four f64 lanes instead of two (preparation 14–16 % faster, `cargo bench --bench
+/// engines -- prepare`), to the same bits (tested below).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,movbe,popcnt,sse3,ssse3,sse4.1,sse4.2")]
+fn x86_64_v3_launch_points(
+    fill: &Fill,
+    n: usize,
+    mode: PhysicsMode,
+    sampling: LaunchPoints,
+    seed: u64,
+) -> Result<Vec<V2>, Invalid> {
+    launch_points_inlined(fill, n, mode, sampling, seed)
+}
+
+#[inline(always)]
+fn launch_points_inlined(
+    fill: &Fill,
+    n: usize,
+    mode: PhysicsMode,
+    sampling: LaunchPoints,
+    seed: u64,
+) -> Result<Vec<V2>, Invalid> {
     let (mut xmin, mut xmax, mut ymin, mut ymax) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
     for p in &fill.polygon {
         xmin = xmin.min(p[0]);
@@ -363,32 +435,46 @@ pub fn launch_points(
         PhysicsMode::Listing => LISTING_HALTON_POINTS,
         PhysicsMode::Physical => MAX_HALTON_POINTS.max(LISTING_HALTON_POINTS),
     };
+    // Candidates are drawn and tested eight at a time (SIMD lanes), then taken in order as
+    // the one-at-a-time loop would: a batch may test a few candidates past the last one
+    // needed, and those are dropped. (Preparation −35 % with the x86-64-v3 build.)
+    const LANES: usize = 8;
+    const _: () = assert!(MAX_HALTON_POINTS + LANES as u64 <= u32::MAX as u64, "candidate indices fit u32");
     let mut out = Vec::with_capacity(n);
     let mut i = 1u64;
-    while out.len() < n && i <= limit {
-        let (u, v) = match sampling {
-            LaunchPoints::Halton => (radical_inverse_2(i), radical_inverse(i, 3)),
+    'candidates: while out.len() < n && i <= limit {
+        let (u, v): ([f64; LANES], [f64; LANES]) = match sampling {
+            LaunchPoints::Halton => {
+                (std::array::from_fn(|l| radical_inverse_2(i + l as u64)), radical_inverse_lanes(i as u32, 3))
+            }
             LaunchPoints::Random => {
                 let w = seed_word(seed);
+                let at = |l: usize, draw: u32| uniform01(w, (i + l as u64) as u32, PER_PARTICLE, draw);
                 (
-                    uniform01(w, i as u32, PER_PARTICLE, DRAW_LAUNCH_POINT),
-                    uniform01(w, i as u32, PER_PARTICLE, DRAW_LAUNCH_POINT + 1),
+                    std::array::from_fn(|l| at(l, DRAW_LAUNCH_POINT)),
+                    std::array::from_fn(|l| at(l, DRAW_LAUNCH_POINT + 1)),
                 )
             }
         };
-        let p = [xmin + (xmax - xmin) * u, ymin + (ymax - ymin) * v];
-        let inside = match &fill.exact {
-            Some(b) => b.contains(p),
-            None => in_polygon(p, &fill.polygon),
+        let px: [f64; LANES] = std::array::from_fn(|l| xmin + (xmax - xmin) * u[l]);
+        let py: [f64; LANES] = std::array::from_fn(|l| ymin + (ymax - ymin) * v[l]);
+        let inside: [bool; LANES] = match &fill.exact {
+            Some(b) => b.contains_lanes(&px, &py),
+            None => std::array::from_fn(|l| in_polygon([px[l], py[l]], &fill.polygon)),
         };
-        if inside {
-            out.push(p);
-        }
-        i += 1;
-        // A fill that seats fewer than 1 in 1000 candidates is degenerate (a sliver): stop
-        // early instead of drawing millions of points; a usable fill seats ~20 % or more.
-        if i == 20_000 && out.len() < 20 {
-            break;
+        for l in 0..LANES {
+            if !(out.len() < n && i <= limit) {
+                break 'candidates;
+            }
+            if inside[l] {
+                out.push([px[l], py[l]]);
+            }
+            i += 1;
+            // A fill that seats fewer than 1 in 1000 candidates is degenerate (a sliver): stop
+            // early instead of drawing millions of points; a usable fill seats ~20 % or more.
+            if i == 20_000 && out.len() < 20 {
+                break 'candidates;
+            }
         }
     }
     if out.len() < n {
@@ -408,6 +494,125 @@ mod tests {
         assert_eq!(radical_inverse(3, 2), 0.75);
         assert!((radical_inverse(1, 3) - 1.0 / 3.0).abs() < 1e-15);
         assert!((radical_inverse(5, 3) - (2.0 / 3.0 + 1.0 / 9.0)).abs() < 1e-15);
+    }
+
+    /// The launch points as the one-at-a-time loop drew them before candidates were tested
+    /// in batches: the specification [`launch_points`] keeps to the bit.
+    fn launch_points_one_at_a_time(
+        fill: &Fill,
+        n: usize,
+        mode: PhysicsMode,
+        sampling: LaunchPoints,
+        seed: u64,
+    ) -> Result<Vec<V2>, Invalid> {
+        let xs = fill.polygon.iter().map(|p| p[0]);
+        let ys = fill.polygon.iter().map(|p| p[1]);
+        let (xmin, xmax) = (xs.clone().fold(f64::INFINITY, f64::min), xs.fold(f64::NEG_INFINITY, f64::max));
+        let (ymin, ymax) = (ys.clone().fold(f64::INFINITY, f64::min), ys.fold(f64::NEG_INFINITY, f64::max));
+        let limit = if mode == PhysicsMode::Listing { LISTING_HALTON_POINTS } else { MAX_HALTON_POINTS };
+        let mut out = Vec::new();
+        let mut i = 1u64;
+        while out.len() < n && i <= limit {
+            let (u, v) = match sampling {
+                LaunchPoints::Halton => (radical_inverse(i, 2), radical_inverse(i, 3)),
+                LaunchPoints::Random => {
+                    let w = seed_word(seed);
+                    (
+                        uniform01(w, i as u32, PER_PARTICLE, DRAW_LAUNCH_POINT),
+                        uniform01(w, i as u32, PER_PARTICLE, DRAW_LAUNCH_POINT + 1),
+                    )
+                }
+            };
+            let p = [xmin + (xmax - xmin) * u, ymin + (ymax - ymin) * v];
+            let inside = match &fill.exact {
+                Some(b) => b.contains(p),
+                None => in_polygon(p, &fill.polygon),
+            };
+            if inside {
+                out.push(p);
+            }
+            i += 1;
+            if i == 20_000 && out.len() < 20 {
+                break;
+            }
+        }
+        if out.len() < n {
+            return Err(Invalid::FillTooSmall { found: out.len(), needed: n });
+        }
+        Ok(out)
+    }
+
+    /// Batched candidates (eight per step, both compilations) seat the same points, to the
+    /// bit, and fail with the same count as one candidate at a time: fills of the rig's
+    /// slopes in both modes, Halton and random candidates, counts on and off a batch's
+    /// edge, the listing's 2000-candidate limit, and a sliver that stops early.
+    #[test]
+    fn batched_candidates_seat_the_one_at_a_time_points() {
+        use crate::model::{prepare, sampling::random_valid_designs, Scenario};
+        let mut fills = Vec::new();
+        for scenario in [Scenario::lunar(), Scenario::earth()] {
+            for mode in [PhysicsMode::Physical, PhysicsMode::Listing] {
+                let s = Scenario { mode, ..scenario.clone() };
+                for d in random_valid_designs(&s, 3, 11) {
+                    fills.push((prepare(&s, &d).expect("a valid design").fill, mode));
+                }
+            }
+        }
+        // a sliver: seats fewer than 20 of the first 20 000 candidates
+        let sliver = vec![[0.0, 0.0], [1.0, 1.0], [1.0, 1.0001]];
+        let polygon_fill = |polygon: Vec<V2>| Fill {
+            surface_angle: 0.0,
+            p_fill: [0.0; 2],
+            area: polygon_area(&polygon),
+            polygon,
+            exact: None,
+        };
+        fills.push((polygon_fill(sliver), PhysicsMode::Physical));
+        // a square seats every candidate: the listing's limit decides at exactly 2000 points
+        fills.push((polygon_fill(vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]), PhysicsMode::Listing));
+        let (mut seated, mut refused) = (0, 0);
+        for (fill, mode) in &fills {
+            for sampling in [LaunchPoints::Halton, LaunchPoints::Random] {
+                for n in [1, 7, 8, 9, 100, 333, 1500, 2000, 2001] {
+                    let expected = launch_points_one_at_a_time(fill, n, *mode, sampling, 5);
+                    let bits = |r: &Result<Vec<V2>, Invalid>| match r {
+                        Ok(ps) => Ok(ps.iter().map(|p| [p[0].to_bits(), p[1].to_bits()]).collect::<Vec<_>>()),
+                        Err(e) => Err(e.to_string()),
+                    };
+                    let mut builds = vec![("baseline", launch_points_inlined(fill, n, *mode, sampling, 5))];
+                    #[cfg(target_arch = "x86_64")]
+                    if crate::x86_64_v3::available() {
+                        // SAFETY: the CPU has x86-64-v3 (checked above).
+                        builds.push(("x86-64-v3", unsafe { x86_64_v3_launch_points(fill, n, *mode, sampling, 5) }));
+                    }
+                    for (build, got) in builds {
+                        assert_eq!(bits(&got), bits(&expected), "{build}, {mode:?}, {sampling:?}, n {n}");
+                    }
+                    match expected {
+                        Ok(_) => seated += 1,
+                        Err(_) => refused += 1,
+                    }
+                }
+            }
+        }
+        assert!(seated > 50 && refused >= 4, "{seated} seated, {refused} refused");
+    }
+
+    /// Every lane of [`radical_inverse_lanes`] is [`radical_inverse`] to the bit, also where
+    /// a batch crosses into one more digit.
+    #[test]
+    fn radical_inverse_lanes_are_the_digit_loop_to_the_bit() {
+        for first in (1..3000u32).chain([6555, 6558, 59_045, 19_999_990]) {
+            let lanes: [f64; 8] = radical_inverse_lanes(first, 3);
+            for (l, r) in lanes.iter().enumerate() {
+                assert_eq!(
+                    r.to_bits(),
+                    radical_inverse(first as u64 + l as u64, 3).to_bits(),
+                    "{}",
+                    first as usize + l
+                );
+            }
+        }
     }
 
     #[test]
