@@ -1,15 +1,19 @@
 //! Hot loops compiled a second time for x86-64-v3 (AVX2, FMA, BMI1/2, SSE4.1-4.2, ...) and
 //! taken at run time on CPUs that have it: the cpu engine's bounce loop
 //! (`engine::cpu::run_design`) and the launch points' candidate tests
-//! (`model::fill::launch_points`). Each such function carries
-//! `#[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,movbe,popcnt,sse3,ssse3,sse4.1,sse4.2")]`,
-//! the features [`available`] checks, and inlines everything it calls, so all of it gets
+//! (`model::fill::launch_points`). Each such function carries `#[target_feature(enable =
+//! …)]` with [`FEATURES`] (an attribute takes a literal, so it is spelled out there; a test
+//! below holds every copy to this one) and inlines everything it calls, so all of it gets
 //! three-operand and 256-bit instructions and inline `floor`/`ceil`. The results are the same
 //! to the bit: Rust never contracts `a * b + c` into a fused multiply-add, so the features
 //! change which instructions compute each IEEE operation, not the operations (tested in
 //! both places).
 
-/// Whether this CPU has every feature of the x86-64-v3 compilations.
+/// The features every x86-64-v3 compilation enables.
+pub const FEATURES: &str = "avx,avx2,fma,bmi1,bmi2,lzcnt,movbe,popcnt,sse3,ssse3,sse4.1,sse4.2";
+
+/// Whether this CPU has every one of [`FEATURES`] (the SSE and AVX levels not named here
+/// come with AVX2).
 pub fn available() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
@@ -25,5 +29,28 @@ pub fn available() -> bool {
     #[cfg(not(target_arch = "x86_64"))]
     {
         false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// Every `#[target_feature(enable = …)]` of the crate enables [`super::FEATURES`]: the
+    /// compilations and the run-time check cannot drift apart.
+    #[test]
+    fn every_x86_64_v3_compilation_enables_the_same_features() {
+        let sources = [
+            ("src/engine/cpu.rs", include_str!("engine/cpu.rs")),
+            ("src/model/fill.rs", include_str!("model/fill.rs")),
+        ];
+        let mut seen = 0;
+        for (path, text) in sources {
+            for (at, _) in text.match_indices("#[target_feature(enable = \"") {
+                let rest = &text[at + "#[target_feature(enable = \"".len()..];
+                let features = &rest[..rest.find('"').expect("a closed literal")];
+                assert_eq!(features, super::FEATURES, "{path}");
+                seen += 1;
+            }
+        }
+        assert_eq!(seen, 2, "the bounce loop and the launch points");
     }
 }
