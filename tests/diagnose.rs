@@ -351,7 +351,12 @@ fn bad_input_is_named_with_exit_2() {
         std::fs::read_to_string(setup("test1")).unwrap().replace("motion_delay_s = 0.0", "motion_delay_s = -1.0");
     std::fs::write(&bad_motion, text).unwrap();
     let bad_motion = bad_motion.to_str().unwrap().to_string();
-    let cases: [(Vec<&str>, &str); 7] = [
+    // Test 3's rig in vacuum: an effect that only changes drag has nothing to act on
+    let vacuum = out.join("vacuum.toml");
+    let text = std::fs::read_to_string(setup("test3")).unwrap().replace("k_drag_per_s = 5.347", "k_drag_per_s = 0.0");
+    std::fs::write(&vacuum, text).unwrap();
+    let vacuum = vacuum.to_str().unwrap().to_string();
+    let cases: [(Vec<&str>, &str); 8] = [
         (vec!["--data", &data, "--setup", &bad_motion], "measurement.motion_delay_s must lie in [0, 100]"),
         (vec!["--data", &data, "--setup", s3, "--rescore-streams", "5000"], "at most"),
         // good input, but --out holds someone else's file (bad_motion.toml): refused before
@@ -361,6 +366,11 @@ fn bad_input_is_named_with_exit_2() {
         (vec!["--data", &data, "--setup", s3, "--effects", "spin"], "unknown effect `spin`"),
         (vec!["--data", &data, "--setup", s3, "--pop", "3"], "--pop must be >= 5"),
         (vec!["--data", "/nonexistent.csv", "--setup", s3], "--data"),
+        // the flag named, before any simulation
+        (
+            vec!["--data", &data, "--setup", &vacuum, "--effects", "quadratic-drag"],
+            "--effects: no candidate effect applies",
+        ),
     ];
     for (args, needle) in cases {
         let o = bin().arg("diagnose").args(&args).args(["--out", o_str]).output().unwrap();

@@ -56,4 +56,20 @@ fn synth_rejects_bad_input() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown effect"));
+    // each bad number named by its flag
+    for (args, needle) in [
+        (["--runs", "0"], "--runs"),
+        (["--particles", "0"], "--particles"),
+        (["--resolution-g", "0"], "--resolution-g must be a positive number of grams, got 0"),
+        (["--mass-g", "0"], "--mass-g must be a positive number of grams"),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_sawtooth"))
+            .args(["synth", "--setup", setup, "--out", "/tmp/x.csv"])
+            .args(args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: `{needle}` not in {err}");
+    }
 }

@@ -12,7 +12,9 @@ use clap::Args;
 use super::args::EffortArgs;
 use super::measured_condition::{self, stem};
 use crate::calibrate::Normalise;
-use crate::diagnose::diagnose::{diagnose, parse_effects, to_json, Condition, Settings};
+use crate::diagnose::diagnose::{
+    applicable_effects, diagnose, parse_effects, to_json, Condition, Settings, NO_EFFECT_APPLIES,
+};
 use crate::diagnose::render;
 use crate::engine::{make_engine, EngineKind};
 use crate::io::run_dir::{Access, RunDir};
@@ -112,6 +114,9 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         }
         conditions.push(c);
     }
+    if applicable_effects(&effects, &conditions).0.is_empty() {
+        bail!("--effects: {NO_EFFECT_APPLIES}");
+    }
     let seed = conditions[0].base.sim.seed;
     // the output folder is owned before the work, so a busy or foreign folder costs nothing
     let _owned = RunDir::acquire(&a.out, "diagnose", Access::Exclusive, |d| d.join("diagnosis.json").exists())
@@ -123,7 +128,7 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let d = diagnose(engine.as_ref(), conditions, settings, &mut |line| eprintln!("{line}"))?;
     eprintln!("diagnose: done in {:.1} s", started.elapsed().as_secs_f64());
     let json = to_json(&d);
-    render::write_dir(&a.out, &d, &json)?;
+    render::write_dir(&a.out, &d, &json).context("--out")?;
     if a.json {
         writeln!(out, "{}", serde_json::to_string_pretty(&json)?).context("writing output")?;
     } else {

@@ -613,6 +613,26 @@ fn new_result(space: &Space, fit: Fit, baseline_dim: usize) -> ModelResult {
     }
 }
 
+/// What is said when none of the candidate effects can act on the setups.
+pub const NO_EFFECT_APPLIES: &str =
+    "no candidate effect applies to these setups (those asked for change only drag, and every setup is in vacuum, k_drag 0)";
+
+/// The candidate effects that can change these setups' outcome, and a note for each left out:
+/// an effect that only changes drag does nothing when every setup is in vacuum. The CLI asks
+/// this before any simulation, so that an empty list is an error about its own flag.
+pub fn applicable_effects(candidates: &[EffectKind], conditions: &[Condition]) -> (Vec<EffectKind>, Vec<String>) {
+    let any_drag = conditions.iter().any(Condition::has_drag);
+    let (mut effects, mut notes) = (Vec::new(), Vec::new());
+    for e in candidates {
+        if e.needs_air() && !any_drag {
+            notes.push(format!("{} skipped: it only changes drag, and every setup is in vacuum (k_drag 0)", e.name()));
+        } else {
+            effects.push(*e);
+        }
+    }
+    (effects, notes)
+}
+
 /// Run the diagnosis. `log` receives progress lines.
 pub fn diagnose(
     engine: &dyn BatchEvaluator,
@@ -653,17 +673,10 @@ pub fn diagnose(
     let effort = settings.effort;
     let seed = effort.seed;
     let mut notes = Vec::new();
-    let any_drag = conditions.iter().any(Condition::has_drag);
-    let mut effects = Vec::new();
-    for e in &settings.effects {
-        if e.needs_air() && !any_drag {
-            notes.push(format!("{} skipped: it only changes drag, and every setup is in vacuum (k_drag 0)", e.name()));
-        } else {
-            effects.push(*e);
-        }
-    }
+    let (effects, skipped) = applicable_effects(&settings.effects, &conditions);
+    notes.extend(skipped);
     if effects.is_empty() {
-        bail!("--effects: no candidate effect applies to these setups");
+        bail!("settings.effects: {NO_EFFECT_APPLIES}");
     }
     if effects.contains(&EffectKind::SledMotion) {
         notes.extend(sled_motion_notes(&conditions));

@@ -648,7 +648,7 @@ impl Figure for DistributionsPlot<'_> {
 
 /// Write report.md, diagnosis.json and the SVGs into `dir` (created if missing).
 pub fn write_dir(dir: &Path, d: &Diagnosis, json: &Value) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("--out: cannot create directory {}", dir.display()))?;
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create directory {}", dir.display()))?;
     write_atomic(&dir.join("diagnosis.json"), format!("{}\n", serde_json::to_string_pretty(json)?).as_bytes())?;
     write_atomic(&dir.join("report.md"), to_markdown(d).as_bytes())?;
     plot::write_figure_files(dir, "residuals", &ResidualsPlot(d))?;

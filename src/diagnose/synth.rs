@@ -60,7 +60,7 @@ pub fn synthesise(
     set: &SynthSettings,
 ) -> anyhow::Result<Vec<SynthRun>> {
     if set.runs == 0 || set.particles == 0 {
-        anyhow::bail!("synth: --runs and --particles must be at least 1");
+        anyhow::bail!("SynthSettings: runs and particles must be at least 1, got {} and {}", set.runs, set.particles);
     }
     if !(set.resolution_g > 0.0
         && set.mass_g > 0.0
@@ -68,7 +68,13 @@ pub fn synthesise(
         && set.recovery.0 <= set.recovery.1
         && set.recovery.1 <= 1.5)
     {
-        anyhow::bail!("synth: resolution, mass and recovery (lo <= hi) must be positive");
+        anyhow::bail!(
+            "SynthSettings: resolution_g ({}) and mass_g ({}) must be positive, recovery ({}, {}) must satisfy 0 < lo <= hi <= 1.5",
+            set.resolution_g,
+            set.mass_g,
+            set.recovery.0,
+            set.recovery.1
+        );
     }
     let mut rng = ChaCha8Rng::seed_from_u64(set.seed);
     let mut runs = Vec::with_capacity(set.runs as usize);
