@@ -144,6 +144,7 @@ fn optimize_writes_its_outputs_and_resumes_after_a_kill_to_the_same_front() {
         serde_json::from_str(&std::fs::read_to_string(int.join("checkpoint.json")).unwrap()).unwrap();
     assert_eq!(checkpoint["generation"].as_u64(), Some(logged), "the checkpoint holds the last logged generation");
     assert!(stderr.contains(&format!("interrupted: checkpoint saved at generation {logged}")), "{stderr}");
+    assert!(stderr.contains("continue with the same command and --resume"), "{stderr}");
     assert!(!int.join("pareto.csv").exists(), "an interrupted run writes no front");
     run_to_end(&int, &["--resume"]);
     for f in ["pareto.csv", "evaluations.csv"] {

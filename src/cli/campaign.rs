@@ -132,6 +132,7 @@ fn run_cmd(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let o = run_optimisation(&dir, (!resume).then(|| m.manifest.clone()), resume, &engine, &opts)
         .with_context(|| format!("member {i} ({})", m.label))?;
     if o.interrupted {
+        eprintln!("member {i} ({}): run the same command again to continue it", m.label);
         return Ok(ExitCode::from(130));
     }
     writeln!(

@@ -309,6 +309,7 @@ pub fn run(a: OptimizeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let engine = make_engine_for(kind, &scenario).context("--engine")?;
     let outcome = run_optimisation(&a.out, manifest, a.resume, &engine, &a.ga.options(""))?;
     if outcome.interrupted {
+        eprintln!("continue with the same command and --resume");
         return Ok(ExitCode::from(130));
     }
     print_picks(out, &outcome.front, &outcome.termination, outcome.generations)?;

@@ -550,10 +550,9 @@ pub fn run(
     let termination = match ending {
         Ending::Terminated(t) => format!("{t:?}"),
         Ending::Stopped => {
-            eprintln!(
-                "{}interrupted: checkpoint saved at generation {}; continue with --resume",
-                opts.label, state.generation
-            );
+            // how to continue is the caller's to say: `optimize --resume`, or the same
+            // sweep, study or campaign command again
+            eprintln!("{}interrupted: checkpoint saved at generation {}", opts.label, state.generation);
             return Ok(RunOutcome {
                 dir: dir.to_path_buf(),
                 manifest,
