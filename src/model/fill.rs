@@ -440,6 +440,7 @@ fn launch_points_inlined(
     // needed, and those are dropped. (Preparation −35 % with the x86-64-v3 build.)
     const LANES: usize = 8;
     const _: () = assert!(MAX_HALTON_POINTS + LANES as u64 <= u32::MAX as u64, "candidate indices fit u32");
+    let w = seed_word(seed); // the random candidates' key
     let mut out = Vec::with_capacity(n);
     let mut i = 1u64;
     'candidates: while out.len() < n && i <= limit {
@@ -448,7 +449,6 @@ fn launch_points_inlined(
                 (std::array::from_fn(|l| radical_inverse_2(i + l as u64)), radical_inverse_lanes(i as u32, 3))
             }
             LaunchPoints::Random => {
-                let w = seed_word(seed);
                 let at = |l: usize, draw: u32| uniform01(w, (i + l as u64) as u32, PER_PARTICLE, draw);
                 (
                     std::array::from_fn(|l| at(l, DRAW_LAUNCH_POINT)),
@@ -543,9 +543,10 @@ mod tests {
     }
 
     /// Batched candidates (eight per step, both compilations) seat the same points, to the
-    /// bit, and fail with the same count as one candidate at a time: fills of the rig's
-    /// slopes in both modes, Halton and random candidates, counts on and off a batch's
-    /// edge, the listing's 2000-candidate limit, and a sliver that stops early.
+    /// bit, and fail with the same count as one candidate at a time: fills of random valid
+    /// designs of both environments in both modes, Halton and random candidates, counts on
+    /// and off a batch's edge, the listing's 2000-candidate limit, and a sliver that stops
+    /// early.
     #[test]
     fn batched_candidates_seat_the_one_at_a_time_points() {
         use crate::model::{prepare, sampling::random_valid_designs, Scenario};
