@@ -95,8 +95,10 @@ fn example_configs_run() {
 fn trajectories_and_plot_are_written() {
     let dir = std::env::temp_dir().join(format!("sawtooth-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let csv = dir.join("t.csv");
-    let svg = dir.join("t.svg");
+    // README's `--trajectories out/traj.csv --plot out/earth.svg` in a fresh checkout: the
+    // folder is not there yet, and is made
+    let csv = dir.join("out").join("t.csv");
+    let svg = dir.join("out").join("t.svg");
     let (code, _, err) = sawtooth(&[
         "simulate",
         "--design",

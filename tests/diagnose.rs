@@ -339,6 +339,34 @@ fn no_effect_no_best() {
     std::fs::remove_dir_all(&d).ok();
 }
 
+/// Without `--json` the summary says what the ranking is ordered by and shows each
+/// effect's score beside its gap (a larger reduction can rank lower: it pays for its
+/// parameters and its uncertainty).
+#[test]
+fn the_text_summary_shows_the_score_it_ranks_by() {
+    let d = tmp("text");
+    let data = d.join("synth.csv");
+    synth(&setup("test3"), Some("impact-scatter=8"), 3, &data);
+    let o = bin()
+        .args(["diagnose", "--data", data.to_str().unwrap(), "--setup", &setup("test3")])
+        .args(["--effects", "impact-scatter,launch-spread", "--max-particles", "2000", "--pop", "8"])
+        .args(["--generations", "4", "--polish", "3", "--bootstrap", "50", "--out"])
+        .arg(d.join("out"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(text.contains("ranked by score = gap + 2 x (extra parameters) x bootstrap SE of the gap"), "{text}");
+    let scores: Vec<f64> = text
+        .lines()
+        .filter(|l| l.starts_with("1. ") || l.starts_with("2. "))
+        .map(|l| l.rsplit_once("score").expect("a score on every ranked line").1.trim().parse().unwrap())
+        .collect();
+    assert_eq!(scores.len(), 2, "{text}");
+    assert!(scores[0] <= scores[1], "ranked by score: {text}");
+    std::fs::remove_dir_all(&d).ok();
+}
+
 #[test]
 fn bad_input_is_named_with_exit_2() {
     let data = format!("{}/data/validation/test3.csv", env!("CARGO_MANIFEST_DIR"));

@@ -134,16 +134,19 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     } else {
         let b = &d.baseline;
         writeln!(out, "baseline gap {:.1} %² [{:.1}, {:.1}]", b.gap, b.interval[0], b.interval[1])?;
+        // the ranking is by the penalised score, not the gap: say so, and show it
+        writeln!(out, "ranked by {}", crate::diagnose::diagnose::RANKING_RULE)?;
         for (i, m) in d.ranking.iter().enumerate() {
             writeln!(
                 out,
-                "{}. {:<15} gap {:>8.1} %² [{:.1}, {:.1}]  reduction {:>6.1} %",
+                "{}. {:<15} gap {:>8.1} %² [{:.1}, {:.1}]  reduction {:>6.1} %  score {:>8.1}",
                 i + 1,
                 m.name(),
                 m.gap,
                 m.interval[0],
                 m.interval[1],
-                100.0 * (1.0 - m.gap / b.gap)
+                100.0 * (1.0 - m.gap / b.gap),
+                m.score
             )?;
         }
         writeln!(out, "best: {}", d.best.map_or("none (the data cannot tell)", |e| e.name()))?;

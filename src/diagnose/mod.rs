@@ -1,5 +1,7 @@
-//! The sim-to-real gap (issue 5). So far: synthetic measurement campaigns from the extended
-//! model (`synth`), the data that checks a diagnosis whose true effect is known.
+//! The sim-to-real gap (issue 5): the diagnosis itself (`diagnose`: where the gap lies, which
+//! unmodelled effect causes it, how far it shrinks), its report and figures (`render`), and
+//! synthetic measurement campaigns from the extended model (`synth`), the data that checks a
+//! diagnosis whose true effect is known.
 
 #[allow(clippy::module_inception)]
 pub mod diagnose;

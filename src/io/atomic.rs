@@ -4,7 +4,7 @@
 //! durable. A reader (or a crash, a SIGKILL, a pre-empted Slurm task) sees the old file or
 //! the new one, never a torn one. Temporary files left by a killed writer are named
 //! `.NAME.XXXXXX.sawtooth-tmp` and removed by [`clean_stale_temps`] once the folder is owned
-//! (see `io::run_dir`).
+//! (see `io::run_dir`). A missing folder on the way to the file is created.
 
 use std::io::{BufWriter, Write};
 use std::path::Path;
@@ -57,6 +57,10 @@ pub fn write_atomic_with(path: &Path, write: impl FnOnce(&mut dyn Write) -> anyh
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
+    // a file named in a folder that is not there yet (`--trajectories out/traj.csv` in a
+    // fresh checkout) gets the folder, as the user asked for the file in it
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("writing {}: creating its folder {}", path.display(), dir.display()))?;
     let mut builder = tempfile::Builder::new();
     // tempfile's default is 0600; results are read by others (a cluster group): 0666 less umask.
     #[cfg(unix)]
