@@ -4,7 +4,8 @@
 //! durable. A reader (or a crash, a SIGKILL, a pre-empted Slurm task) sees the old file or
 //! the new one, never a torn one. Temporary files left by a killed writer are named
 //! `.NAME.XXXXXX.sawtooth-tmp` and removed by [`clean_stale_temps`] once the folder is owned
-//! (see `io::run_dir`). A missing folder on the way to the file is created.
+//! (see `io::run_dir`). A missing folder on the way to the file is created; a device or pipe
+//! (`/dev/stdout`) is written into directly, as it cannot be replaced.
 
 use std::io::{BufWriter, Write};
 use std::path::Path;
@@ -57,6 +58,24 @@ pub fn write_atomic_with(path: &Path, write: impl FnOnce(&mut dyn Write) -> anyh
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
+    // What is there already decides how to write. A folder is refused; a stream or device
+    // (`--trajectories /dev/stdout`, a named pipe) is written straight into, as renaming a
+    // file over it would replace the device node (as root) instead of writing to it.
+    if let Ok(meta) = std::fs::metadata(path) {
+        if meta.is_dir() {
+            anyhow::bail!("{} is a folder: name a file to write", path.display());
+        }
+        if !meta.is_file() {
+            let mut stream = std::fs::OpenOptions::new()
+                .write(true)
+                .open(path)
+                .with_context(|| format!("writing {}: opening it", path.display()))?;
+            let mut w = BufWriter::new(&mut stream);
+            write(&mut w).with_context(|| format!("writing {}", path.display()))?;
+            w.flush().with_context(|| format!("writing {}", path.display()))?;
+            return Ok(());
+        }
+    }
     // a file named in a folder that is not there yet (`--trajectories out/traj.csv` in a
     // fresh checkout) gets the folder, as the user asked for the file in it
     std::fs::create_dir_all(dir)
@@ -147,6 +166,26 @@ mod tests {
             let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
             assert_eq!(mode(&p), mode(&probe));
         }
+    }
+
+    /// A device or pipe named as the output is written into, not replaced by a file (as
+    /// root the rename would succeed and swap the device node for a regular file); a folder
+    /// is refused by name.
+    #[cfg(unix)]
+    #[test]
+    fn devices_are_written_into_and_folders_refused() {
+        use std::os::unix::fs::FileTypeExt as _;
+        write_atomic(Path::new("/dev/null"), b"discarded").unwrap();
+        assert!(std::fs::metadata("/dev/null").unwrap().file_type().is_char_device());
+        // a device that refuses the bytes is an error naming it (where the system has one)
+        if std::fs::metadata("/dev/full").is_ok_and(|m| m.file_type().is_char_device()) {
+            let full = write_atomic(Path::new("/dev/full"), &[b'x'; 1 << 16]);
+            assert!(format!("{:#}", full.unwrap_err()).contains("/dev/full"));
+            assert!(std::fs::metadata("/dev/full").unwrap().file_type().is_char_device());
+        }
+        let d = tempfile::tempdir().unwrap();
+        let err = write_atomic(d.path(), b"x").unwrap_err();
+        assert!(format!("{err:#}").contains("is a folder: name a file to write"), "{err:#}");
     }
 
     #[test]
