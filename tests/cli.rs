@@ -132,6 +132,28 @@ fn trajectories_and_plot_are_written() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `--trajectories /dev/stdout` prints the CSV before the summary, also when stdout is a
+/// file (writing it through a second open of /dev/stdout overwrote one with the other, and
+/// as root an atomic rename would have replaced the /dev/stdout link itself).
+#[test]
+fn trajectories_go_to_stdout_in_order() {
+    let dir = std::env::temp_dir().join(format!("sawtooth-cli-stdout-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("stdout.txt");
+    let status = Command::new(env!("CARGO_BIN_EXE_sawtooth"))
+        .args(["simulate", "--design", LUNAR_C, "--particles", "3", "--trajectories", "/dev/stdout"])
+        .stdout(std::fs::File::create(&file).unwrap())
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let text = std::fs::read_to_string(&file).unwrap();
+    assert!(text.starts_with("particle,bounce,x_m,y_m,state\n"), "{text}");
+    let summary = text.find("d_avg").expect("the summary follows the CSV");
+    assert!(text[..summary].lines().count() > 3, "{text}");
+    assert!(std::fs::symlink_metadata("/dev/stdout").map_or(true, |m| m.file_type().is_symlink()));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 fn assert_bad_input(args: &[&str], needle: &str) {
     let (code, _, err) = sawtooth(args);
     assert_eq!(code, 2, "{args:?}: {err}");

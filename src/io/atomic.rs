@@ -5,7 +5,8 @@
 //! the new one, never a torn one. Temporary files left by a killed writer are named
 //! `.NAME.XXXXXX.sawtooth-tmp` and removed by [`clean_stale_temps`] once the folder is owned
 //! (see `io::run_dir`). A missing folder on the way to the file is created; a device or pipe
-//! (`/dev/stdout`) is written into directly, as it cannot be replaced.
+//! (`/dev/stdout`) is written into directly, as it cannot be replaced; a link to a file is
+//! followed.
 
 use std::io::{BufWriter, Write};
 use std::path::Path;
@@ -49,6 +50,42 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
 
 /// Write `path` atomically from a writer callback (e.g. a serde serialiser).
 pub fn write_atomic_with(path: &Path, write: impl FnOnce(&mut dyn Write) -> anyhow::Result<()>) -> anyhow::Result<()> {
+    // What is there already decides how to write. A folder is refused. A stream or device
+    // (`--trajectories /dev/stdout`, a named pipe), and anything under /dev or /proc, is
+    // written straight into: renaming a file over it would replace the device node or the
+    // /dev/stdout link (as root) instead of writing to it. A link to a file is followed, so
+    // the file is replaced and the link stays.
+    if path == Path::new("/dev/stdout") {
+        // through this process's own stdout, so that what else it prints follows in order
+        // even when stdout is a file (a second open of /dev/stdout has its own offset)
+        let mut out = std::io::stdout().lock();
+        let mut w = BufWriter::new(&mut out);
+        write(&mut w).with_context(|| format!("writing {}", path.display()))?;
+        w.flush().with_context(|| format!("writing {}", path.display()))?;
+        return Ok(());
+    }
+    let resolved;
+    let mut path = path;
+    if let Ok(meta) = std::fs::metadata(path) {
+        if meta.is_dir() {
+            anyhow::bail!("{} is a folder: name a file to write", path.display());
+        }
+        if !meta.is_file() || path.starts_with("/dev") || path.starts_with("/proc") {
+            let mut stream = std::fs::OpenOptions::new()
+                .write(true)
+                .truncate(meta.is_file())
+                .open(path)
+                .with_context(|| format!("writing {}: opening it", path.display()))?;
+            let mut w = BufWriter::new(&mut stream);
+            write(&mut w).with_context(|| format!("writing {}", path.display()))?;
+            w.flush().with_context(|| format!("writing {}", path.display()))?;
+            return Ok(());
+        }
+        if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) {
+            resolved = std::fs::canonicalize(path).with_context(|| format!("writing {}", path.display()))?;
+            path = &resolved;
+        }
+    }
     let name = path
         .file_name()
         .with_context(|| format!("{} has no file name", path.display()))?
@@ -58,24 +95,6 @@ pub fn write_atomic_with(path: &Path, write: impl FnOnce(&mut dyn Write) -> anyh
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    // What is there already decides how to write. A folder is refused; a stream or device
-    // (`--trajectories /dev/stdout`, a named pipe) is written straight into, as renaming a
-    // file over it would replace the device node (as root) instead of writing to it.
-    if let Ok(meta) = std::fs::metadata(path) {
-        if meta.is_dir() {
-            anyhow::bail!("{} is a folder: name a file to write", path.display());
-        }
-        if !meta.is_file() {
-            let mut stream = std::fs::OpenOptions::new()
-                .write(true)
-                .open(path)
-                .with_context(|| format!("writing {}: opening it", path.display()))?;
-            let mut w = BufWriter::new(&mut stream);
-            write(&mut w).with_context(|| format!("writing {}", path.display()))?;
-            w.flush().with_context(|| format!("writing {}", path.display()))?;
-            return Ok(());
-        }
-    }
     // a file named in a folder that is not there yet (`--trajectories out/traj.csv` in a
     // fresh checkout) gets the folder, as the user asked for the file in it
     std::fs::create_dir_all(dir)
@@ -170,7 +189,7 @@ mod tests {
 
     /// A device or pipe named as the output is written into, not replaced by a file (as
     /// root the rename would succeed and swap the device node for a regular file); a folder
-    /// is refused by name.
+    /// is refused by name; a link to a file is followed.
     #[cfg(unix)]
     #[test]
     fn devices_are_written_into_and_folders_refused() {
@@ -186,6 +205,13 @@ mod tests {
         let d = tempfile::tempdir().unwrap();
         let err = write_atomic(d.path(), b"x").unwrap_err();
         assert!(format!("{err:#}").contains("is a folder: name a file to write"), "{err:#}");
+        // a link to a file: the file is replaced, the link stays a link
+        let (file, link) = (d.path().join("data.csv"), d.path().join("latest.csv"));
+        std::fs::write(&file, "old").unwrap();
+        std::os::unix::fs::symlink(&file, &link).unwrap();
+        write_atomic(&link, b"new").unwrap();
+        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), "new");
     }
 
     #[test]
