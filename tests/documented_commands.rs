@@ -1,0 +1,141 @@
+//! Every `sawtooth` command written in README.md and BENCHMARKS.md is one the command line
+//! accepts: its subcommand, flags and values parse (clap's rules; the checks a command makes
+//! once it runs, such as `--pop` against the algorithm, are the commands' own tests'). A
+//! renamed or removed flag fails here instead of in a new user's terminal.
+
+use clap::Parser;
+use sawtooth::cli::Cli;
+
+/// The commands in the shell blocks of a Markdown file: continuation lines joined, comments
+/// dropped, and whatever runs the binary (`cargo run --release --`, `$S`, `$st`, a path to
+/// it) replaced by its name. Returns (line number, the words after the binary).
+fn documented_commands(file: &str) -> Vec<(usize, Vec<String>)> {
+    let text = std::fs::read_to_string(format!("{}/{file}", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let mut commands = Vec::new();
+    let (mut in_shell, mut pending, mut start) = (false, String::new(), 0);
+    for (i, line) in text.lines().enumerate() {
+        let trimmed = line.trim();
+        if let Some(lang) = trimmed.strip_prefix("```") {
+            in_shell = !in_shell && (lang == "sh" || lang == "bash");
+            continue;
+        }
+        if !in_shell {
+            continue;
+        }
+        if pending.is_empty() {
+            start = i + 1;
+        }
+        let code = strip_comment(line);
+        if let Some(head) = code.trim_end().strip_suffix('\\') {
+            pending.push_str(head);
+            pending.push(' ');
+            continue;
+        }
+        pending.push_str(&code);
+        let joined = std::mem::take(&mut pending);
+        for runner in ["cargo run --release -- ", "$S ", "$st ", "target/release/sawtooth ", "sawtooth "] {
+            // the command starts the line, or follows `time`, `&&`, `;` or `$(`
+            let Some(at) = joined.find(runner) else { continue };
+            let before = joined[..at].trim_end();
+            let starts_command = before.is_empty()
+                || before.ends_with("&&")
+                || before.ends_with(';')
+                || before.ends_with("$(")
+                || before.ends_with("./")
+                || before.ends_with("time")
+                || before.ends_with("%e s wall\"")
+                || before.ends_with("do");
+            if !starts_command {
+                continue;
+            }
+            let rest = &joined[at + runner.len()..];
+            let rest = rest.split(['|', ')', ';']).next().unwrap().split(" && ").next().unwrap();
+            commands.push((start, words(rest)));
+            break;
+        }
+    }
+    commands
+}
+
+/// A line without its `#` comment (a `#` that starts a word, outside quotes).
+fn strip_comment(line: &str) -> String {
+    let mut out = String::new();
+    let (mut quote, mut prev_space) = (None, true);
+    for c in line.chars() {
+        match (quote, c) {
+            (None, '#') if prev_space => break,
+            (None, '"' | '\'') => quote = Some(c),
+            (Some(q), _) if c == q => quote = None,
+            _ => {}
+        }
+        prev_space = c.is_whitespace();
+        out.push(c);
+    }
+    out
+}
+
+/// Shell words: whitespace-separated, quotes removed, variables given example values.
+fn words(command: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let (mut word, mut quote, mut any) = (String::new(), None, false);
+    for c in command.chars() {
+        match (quote, c) {
+            (None, '"' | '\'') => {
+                quote = Some(c);
+                any = true;
+            }
+            (Some(q), _) if c == q => quote = None,
+            (None, c) if c.is_whitespace() => {
+                if any {
+                    out.push(std::mem::take(&mut word));
+                    any = false;
+                }
+            }
+            _ => {
+                word.push(c);
+                any = true;
+            }
+        }
+    }
+    if any {
+        out.push(word);
+    }
+    out.into_iter()
+        .map(|w| w.replace("$USER", "user").replace("${env}", "lunar").replace("$env", "lunar").replace("$jid", "1"))
+        .collect()
+}
+
+fn check(file: &str, at_least: usize) {
+    let commands = documented_commands(file);
+    assert!(commands.len() >= at_least, "{file}: found only {} commands: {commands:?}", commands.len());
+    eprintln!("{file}: {} commands", commands.len());
+    let mut failures = Vec::new();
+    for (line, args) in &commands {
+        if let Err(e) = Cli::try_parse_from(std::iter::once("sawtooth".to_string()).chain(args.iter().cloned())) {
+            // `--help` and `--version` are answers, not errors
+            if e.use_stderr() {
+                failures.push(format!("{file}:{line}: sawtooth {}\n{}", args.join(" "), e.render()));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "documented commands the CLI refuses:\n{}", failures.join("\n"));
+}
+
+#[test]
+fn every_command_in_the_readme_parses() {
+    check("README.md", 30);
+}
+
+#[test]
+fn every_command_in_the_benchmarks_parses() {
+    check("BENCHMARKS.md", 15);
+}
+
+#[test]
+fn the_extraction_sees_continuations_comments_and_quotes() {
+    assert_eq!(strip_comment("a --b 'x # y' # note"), "a --b 'x # y' ");
+    assert_eq!(words("simulate --plot 'a b.svg' --env $env"), ["simulate", "--plot", "a b.svg", "--env", "lunar"]);
+    // and a refused flag is caught: the check can fail
+    let bad = Cli::try_parse_from(["sawtooth", "simulate", "--no-such-flag"]);
+    assert!(bad.is_err_and(|e| e.use_stderr()));
+}
