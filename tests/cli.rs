@@ -36,8 +36,9 @@ fn same_seed_same_output_different_seed_different_output() {
     assert_ne!(run("5"), run("6"));
 }
 
-/// `bench` says what each engine ran on (for the cpu engine: which compilation of its
-/// bounce loop, chosen at run time), so a timing can be traced to its build.
+/// `bench` says what each engine ran on (the CPU's model; for the cpu engine also which
+/// compilation of its bounce loop, chosen at run time), so a timing can be traced to its
+/// machine and build.
 #[test]
 fn bench_names_each_engines_device() {
     let args = [
@@ -58,6 +59,13 @@ fn bench_names_each_engines_device() {
     assert!(out.contains("listing: listing engine on the host CPU"), "{out}");
     let cpu = out.lines().find(|l| l.starts_with("cpu: cpu engine on the host CPU")).unwrap_or_else(|| panic!("{out}"));
     assert!(cpu.ends_with("x86-64-v3 build)") || cpu.ends_with("baseline build)"), "{cpu}");
+    // and which CPU: its model name, so that a timing can be traced to its machine
+    assert!(cpu.contains(&format!("({}; ", sawtooth::engine::host_cpu())), "{cpu}");
+    if let Ok(info) = std::fs::read_to_string("/proc/cpuinfo") {
+        if let Some(name) = info.lines().find(|l| l.starts_with("model name")) {
+            assert!(cpu.contains(name.split_once(':').unwrap().1.trim()), "{cpu}");
+        }
+    }
     let (code, out, err) = sawtooth(&[&args[..], &["--json"]].concat());
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();

@@ -104,13 +104,29 @@ pub struct Detailed {
     pub flights: Vec<FlightRecord>,
 }
 
+/// The host CPU's model name (Linux: /proc/cpuinfo's first `model name`; "unknown model"
+/// elsewhere), so that a timing or a run manifest names the machine it came from.
+pub fn host_cpu() -> &'static str {
+    static NAME: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    NAME.get_or_init(|| {
+        std::fs::read_to_string("/proc/cpuinfo")
+            .ok()
+            .and_then(|t| {
+                let line = t.lines().find(|l| l.starts_with("model name"))?;
+                Some(line.split_once(':')?.1.trim().to_string())
+            })
+            .filter(|n| !n.is_empty())
+            .unwrap_or_else(|| "unknown model".to_string())
+    })
+}
+
 /// The interface every evaluator implements, GPU included: a whole generation per call.
 pub trait BatchEvaluator: Sync {
     /// The backend's name, as `--engine` spells it.
     fn backend(&self) -> &'static str;
     /// What runs it, for run manifests (the GPU's name and driver for `gpu`).
     fn device(&self) -> String {
-        format!("{} engine on the host CPU ({} threads)", self.backend(), rayon::current_num_threads())
+        format!("{} engine on the host CPU ({}; {} threads)", self.backend(), host_cpu(), rayon::current_num_threads())
     }
     fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>>;
     /// Whether a first evaluation also compiles kernels (the gpu engine builds a pipeline per
@@ -176,8 +192,9 @@ impl BatchEvaluator for cpu::CpuEngine {
     }
     fn device(&self) -> String {
         format!(
-            "{} engine on the host CPU ({} threads, {})",
+            "{} engine on the host CPU ({}; {} threads, {})",
             self.backend(),
+            host_cpu(),
             rayon::current_num_threads(),
             cpu::build()
         )
