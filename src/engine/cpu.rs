@@ -1,11 +1,16 @@
 //! The `cpu` engine: the fast reference. Drives the kernel of `kernel.rs` over a design's
 //! particles, bounce by bounce, in f64 (physics) or f32 (the GPU's precision).
 
+use std::any::Any;
+
 use super::kernel::*;
+use super::lanes;
 use super::{Context, FlightRecord, ParticleEngine, Run};
+use crate::model::flight::Flight;
 use crate::model::geometry::Profile;
 use crate::model::outcome::{ParticleEnd, ParticleState};
 use crate::model::real::Real;
+use crate::model::rng::{DRAW_ANGLE, DRAW_SPEED};
 use crate::model::{PhysicsMode, Prepared};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -41,6 +46,7 @@ pub fn kernel_design<T: Real>(prep: &Prepared) -> KDesign<T> {
         ext_max: T::c(xs.iter().cloned().fold(f64::NEG_INFINITY, f64::max)),
         teeth: p.teeth as i32,
         launch_angle: T::c(prep.launch_angle),
+        launch_sin_cos: T::c(prep.launch_angle).ksin_cos(),
         v0: T::c(prep.design.v0),
         stroke: T::c(prep.design.v0 * prep.design.v0 / (2.0 * prep.design.a)),
     }
@@ -113,20 +119,41 @@ pub fn run_particles<T: Real>(
         .enumerate()
         .map(|(i, l)| init_particle(&d, &ph, [T::c(l[0]), T::c(l[1])], i as u32))
         .collect();
+    // vacuum flights of the text's physics in f64 (the lunar batches) are searched eight at
+    // a time on SIMD lanes, to the same bits (`lanes`)
+    let any_d: &dyn Any = &d;
+    let any_ph: &dyn Any = &ph;
+    let vector = match (any_d.downcast_ref::<KDesign<f64>>(), any_ph.downcast_ref::<KPhysics<f64>>()) {
+        (Some(d64), Some(ph64)) if lanes::applies(ph64) && lanes::available() => Some((d64, ph64)),
+        _ => None,
+    };
+    // and the launch factors' draws of every engine run are made sixteen at a time
+    let draw_lanes = lanes::available();
+    let mut to_fly: Vec<usize> = Vec::with_capacity(parts.len());
     let mut iterations = 0;
     for bounce in 0..ctx.max_bounces {
         let (mut flying, mut hop_sum, mut hop_n) = (0usize, 0.0f64, 0usize);
         // every launch of this bounce first, then every flight (`fly_particle` says why)
-        for (i, p) in parts.iter_mut().enumerate() {
-            if p.state == STATE_FLYING {
-                randomise_launch(&d, &ph, p, i as u32, bounce);
+        if draw_lanes {
+            // the launch factors' draws sixteen particles at a time
+            to_fly.clear();
+            to_fly.extend(parts.iter().enumerate().filter(|(_, p)| p.state == STATE_FLYING).map(|(i, _)| i));
+            for group in to_fly.chunks(16) {
+                let ids: [u32; 16] = std::array::from_fn(|l| group[l.min(group.len() - 1)] as u32);
+                let angle = lanes::uniforms(ph.seed, &ids[..group.len()], bounce, DRAW_ANGLE);
+                let speed = lanes::uniforms(ph.seed, &ids[..group.len()], bounce, DRAW_SPEED);
+                for (l, &i) in group.iter().enumerate() {
+                    randomise_launch_drawn(&d, &ph, &mut parts[i], i as u32, bounce, Some([angle[l], speed[l]]));
+                }
+            }
+        } else {
+            for (i, p) in parts.iter_mut().enumerate() {
+                if p.state == STATE_FLYING {
+                    randomise_launch(&d, &ph, p, i as u32, bounce);
+                }
             }
         }
-        for (i, p) in parts.iter_mut().enumerate() {
-            if p.state != STATE_FLYING {
-                continue;
-            }
-            let flown = fly_particle(&d, &ph, p, i as u32, bounce);
+        let mut record = |i: usize, p: &KParticle<T>, flown: Flown<T>| {
             if let Some(tr) = trace.as_deref_mut() {
                 let origin = [T::c(flown.from_tooth as f64) * d.pitch[0], T::c(flown.from_tooth as f64) * d.pitch[1]];
                 tr.push(FlightRecord {
@@ -144,6 +171,63 @@ pub fn run_particles<T: Real>(
             }
             if p.state == STATE_FLYING {
                 flying += 1;
+            }
+        };
+        if let Some((d64, ph64)) = vector {
+            for group in to_fly.chunks(lanes::LANES) {
+                let any_parts: &dyn Any = &parts;
+                let parts64 = any_parts.downcast_ref::<Vec<KParticle<f64>>>().expect("T is f64 here");
+                let hits = lanes::first_hits(d64, ph64, parts64, group, bounce);
+                if ph64.scatter_sigma == 0.0 {
+                    // the restitution law on the lanes too (impact scatter draws per grain)
+                    let (mut v_in, mut normal) = ([[0.0; lanes::LANES]; 2], [[0.0; lanes::LANES]; 2]);
+                    for (l, (h, &i)) in hits.iter().zip(group).enumerate() {
+                        // `land`: the vacuum flight's velocity at the impact, plus a zero drift
+                        let v = parts64[i].vel;
+                        (v_in[0][l], v_in[1][l]) = (v[0] + 0.0, (v[1] - ph64.g * h.t) + 0.0);
+                        (normal[0][l], normal[1][l]) = (normal_of(d64, h.surface)[0], normal_of(d64, h.surface)[1]);
+                    }
+                    let out = lanes::bounce_velocities(&ph64.restitution, &v_in, &normal);
+                    for (l, (h, &i)) in hits.iter().zip(group).enumerate() {
+                        let p = &mut parts[i];
+                        let mut flown = Flown { from_tooth: p.tooth, from: p.pos, vel: p.vel, t: T::zero() };
+                        if h.found {
+                            let hit = Hit {
+                                found: true,
+                                t: T::c(h.t),
+                                pos: [T::c(h.pos[0]), T::c(h.pos[1])],
+                                tooth: h.tooth,
+                                surface: h.surface,
+                            };
+                            settle(&d, &ph, p, &hit, [T::c(out[0][l] - 0.0), T::c(out[1][l] - 0.0)]);
+                            flown.t = hit.t;
+                        } else {
+                            p.state = STATE_LOST;
+                        }
+                        record(i, p, flown);
+                    }
+                    continue;
+                }
+                for (h, &i) in hits.iter().zip(group) {
+                    let hit = Hit {
+                        found: h.found,
+                        t: T::c(h.t),
+                        pos: [T::c(h.pos[0]), T::c(h.pos[1])],
+                        tooth: h.tooth,
+                        surface: h.surface,
+                    };
+                    let p = &mut parts[i];
+                    let fl = Flight { p0: p.pos, v0: p.vel, g: ph.g, k: p.k_drag, drift: [T::zero(); 2] };
+                    let flown = land(&d, &ph, p, i as u32, bounce, hit, &fl, T::zero());
+                    record(i, p, flown);
+                }
+            }
+        } else {
+            for (i, p) in parts.iter_mut().enumerate() {
+                if p.state == STATE_FLYING {
+                    let flown = fly_particle(&d, &ph, p, i as u32, bounce);
+                    record(i, p, flown);
+                }
             }
         }
         iterations = bounce + 1;

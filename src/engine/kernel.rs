@@ -63,6 +63,9 @@ pub struct KDesign<T> {
     pub ext_max: T,
     pub teeth: i32,
     pub launch_angle: T,
+    /// sin and cos of the launch angle, computed once per design (every particle starts
+    /// along it).
+    pub launch_sin_cos: (T, T),
     pub v0: T,
     /// Stroke v0²/(2a), m: how far the sled returns (sled-motion effect).
     pub stroke: T,
@@ -188,7 +191,7 @@ pub fn init_particle<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, launch: [T; 2], 
         tooth: 0,
         pos: launch,
         vel: {
-            let (s, c) = d.launch_angle.ksin_cos();
+            let (s, c) = d.launch_sin_cos;
             [d.v0 * c, d.v0 * s]
         },
         surface: SURFACE_NONE,
@@ -204,6 +207,21 @@ pub fn init_particle<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, launch: [T; 2], 
 /// (erratum 24).
 #[inline(always)]
 pub fn randomise_launch<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KParticle<T>, index: u32, bounce: u32) {
+    randomise_launch_drawn(d, ph, p, index, bounce, None);
+}
+
+/// [`randomise_launch`] with its two factors' uniform draws (`DRAW_ANGLE`, `DRAW_SPEED`)
+/// given when the caller has them already (the cpu engine draws a whole bounce's on SIMD
+/// lanes, `lanes::uniforms`, the same numbers).
+#[inline(always)]
+pub fn randomise_launch_drawn<T: Real>(
+    d: &KDesign<T>,
+    ph: &KPhysics<T>,
+    p: &mut KParticle<T>,
+    index: u32,
+    bounce: u32,
+    draws: Option<[f64; 2]>,
+) {
     let apply = match ph.randomise {
         RANDOMISE_FIRST_LAUNCH => bounce == 0,
         RANDOMISE_EVERY_LAUNCH => true,
@@ -216,8 +234,10 @@ pub fn randomise_launch<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KPart
     let two = T::c(2.0);
     let (fa, fs) = if apply {
         (
-            T::one() - ph.band + two * ph.band * T::c(uniform01(ph.seed, index, bounce, DRAW_ANGLE)),
-            T::one() - ph.band + two * ph.band * T::c(uniform01(ph.seed, index, bounce, DRAW_SPEED)),
+            T::one() - ph.band
+                + two * ph.band * T::c(draws.map_or_else(|| uniform01(ph.seed, index, bounce, DRAW_ANGLE), |u| u[0])),
+            T::one() - ph.band
+                + two * ph.band * T::c(draws.map_or_else(|| uniform01(ph.seed, index, bounce, DRAW_SPEED), |u| u[1])),
         )
     } else {
         (T::one(), T::one())
@@ -455,7 +475,7 @@ fn sled_phase<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, clock: T) -> ([T; 2], T
         ([T::zero(); 2], ph.sled_delay)
     } else if clock < back_end {
         let dir = if ph.sled_along_launch {
-            let (s, c) = d.launch_angle.ksin_cos();
+            let (s, c) = d.launch_sin_cos;
             [c, s]
         } else {
             d.t_base
@@ -552,13 +572,32 @@ pub fn fly_particle<T: Real>(
     index: u32,
     bounce: u32,
 ) -> Flown<T> {
-    let flown = Flown { from_tooth: p.tooth, from: p.pos, vel: p.vel, t: T::zero() };
     let (hit, fl, piece_start) = if ph.sled_speed > T::zero() || ph.qd_step > T::zero() {
         first_hit_piecewise(d, ph, p, bounce)
     } else {
         let fl = Flight { p0: p.pos, v0: p.vel, g: ph.g, k: p.k_drag, drift: [T::zero(); 2] };
         (first_hit(d, ph, p, bounce), fl, T::zero())
     };
+    land(d, ph, p, index, bounce, hit, &fl, piece_start)
+}
+
+/// The second half of [`fly_particle`]: the bounce at the flight's first impact `hit` (or
+/// the particle's loss when there is none). `fl` is the flight (piece) the hit lies in and
+/// `piece_start` the time that piece began. The cpu engine's vector search
+/// (`lanes::first_hits`) finds eight particles' hits at once and lands each with this.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn land<T: Real>(
+    d: &KDesign<T>,
+    ph: &KPhysics<T>,
+    p: &mut KParticle<T>,
+    index: u32,
+    bounce: u32,
+    hit: Hit<T>,
+    fl: &Flight<T>,
+    piece_start: T,
+) -> Flown<T> {
+    let flown = Flown { from_tooth: p.tooth, from: p.pos, vel: p.vel, t: T::zero() };
     if !hit.found {
         p.state = STATE_LOST;
         return flown;
@@ -590,6 +629,14 @@ pub fn fly_particle<T: Real>(
         }
     }
     let v_out = [v_rel_out[0] - fl.drift[0], v_rel_out[1] - fl.drift[1]];
+    settle(d, ph, p, &hit, v_out);
+    Flown { t: hit.t, ..flown }
+}
+
+/// The end of [`land`]: the particle moves to its impact `hit` (found) and leaves it with
+/// `v_out`; it rests when the hop was below the threshold (text mode).
+#[inline(always)]
+pub fn settle<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, p: &mut KParticle<T>, hit: &Hit<T>, v_out: [T; 2]) {
     p.hop = (hit.pos[0] - p.pos[0]).abs(); // Eq. 4.50, per particle
     p.clock = p.clock + hit.t;
     let back = offset(d, hit.tooth - p.tooth, [T::zero(), T::zero()]);
@@ -604,7 +651,6 @@ pub fn fly_particle<T: Real>(
     if ph.per_particle_rest && p.hop < ph.rest_threshold {
         p.state = STATE_RESTING;
     }
-    Flown { t: hit.t, ..flown }
 }
 
 /// Threads per workgroup of the WGSL kernel (`WG` in particles.wgsl): the reduction's lanes.

@@ -9,6 +9,7 @@ pub mod conformance;
 pub mod cpu;
 pub mod gpu;
 pub mod kernel;
+pub mod lanes;
 pub mod listing;
 pub mod shared;
 

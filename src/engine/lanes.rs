@@ -1,0 +1,695 @@
+//! The flight search of [`first_hit`](super::kernel::first_hit) for [`LANES`] particles at
+//! once, in f64, for vacuum flights of the text's physics (no drag, no sled motion, every
+//! hop an impact): the case of the lunar batches. The branches of the scalar search become
+//! masks and selects on AVX-512 lanes, and every lane does the scalar search's IEEE
+//! operations in the scalar search's order, so each lane's hit is the scalar hit to the bit
+//! (`tests` below, and `examples/engine_digest.rs`). A lane whose particle has finished its
+//! teeth idles while the others go on.
+
+use super::kernel::{Hit, KDesign, KParticle, KPhysics, SURFACE_BASE, SURFACE_CATCH, SURFACE_RAMP};
+use crate::model::collision::Restitution;
+
+/// Particles searched together: eight f64 lanes, one AVX-512 register.
+pub const LANES: usize = 8;
+
+/// Whether [`first_hits`] gives the scalar search's hits for these physics: vacuum (so
+/// every grain's k_drag is 0), no flight split in pieces (sled motion, quadratic drag), and
+/// no minimum hop (the listing mode's 1e-3 mm rule skips roots the lanes would take).
+pub fn applies(ph: &KPhysics<f64>) -> bool {
+    ph.k_drag == 0.0 && ph.sled_speed == 0.0 && ph.qd_step == 0.0 && ph.min_hop == 0.0
+}
+
+/// Whether this CPU runs [`first_hits`] (AVX-512F; the caller searches one particle at a
+/// time otherwise).
+pub fn available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    return std::arch::is_x86_feature_detected!("avx512f");
+    #[allow(unreachable_code)]
+    false
+}
+
+/// The first impact of each of the particles `parts[idx[l]]` (as `kernel::first_hit` finds
+/// it), for physics where [`applies`] holds, on a CPU where [`available`] holds. `idx` has
+/// 1 to [`LANES`] entries; lanes beyond it repeat the first particle and are dropped.
+pub fn first_hits(
+    d: &KDesign<f64>,
+    ph: &KPhysics<f64>,
+    parts: &[KParticle<f64>],
+    idx: &[usize],
+    bounce: u32,
+) -> [Hit<f64>; LANES] {
+    assert!(applies(ph) && available() && !idx.is_empty() && idx.len() <= LANES);
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: the CPU has AVX-512F (asserted above).
+    return unsafe { avx512::first_hits(d, ph, parts, idx, bounce) };
+    #[allow(unreachable_code)]
+    {
+        unreachable!("available() is false off x86-64")
+    }
+}
+
+/// `Restitution::bounce` of [`LANES`] impact velocities `v` on surfaces with normals `n`,
+/// on a CPU where [`available`] holds: the same bits as the scalar law in every lane.
+pub fn bounce_velocities(r: &Restitution<f64>, v: &[[f64; LANES]; 2], n: &[[f64; LANES]; 2]) -> [[f64; LANES]; 2] {
+    assert!(available());
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: the CPU has AVX-512F (asserted above).
+    return unsafe { avx512::bounce(r, v, n) };
+    #[allow(unreachable_code)]
+    {
+        unreachable!("available() is false off x86-64")
+    }
+}
+
+/// `rng::uniform01(seed_word, particle, bounce, draw)` for each of `particles` (1 to 16),
+/// on a CPU where [`available`] holds: the counter-based generator's integer hash on
+/// sixteen lanes, the same numbers.
+pub fn uniforms(seed_word: u32, particles: &[u32], bounce: u32, draw: u32) -> [f64; 16] {
+    assert!(available() && !particles.is_empty() && particles.len() <= 16);
+    let mut ids = [particles[0]; 16];
+    ids[..particles.len()].copy_from_slice(particles);
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: the CPU has AVX-512F (asserted above).
+    let h = unsafe { avx512::uniform_bits(seed_word, &ids, bounce, draw) };
+    #[cfg(not(target_arch = "x86_64"))]
+    let h: [u32; 16] = unreachable!("available() is false off x86-64");
+    // as `uniform01`: 24 random bits, exact in f64
+    h.map(|h| (h >> 8) as f64 * (1.0 / 16_777_216.0))
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx512 {
+    use super::*;
+    use std::arch::x86_64::*;
+
+    type V = __m512d;
+    type M = __mmask8;
+
+    // One helper per scalar operation, each the IEEE operation of the scalar code in every
+    // lane (the target feature lets them inline into `first_hits`).
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn sp(x: f64) -> V {
+        _mm512_set1_pd(x)
+    }
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn add(a: V, b: V) -> V {
+        _mm512_add_pd(a, b)
+    }
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn sub(a: V, b: V) -> V {
+        _mm512_sub_pd(a, b)
+    }
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn mul(a: V, b: V) -> V {
+        _mm512_mul_pd(a, b)
+    }
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn div(a: V, b: V) -> V {
+        _mm512_div_pd(a, b)
+    }
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn neg(a: V) -> V {
+        _mm512_castsi512_pd(_mm512_xor_si512(_mm512_castpd_si512(a), _mm512_set1_epi64(i64::MIN)))
+    }
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn abs(a: V) -> V {
+        _mm512_abs_pd(a)
+    }
+    /// `f64::max`: the other operand where one is NaN.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn max(a: V, b: V) -> V {
+        let m = _mm512_max_pd(a, b);
+        _mm512_mask_blend_pd(_mm512_cmp_pd_mask::<_CMP_UNORD_Q>(b, b), m, a)
+    }
+    /// `f64::min`: the other operand where one is NaN.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn min(a: V, b: V) -> V {
+        let m = _mm512_min_pd(a, b);
+        _mm512_mask_blend_pd(_mm512_cmp_pd_mask::<_CMP_UNORD_Q>(b, b), m, a)
+    }
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn floor(a: V) -> V {
+        _mm512_roundscale_pd::<{ _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC }>(a)
+    }
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn ceil(a: V) -> V {
+        _mm512_roundscale_pd::<{ _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC }>(a)
+    }
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn sqrt(a: V) -> V {
+        _mm512_sqrt_pd(a)
+    }
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn lt(a: V, b: V) -> M {
+        _mm512_cmp_pd_mask::<_CMP_LT_OQ>(a, b)
+    }
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn le(a: V, b: V) -> M {
+        _mm512_cmp_pd_mask::<_CMP_LE_OQ>(a, b)
+    }
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn gt(a: V, b: V) -> M {
+        _mm512_cmp_pd_mask::<_CMP_GT_OQ>(a, b)
+    }
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn ge(a: V, b: V) -> M {
+        _mm512_cmp_pd_mask::<_CMP_GE_OQ>(a, b)
+    }
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn eq(a: V, b: V) -> M {
+        _mm512_cmp_pd_mask::<_CMP_EQ_OQ>(a, b)
+    }
+    /// `!=` (true where either is NaN, as in scalar code).
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn ne(a: V, b: V) -> M {
+        _mm512_cmp_pd_mask::<_CMP_NEQ_UQ>(a, b)
+    }
+    /// `if m { a } else { b }` in every lane.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn sel(m: M, a: V, b: V) -> V {
+        _mm512_mask_blend_pd(m, b, a)
+    }
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn load(a: &[f64; LANES]) -> V {
+        // SAFETY: eight f64 are readable at `a`.
+        unsafe { _mm512_loadu_pd(a.as_ptr()) }
+    }
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn store(v: V) -> [f64; LANES] {
+        let mut a = [0.0; LANES];
+        // SAFETY: eight f64 are writable at `a`.
+        unsafe { _mm512_storeu_pd(a.as_mut_ptr(), v) };
+        a
+    }
+
+    /// Up to two crossing times per lane: how many (as f64), the first and the second.
+    #[derive(Clone, Copy)]
+    struct Roots {
+        n: V,
+        r0: V,
+        r1: V,
+    }
+
+    /// `push_root` in the lanes of `mask`.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn push(r: &mut Roots, mask: M, t: V, t_min: V, t_max: V) {
+        let ok = mask & gt(t, sp(0.0)) & ge(t, t_min) & le(t, t_max);
+        let first = eq(r.n, sp(0.0));
+        r.r0 = sel(ok & first, t, r.r0);
+        r.r1 = sel(ok & !first, t, r.r1);
+        r.n = _mm512_mask_add_pd(r.n, ok, r.n, sp(1.0));
+    }
+
+    /// A flight's start and launch velocity in every lane.
+    #[derive(Clone, Copy)]
+    struct Fl {
+        px: V,
+        py: V,
+        vx: V,
+        vy: V,
+        /// 0.5 g, as the scalar position multiplies it.
+        half_g: V,
+    }
+
+    /// `Flight::pos` of a vacuum flight.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn pos_at(f: &Fl, t: V) -> (V, V) {
+        (add(f.px, mul(f.vx, t)), sub(add(f.py, mul(f.vy, t)), mul(mul(f.half_g, t), t)))
+    }
+
+    /// `Flight::time_at_x` of a vacuum flight.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn time_at_x(f: &Fl, x: V) -> V {
+        let dx = sub(x, f.px);
+        let t = div(dx, f.vx);
+        let never = eq(f.vx, sp(0.0)) | lt(t, sp(0.0));
+        sel(never, sel(eq(dx, sp(0.0)), sp(0.0), sp(f64::INFINITY)), t)
+    }
+
+    /// `Flight::y_at_x` of a vacuum flight: whether it gets there, and the height.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn y_at_x(f: &Fl, x: V) -> (M, V) {
+        let e = div(sub(x, f.px), f.vx);
+        (ne(f.vx, sp(0.0)) & !lt(e, sp(0.0)), sub(add(f.py, mul(f.vy, e)), mul(mul(f.half_g, e), e)))
+    }
+
+    /// `Flight::line_crossings` of vacuum flights against the line through `a` with normal
+    /// `n`, in the lanes of `mask` (no roots elsewhere). `c2_g` is -0.5 g.
+    #[allow(clippy::too_many_arguments)]
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn line_crossings(
+        mask: M,
+        f: &Fl,
+        c2_g: f64,
+        (ax, ay): (V, V),
+        (nx, ny): (V, V),
+        departing: M,
+        t_min: V,
+        t_max: V,
+    ) -> Roots {
+        let zero = sp(0.0);
+        let c0 = sel(departing, zero, add(mul(nx, sub(f.px, ax)), mul(ny, sub(f.py, ay))));
+        let nv = add(mul(nx, f.vx), mul(ny, f.vy));
+        let nw = add(mul(nx, zero), mul(ny, zero)); // the drift term, zero here
+        let c1 = add(nv, nw);
+        let c2 = mul(sp(c2_g), ny);
+        let mut r = Roots { n: zero, r0: zero, r1: zero };
+        // (a branch taken by no lane is skipped: a mask is the same for the whole group)
+        // departing: f(t) = t (c1 + c2 t)
+        let dep = mask & departing & ne(c2, zero);
+        if dep != 0 {
+            push(&mut r, dep, div(neg(c1), c2), t_min, t_max);
+        }
+        // quadratic_roots: the linear case, then both roots of the stable form
+        let solve = mask & !departing;
+        if solve == 0 {
+            return r;
+        }
+        let linear = solve & eq(c2, zero) & ne(c1, zero);
+        if linear != 0 {
+            push(&mut r, linear, div(neg(c0), c1), t_min, t_max);
+        }
+        let disc = sub(mul(c1, c1), mul(mul(sp(4.0), c2), c0));
+        let sq = sqrt(disc);
+        let q = sel(ge(c1, zero), mul(sp(-0.5), add(c1, sq)), mul(sp(-0.5), sub(c1, sq)));
+        let quad = solve & ne(c2, zero) & !lt(disc, zero) & !eq(q, zero);
+        let (x, y) = (div(q, c2), div(c0, q));
+        let swap = lt(y, x);
+        push(&mut r, quad, sel(swap, y, x), t_min, t_max);
+        push(&mut r, quad, sel(swap, x, y), t_min, t_max);
+        r
+    }
+
+    /// `contact` (kernel.rs) in every lane.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn contact(pitch_len: f64, f: &Fl, (vx, vy): (V, V), (ax, ay): (V, V), (bx, by): (V, V), (nx, ny): (V, V)) -> M {
+        let (dx, dy) = (sub(f.px, ax), sub(f.py, ay));
+        let c0 = add(mul(dx, nx), mul(dy, ny));
+        let tol = mul(sp(64.0 * f64::EPSILON), max(max(sp(pitch_len), abs(f.px)), abs(f.py)));
+        let away = ge(add(mul(vx, nx), mul(vy, ny)), sp(0.0));
+        let near = !(gt(abs(c0), tol) | away);
+        if near == 0 {
+            return 0; // the usual case: no lane lies on the line
+        }
+        let (ex, ey) = (sub(bx, ax), sub(by, ay));
+        let s = div(add(mul(dx, ex), mul(dy, ey)), add(mul(ex, ex), mul(ey, ey)));
+        near & ge(s, sp(0.0)) & le(s, sp(1.0))
+    }
+
+    /// [`super::bounce_velocities`]: Eq. 4.47-4.49 with Eq. 4.9 and 4.14 as
+    /// `Restitution::bounce` evaluates them, operation for operation.
+    #[target_feature(enable = "avx512f")]
+    pub fn bounce(r: &Restitution<f64>, v: &[[f64; LANES]; 2], n: &[[f64; LANES]; 2]) -> [[f64; LANES]; 2] {
+        let (vx, vy, nx, ny) = (load(&v[0]), load(&v[1]), load(&n[0]), load(&n[1]));
+        let (zero, one) = (sp(0.0), sp(1.0));
+        let vn_s = add(mul(vx, nx), mul(vy, ny));
+        let (vnx, vny) = (mul(vn_s, nx), mul(vn_s, ny));
+        let (vtx, vty) = (sub(vx, vnx), sub(vy, vny));
+        let vn_abs = abs(vn_s);
+        let vt_abs = sqrt(add(mul(vtx, vtx), mul(vty, vty)));
+        let k_elastic = sp(r.k_elastic);
+        let k_norm = if r.plastic {
+            let plastic = gt(vn_abs, sp(r.v_limit));
+            sel(plastic, mul(k_elastic, sqrt(sqrt(div(sp(r.v_limit), vn_abs)))), k_elastic)
+        } else {
+            k_elastic
+        };
+        let slip = div(mul(mul(sp(r.tangential_factor * r.mu_friction), add(k_norm, one)), vn_abs), vt_abs);
+        let mut k_tang = sel(gt(vt_abs, zero), sub(one, slip), zero);
+        if r.clamp_tangential {
+            k_tang = min(max(k_tang, zero), one);
+        }
+        [store(sub(mul(k_tang, vtx), mul(k_norm, vnx))), store(sub(mul(k_tang, vty), mul(k_norm, vny)))]
+    }
+
+    /// One round of `rng::pcg4d` with each of the four words a vector of sixteen keys.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn pcg4d(v: [__m512i; 4]) -> [__m512i; 4] {
+        let (m, c) = (_mm512_set1_epi32(1_664_525), _mm512_set1_epi32(1_013_904_223));
+        let [mut v0, mut v1, mut v2, mut v3] = v;
+        v0 = _mm512_add_epi32(_mm512_mullo_epi32(v0, m), c);
+        v1 = _mm512_add_epi32(_mm512_mullo_epi32(v1, m), c);
+        v2 = _mm512_add_epi32(_mm512_mullo_epi32(v2, m), c);
+        v3 = _mm512_add_epi32(_mm512_mullo_epi32(v3, m), c);
+        for round in 0..2 {
+            v0 = _mm512_add_epi32(v0, _mm512_mullo_epi32(v1, v3));
+            v1 = _mm512_add_epi32(v1, _mm512_mullo_epi32(v2, v0));
+            v2 = _mm512_add_epi32(v2, _mm512_mullo_epi32(v0, v1));
+            v3 = _mm512_add_epi32(v3, _mm512_mullo_epi32(v1, v2));
+            if round == 0 {
+                v0 = _mm512_xor_si512(v0, _mm512_srli_epi32::<16>(v0));
+                v1 = _mm512_xor_si512(v1, _mm512_srli_epi32::<16>(v1));
+                v2 = _mm512_xor_si512(v2, _mm512_srli_epi32::<16>(v2));
+                v3 = _mm512_xor_si512(v3, _mm512_srli_epi32::<16>(v3));
+            }
+        }
+        [v0, v1, v2, v3]
+    }
+
+    /// The first word of `pcg4d(pcg4d([particle, bounce, draw, seed_word]))` for sixteen
+    /// particles, as `rng::uniform01` hashes its key.
+    #[target_feature(enable = "avx512f")]
+    pub fn uniform_bits(seed_word: u32, particles: &[u32; 16], bounce: u32, draw: u32) -> [u32; 16] {
+        // SAFETY: sixteen u32 are readable at `particles`.
+        let ids = unsafe { _mm512_loadu_si512(particles.as_ptr().cast()) };
+        let key = [
+            ids,
+            _mm512_set1_epi32(bounce as i32),
+            _mm512_set1_epi32(draw as i32),
+            _mm512_set1_epi32(seed_word as i32),
+        ];
+        let h = pcg4d(pcg4d(key));
+        let mut out = [0u32; 16];
+        // SAFETY: sixteen u32 are writable at `out`.
+        unsafe { _mm512_storeu_si512(out.as_mut_ptr().cast(), h[0]) };
+        out
+    }
+
+    /// A position's index (`to_index`): clamped to ±1e9, kept as a whole f64.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn to_index(x: V) -> V {
+        min(max(x, sp(-1e9)), sp(1e9))
+    }
+
+    /// [`super::first_hits`] on eight AVX-512 lanes: `kernel::first_hit_in` for a flight
+    /// without drift or time limit, step by step; whole numbers (teeth, codes) ride as f64.
+    #[target_feature(enable = "avx512f")]
+    pub fn first_hits(
+        d: &KDesign<f64>,
+        ph: &KPhysics<f64>,
+        parts: &[KParticle<f64>],
+        idx: &[usize],
+        bounce: u32,
+    ) -> [Hit<f64>; LANES] {
+        let mut a = [[0.0; LANES]; 6];
+        for l in 0..LANES {
+            let p = &parts[idx[if l < idx.len() { l } else { 0 }]];
+            (a[0][l], a[1][l], a[2][l], a[3][l]) = (p.pos[0], p.pos[1], p.vel[0], p.vel[1]);
+            (a[4][l], a[5][l]) = (p.surface as f64, p.tooth as f64);
+        }
+        let f = Fl { px: load(&a[0]), py: load(&a[1]), vx: load(&a[2]), vy: load(&a[3]), half_g: sp(0.5 * ph.g) };
+        let (surface, kf) = (load(&a[4]), load(&a[5]));
+        let c2_g = -0.5 * ph.g;
+        let (zero, inf) = (sp(0.0), sp(f64::INFINITY));
+        // `rel_vel` of the scalar search: the velocity plus a zero drift
+        let rel_vel = (add(f.vx, zero), add(f.vy, zero));
+
+        // The base line through every p1; its crossing bounds the flight.
+        let n_base = (sp(d.n_base[0]), sp(d.n_base[1]));
+        let departing_base = eq(surface, sp(SURFACE_BASE as f64));
+        let mut roots = line_crossings(!0, &f, c2_g, (zero, zero), n_base, departing_base, zero, inf);
+        let s0 = mul(neg(kf), sp(d.pitch_len));
+        let s1 = add(s0, sp(d.base_length));
+        let (tb0, tb1) = (sp(d.t_base[0]), sp(d.t_base[1]));
+        let ends = ((mul(s0, tb0), mul(s0, tb1)), (mul(s1, tb0), mul(s1, tb1)));
+        let over = !departing_base & contact(d.pitch_len, &f, rel_vel, ends.0, ends.1, n_base);
+        roots.n = sel(over, sp(1.0), roots.n);
+        roots.r0 = sel(over, zero, roots.r0);
+        // every hop counts, so the first root is the base crossing
+        let has = ge(roots.n, sp(1.0));
+        let t = roots.r0;
+        let (qx, qy) = pos_at(&f, t);
+        let s = add(mul(qx, tb0), mul(qy, tb1));
+        let mut found = has & ge(s, s0) & le(s, add(sp(d.base_length), s0));
+        let horizon = sel(has, t, inf);
+        let teeth_last = sp((d.teeth - 1) as f64);
+        let j = min(max(add(to_index(floor(div(s, sp(d.pitch_len)))), kf), zero), teeth_last);
+        let mut best_t = sel(found, t, inf);
+        let (mut best_x, mut best_y) = (sel(found, qx, zero), sel(found, qy, zero));
+        let mut best_tooth = sel(found, j, zero);
+        let mut best_surface = sel(found, sp(SURFACE_BASE as f64), zero);
+
+        // The teeth whose x-extent overlaps the flight's x-range before the horizon.
+        let finite = lt(abs(horizon), inf);
+        let x_end = sel(finite, pos_at(&f, horizon).0, sel(ge(f.vx, zero), inf, sp(f64::NEG_INFINITY)));
+        let forward = ge(x_end, f.px);
+        let (xmin, xmax) = (sel(forward, f.px, x_end), sel(forward, x_end, f.px));
+        let lo = add(to_index(ceil(div(sub(xmin, sp(d.ext_max)), sp(d.pitch[0])))), kf);
+        let hi = add(to_index(floor(div(sub(xmax, sp(d.ext_min)), sp(d.pitch[0])))), kf);
+        let j_lo = min(max(lo, zero), teeth_last);
+        let j_hi = min(max(hi, zero), teeth_last);
+        let none = gt(lo, teeth_last) | lt(hi, zero);
+        let count = sel(none, zero, max(add(sub(j_hi, j_lo), sp(1.0)), zero));
+        let x_far = sel(found, best_x, x_end);
+        let steps = store(count).iter().fold(0.0f64, |m, &c| m.max(c)) as usize;
+        let top_rel = sp(d.p2[1].max(d.p4[1]).max(0.0));
+        let margin = sp(64.0 * f64::EPSILON * d.pitch_len);
+        for step in 0..steps {
+            // flies_over: a lane whose flight stays above this tooth's peak skips it
+            let stepf = sp(step as f64);
+            let j = add(j_lo, stepf);
+            let dj = sub(j, kf);
+            let base = mul(dj, sp(d.pitch[0]));
+            let ahead = ge(x_far, f.px);
+            let (lo, hi) = (sel(ahead, f.px, x_far), sel(ahead, x_far, f.px));
+            let xa = max(add(base, sp(d.ext_min)), lo);
+            let xb = min(add(base, sp(d.ext_max)), hi);
+            let top = add(mul(dj, sp(d.pitch[1])), top_rel);
+            let (sa, ya) = y_at_x(&f, xa);
+            let (sb, yb) = y_at_x(&f, xb);
+            let flies_over = gt(xa, xb) | (sa & sb & gt(ya, top) & gt(yb, top));
+            let live = lt(stepf, count) & !flies_over;
+            if live == 0 {
+                continue;
+            }
+            for surface_kind in [SURFACE_RAMP, SURFACE_CATCH] {
+                let first_catch = surface_kind == SURFACE_CATCH && bounce == 0;
+                let on = if first_catch { live & !eq(j, zero) } else { live };
+                if on == 0 {
+                    continue;
+                }
+                let (from, to, normal) =
+                    if surface_kind == SURFACE_RAMP { ([0.0, 0.0], d.p2, d.n_ramp) } else { (d.p2, d.p4, d.n_catch) };
+                let (ox, oy) = (mul(dj, sp(d.pitch[0])), mul(dj, sp(d.pitch[1])));
+                let (ax, ay) = (add(ox, sp(from[0])), add(oy, sp(from[1])));
+                let (bx, by) = (add(ox, sp(to[0])), add(oy, sp(to[1])));
+                let n = (sp(normal[0]), sp(normal[1]));
+                let departing = eq(surface, sp(surface_kind as f64)) & eq(dj, zero);
+                let t_max = sel(found, best_t, horizon);
+                let (xa, xb) = (sub(min(ax, bx), margin), add(max(ax, bx), margin));
+                let backward = lt(f.vx, zero);
+                let x_in = sel(backward, min(xb, f.px), max(xa, f.px));
+                let x_out = sel(backward, xa, xb);
+                let moving = gt(f.vx, zero) | lt(f.vx, zero);
+                let inside = ge(f.px, xa) & le(f.px, xb);
+                let t_lo = sel(moving, time_at_x(&f, x_in), sel(inside, zero, inf));
+                let t_hi = sel(moving, time_at_x(&f, x_out), inf);
+                let search = on & !gt(t_lo, t_max);
+                let mut roots = line_crossings(search, &f, c2_g, (ax, ay), n, departing, t_lo, min(t_max, t_hi));
+                let over = on & !departing & contact(d.pitch_len, &f, rel_vel, (ax, ay), (bx, by), n);
+                roots.n = sel(over, sp(1.0), roots.n);
+                roots.r0 = sel(over, zero, roots.r0);
+                // the first root on the segment itself (0 <= s <= 1) is this segment's hit
+                let (ex, ey) = (sub(bx, ax), sub(by, ay));
+                let ee = add(mul(ex, ex), mul(ey, ey));
+                let q0 = pos_at(&f, roots.r0);
+                let s0 = div(add(mul(sub(q0.0, ax), ex), mul(sub(q0.1, ay), ey)), ee);
+                let ok0 = on & ge(roots.n, sp(1.0)) & !(lt(s0, zero) | gt(s0, sp(1.0)));
+                let second = on & ge(roots.n, sp(2.0)) & !ok0;
+                let (q1, ok1) = if second != 0 {
+                    let q1 = pos_at(&f, roots.r1);
+                    let s1 = div(add(mul(sub(q1.0, ax), ex), mul(sub(q1.1, ay), ey)), ee);
+                    (q1, second & !(lt(s1, zero) | gt(s1, sp(1.0))))
+                } else {
+                    (q0, 0)
+                };
+                let t = sel(ok0, roots.r0, roots.r1);
+                let better = (ok0 | ok1) & lt(t, best_t);
+                found |= better;
+                best_t = sel(better, t, best_t);
+                best_x = sel(better, sel(ok0, q0.0, q1.0), best_x);
+                best_y = sel(better, sel(ok0, q0.1, q1.1), best_y);
+                best_tooth = sel(better, j, best_tooth);
+                best_surface = sel(better, sp(surface_kind as f64), best_surface);
+            }
+        }
+        let (t, x, y, tooth, surface) =
+            (store(best_t), store(best_x), store(best_y), store(best_tooth), store(best_surface));
+        std::array::from_fn(|l| Hit {
+            found: found & (1 << l) != 0,
+            t: t[l],
+            pos: [x[l], y[l]],
+            tooth: tooth[l] as i32,
+            surface: surface[l] as u32,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::cpu::{kernel_design, kernel_physics};
+    use crate::engine::kernel::{first_hit, fly_particle, init_particle, randomise_launch, STATE_FLYING};
+    use crate::engine::Context;
+    use crate::model::effects::{ImpactScatter, LaunchSpread, Polydisperse, SizeForm, TiltForm};
+    use crate::model::sampling::random_valid_designs;
+    use crate::model::scenario::LaunchPoints;
+    use crate::model::{prepare, Scenario};
+
+    type HitBits = (bool, u64, [u64; 2], i32, u32);
+
+    fn bits(h: &Hit<f64>) -> HitBits {
+        (h.found, h.t.to_bits(), [h.pos[0].to_bits(), h.pos[1].to_bits()], h.tooth, h.surface)
+    }
+
+    /// Every lane finds the hit the scalar search finds, to the bit, at every bounce of
+    /// every particle: random valid lunar designs, slopes from 0 to 40°, with and without
+    /// the effects that change launches and bounces, on Halton and random launch points,
+    /// in groups of every size from one to eight.
+    #[test]
+    fn each_lane_finds_the_scalar_hit_to_the_bit() {
+        let mut cases = Vec::new();
+        for alpha in [0.0, 20.0, 35.0, 40.0] {
+            let mut s = Scenario::lunar();
+            s.sim.particles = 120;
+            s.environment.alpha_deg = alpha;
+            cases.push(s.clone());
+            s.effects.impact_scatter = Some(ImpactScatter { sigma_deg: 6.0, form: TiltForm::default() });
+            s.effects.launch_spread = Some(LaunchSpread { speed_spread: 0.3, angle_sigma_deg: 8.0 });
+            s.effects.polydisperse = Some(Polydisperse { sigma_ln: 0.4, form: SizeForm::default() });
+            s.sim.launch_points = LaunchPoints::Random;
+            cases.push(s);
+        }
+        let (mut compared, mut on_teeth) = (0usize, 0usize);
+        for (c, s) in cases.iter().enumerate() {
+            let ctx = Context::new(s);
+            let ph = kernel_physics::<f64>(&ctx);
+            assert!(applies(&ph), "case {c} is a vacuum flight of the text's physics");
+            for design in random_valid_designs(s, 5, 7 + c as u64) {
+                let prep = prepare(s, &design).unwrap();
+                let d = kernel_design::<f64>(&prep);
+                let mut parts: Vec<KParticle<f64>> =
+                    prep.launches.iter().enumerate().map(|(i, l)| init_particle(&d, &ph, *l, i as u32)).collect();
+                for bounce in 0..ctx.max_bounces {
+                    for (i, p) in parts.iter_mut().enumerate().filter(|(_, p)| p.state == STATE_FLYING) {
+                        randomise_launch(&d, &ph, p, i as u32, bounce);
+                    }
+                    let flying: Vec<usize> = (0..parts.len()).filter(|&i| parts[i].state == STATE_FLYING).collect();
+                    if flying.is_empty() {
+                        break;
+                    }
+                    // groups of 1, 2, ..., 8 particles, then again
+                    let mut rest = &flying[..];
+                    let mut size = 1 + (bounce as usize % LANES);
+                    while !rest.is_empty() {
+                        let (group, tail) = rest.split_at(size.min(rest.len()));
+                        let hits = first_hits(&d, &ph, &parts, group, bounce);
+                        for (h, &i) in hits.iter().zip(group) {
+                            let scalar = first_hit(&d, &ph, &parts[i], bounce);
+                            assert_eq!(bits(h), bits(&scalar), "case {c}, bounce {bounce}, particle {i}");
+                            compared += 1;
+                            on_teeth += usize::from(scalar.found && scalar.surface != SURFACE_BASE);
+                        }
+                        rest = tail;
+                        size = size % LANES + 1;
+                    }
+                    for &i in &flying {
+                        fly_particle(&d, &ph, &mut parts[i], i as u32, bounce);
+                    }
+                }
+            }
+        }
+        assert!(compared > 20_000 && on_teeth > compared / 3, "{compared} flights compared, {on_teeth} on teeth");
+    }
+
+    /// The restitution law on lanes gives the scalar law's bits, over impacts of every
+    /// speed (both sides of the plastic limit) and angle, in both modes' laws.
+    #[test]
+    fn lane_bounces_are_the_scalar_bounces_to_the_bit() {
+        use crate::model::scenario::{Material, PhysicsMode};
+        use rand::{Rng, SeedableRng};
+        if !available() {
+            eprintln!("skipped: this CPU lacks AVX-512F, so the engine does not use the lanes");
+            return;
+        }
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for mode in [PhysicsMode::Physical, PhysicsMode::Listing] {
+            let r = Restitution::new(mode, 0.8, 0.3, &Material::lunar_regolith());
+            for _ in 0..2000 {
+                let (mut v, mut n) = ([[0.0; LANES]; 2], [[0.0; LANES]; 2]);
+                for l in 0..LANES {
+                    let speed = 10f64.powf(rng.random_range(-4.0..1.0));
+                    let (a, b): (f64, f64) = (rng.random_range(0.0..6.3), rng.random_range(0.0..6.3));
+                    (v[0][l], v[1][l]) = (speed * a.cos(), speed * a.sin());
+                    (n[0][l], n[1][l]) = (b.cos(), b.sin());
+                }
+                // a grazing, a head-on and a resting impact among them
+                (v[0][0], v[1][0], n[0][0], n[1][0]) = (1.0, 0.0, 0.0, 1.0);
+                (v[0][1], v[1][1], n[0][1], n[1][1]) = (0.0, -1.0, 0.0, 1.0);
+                (v[0][2], v[1][2]) = (0.0, 0.0);
+                let out = bounce_velocities(&r, &v, &n);
+                for l in 0..LANES {
+                    let s = r.bounce([v[0][l], v[1][l]], [n[0][l], n[1][l]]);
+                    assert_eq!(
+                        [out[0][l].to_bits(), out[1][l].to_bits()],
+                        [s[0].to_bits(), s[1].to_bits()],
+                        "{mode:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// The generator on sixteen lanes draws `uniform01`'s numbers.
+    #[test]
+    fn lane_uniforms_are_uniform01() {
+        use crate::model::rng::{seed_word, uniform01};
+        if !available() {
+            eprintln!("skipped: this CPU lacks AVX-512F, so the engine does not use the lanes");
+            return;
+        }
+        for seed in [0u64, 1, 0xdead_beef_1234] {
+            let s = seed_word(seed);
+            for first in [0u32, 5, 1000, u32::MAX - 20] {
+                let ids: Vec<u32> = (0..16).map(|k| first.wrapping_add(3 * k)).collect();
+                for (bounce, draw) in [(0, 0), (7, 1), (99, 6)] {
+                    for n in [1, 9, 16] {
+                        let u = uniforms(s, &ids[..n], bounce, draw);
+                        for (k, id) in ids[..n].iter().enumerate() {
+                            assert_eq!(u[k].to_bits(), uniform01(s, *id, bounce, draw).to_bits());
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// What the vector search does not cover it says so: drag, a flight in pieces, the
+    /// listing's minimum hop.
+    #[test]
+    fn the_vector_search_is_only_for_plain_vacuum_flights() {
+        let physics = |s: &Scenario| kernel_physics::<f64>(&Context::new(s));
+        assert!(applies(&physics(&Scenario::lunar())));
+        assert!(!applies(&physics(&Scenario::earth())));
+        assert!(!applies(&physics(&Scenario::lunar().into_listing_compat())));
+    }
+}
