@@ -58,7 +58,9 @@ fn bench_names_each_engines_device() {
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("listing: listing engine on the host CPU"), "{out}");
     let cpu = out.lines().find(|l| l.starts_with("cpu: cpu engine on the host CPU")).unwrap_or_else(|| panic!("{out}"));
-    assert!(cpu.ends_with("x86-64-v3 build)") || cpu.ends_with("baseline build)"), "{cpu}");
+    let build = cpu.trim_end_matches(", AVX-512 lanes)").trim_end_matches(')');
+    assert!(build.ends_with("x86-64-v3 build") || build.ends_with("baseline build"), "{cpu}");
+    assert_eq!(cpu.ends_with(", AVX-512 lanes)"), sawtooth::engine::lanes::available(), "{cpu}");
     // and which CPU: its model name, so that a timing can be traced to its machine
     assert!(cpu.contains(&format!("({}; ", sawtooth::engine::host_cpu())), "{cpu}");
     if let Ok(info) = std::fs::read_to_string("/proc/cpuinfo") {

@@ -193,11 +193,12 @@ impl BatchEvaluator for cpu::CpuEngine {
     }
     fn device(&self) -> String {
         format!(
-            "{} engine on the host CPU ({}; {} threads, {})",
+            "{} engine on the host CPU ({}; {} threads, {}{})",
             self.backend(),
             host_cpu(),
             rayon::current_num_threads(),
-            cpu::build()
+            cpu::build(),
+            if lanes::available() { ", AVX-512 lanes" } else { "" }
         )
     }
     fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
