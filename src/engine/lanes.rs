@@ -91,30 +91,33 @@ mod avx512 {
 
     // One helper per scalar operation, each the IEEE operation of the scalar code in every
     // lane (the target feature lets them inline into `first_hits`).
+    macro_rules! lane_ops {
+        ($($name:ident -> $out:ty = $body:expr;)*) => {$(
+            #[target_feature(enable = "avx512f")]
+            #[inline]
+            fn $name(a: V, b: V) -> $out {
+                $body(a, b)
+            }
+        )*};
+    }
+    lane_ops! {
+        add -> V = _mm512_add_pd;
+        sub -> V = _mm512_sub_pd;
+        mul -> V = _mm512_mul_pd;
+        div -> V = _mm512_div_pd;
+        // ordered comparisons: false where either is NaN, as in scalar code
+        lt -> M = _mm512_cmp_pd_mask::<_CMP_LT_OQ>;
+        le -> M = _mm512_cmp_pd_mask::<_CMP_LE_OQ>;
+        gt -> M = _mm512_cmp_pd_mask::<_CMP_GT_OQ>;
+        ge -> M = _mm512_cmp_pd_mask::<_CMP_GE_OQ>;
+        eq -> M = _mm512_cmp_pd_mask::<_CMP_EQ_OQ>;
+        // `!=`: true where either is NaN, as in scalar code
+        ne -> M = _mm512_cmp_pd_mask::<_CMP_NEQ_UQ>;
+    }
     #[target_feature(enable = "avx512f")]
     #[inline]
     fn sp(x: f64) -> V {
         _mm512_set1_pd(x)
-    }
-    #[target_feature(enable = "avx512f")]
-    #[inline]
-    fn add(a: V, b: V) -> V {
-        _mm512_add_pd(a, b)
-    }
-    #[target_feature(enable = "avx512f")]
-    #[inline]
-    fn sub(a: V, b: V) -> V {
-        _mm512_sub_pd(a, b)
-    }
-    #[target_feature(enable = "avx512f")]
-    #[inline]
-    fn mul(a: V, b: V) -> V {
-        _mm512_mul_pd(a, b)
-    }
-    #[target_feature(enable = "avx512f")]
-    #[inline]
-    fn div(a: V, b: V) -> V {
-        _mm512_div_pd(a, b)
     }
     #[target_feature(enable = "avx512f")]
     #[inline]
@@ -154,37 +157,6 @@ mod avx512 {
     #[inline]
     fn sqrt(a: V) -> V {
         _mm512_sqrt_pd(a)
-    }
-    #[target_feature(enable = "avx512f")]
-    #[inline]
-    fn lt(a: V, b: V) -> M {
-        _mm512_cmp_pd_mask::<_CMP_LT_OQ>(a, b)
-    }
-    #[target_feature(enable = "avx512f")]
-    #[inline]
-    fn le(a: V, b: V) -> M {
-        _mm512_cmp_pd_mask::<_CMP_LE_OQ>(a, b)
-    }
-    #[target_feature(enable = "avx512f")]
-    #[inline]
-    fn gt(a: V, b: V) -> M {
-        _mm512_cmp_pd_mask::<_CMP_GT_OQ>(a, b)
-    }
-    #[target_feature(enable = "avx512f")]
-    #[inline]
-    fn ge(a: V, b: V) -> M {
-        _mm512_cmp_pd_mask::<_CMP_GE_OQ>(a, b)
-    }
-    #[target_feature(enable = "avx512f")]
-    #[inline]
-    fn eq(a: V, b: V) -> M {
-        _mm512_cmp_pd_mask::<_CMP_EQ_OQ>(a, b)
-    }
-    /// `!=` (true where either is NaN, as in scalar code).
-    #[target_feature(enable = "avx512f")]
-    #[inline]
-    fn ne(a: V, b: V) -> M {
-        _mm512_cmp_pd_mask::<_CMP_NEQ_UQ>(a, b)
     }
     /// `if m { a } else { b }` in every lane.
     #[target_feature(enable = "avx512f")]
