@@ -134,7 +134,12 @@ pub fn run_particles<T: Real>(
     for bounce in 0..ctx.max_bounces {
         let (mut flying, mut hop_sum, mut hop_n) = (0usize, 0.0f64, 0usize);
         // every launch of this bounce first, then every flight (`fly_particle` says why)
-        if draw_lanes {
+        let factors_drawn = match ph.randomise {
+            RANDOMISE_EVERY_LAUNCH => true,
+            RANDOMISE_FIRST_LAUNCH => bounce == 0,
+            _ => false,
+        };
+        if draw_lanes && factors_drawn {
             // the launch factors' draws sixteen particles at a time
             to_fly.clear();
             to_fly.extend(parts.iter().enumerate().filter(|(_, p)| p.state == STATE_FLYING).map(|(i, _)| i));
@@ -174,6 +179,10 @@ pub fn run_particles<T: Real>(
             }
         };
         if let Some((d64, ph64)) = vector {
+            if !(draw_lanes && factors_drawn) {
+                to_fly.clear();
+                to_fly.extend(parts.iter().enumerate().filter(|(_, p)| p.state == STATE_FLYING).map(|(i, _)| i));
+            }
             for group in to_fly.chunks(lanes::LANES) {
                 let any_parts: &dyn Any = &parts;
                 let parts64 = any_parts.downcast_ref::<Vec<KParticle<f64>>>().expect("T is f64 here");

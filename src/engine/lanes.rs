@@ -663,6 +663,53 @@ mod tests {
         }
     }
 
+    /// The cpu engine with its lanes leaves every particle as the scalar kernel's bounce
+    /// loop does (randomise every launch, fly, land, one particle at a time): lunar designs
+    /// with and without launch randomisation, with and without the effects.
+    #[test]
+    fn the_engine_on_lanes_leaves_every_particle_as_the_scalar_loop() {
+        if !available() {
+            eprintln!("skipped: this CPU lacks AVX-512F, so the engine does not use the lanes");
+            return;
+        }
+        let mut cases = Vec::new();
+        for randomise in [true, false] {
+            let mut s = Scenario::lunar();
+            s.sim.particles = 150;
+            s.sim.randomise = randomise;
+            cases.push(s.clone());
+            s.effects.impact_scatter = Some(ImpactScatter { sigma_deg: 4.0, form: TiltForm::default() });
+            s.effects.launch_spread = Some(LaunchSpread { speed_spread: 0.2, angle_sigma_deg: 5.0 });
+            cases.push(s);
+        }
+        for (c, s) in cases.iter().enumerate() {
+            let ctx = Context::new(s);
+            let ph = kernel_physics::<f64>(&ctx);
+            for design in random_valid_designs(s, 4, 30 + c as u64) {
+                let prep = prepare(s, &design).unwrap();
+                let d = kernel_design::<f64>(&prep);
+                let (engine, _) = crate::engine::cpu::run_particles::<f64>(&prep, &ctx, None);
+                for (i, l) in prep.launches.iter().enumerate() {
+                    let mut p = init_particle(&d, &ph, *l, i as u32);
+                    for bounce in 0..ctx.max_bounces {
+                        if p.state != STATE_FLYING {
+                            break;
+                        }
+                        randomise_launch(&d, &ph, &mut p, i as u32, bounce);
+                        fly_particle(&d, &ph, &mut p, i as u32, bounce);
+                    }
+                    let e = &engine[i];
+                    let b = |v: [f64; 2]| [v[0].to_bits(), v[1].to_bits()];
+                    assert_eq!(
+                        (e.state, e.tooth, b(e.pos), b(e.vel), e.bounces, b(e.first)),
+                        (p.state, p.tooth, b(p.pos), b(p.vel), p.bounces, b(p.first)),
+                        "case {c}, particle {i}"
+                    );
+                }
+            }
+        }
+    }
+
     /// What the vector search does not cover it says so: drag, a flight in pieces, the
     /// listing's minimum hop.
     #[test]
