@@ -129,10 +129,15 @@ pub fn run_particles<T: Real>(
     };
     // and the launch factors' draws of every engine run are made sixteen at a time
     let draw_lanes = lanes::available();
-    let mut to_fly: Vec<usize> = Vec::with_capacity(parts.len());
+    // the indices of the particles still flying, for the lanes
+    let mut to_fly: Vec<u32> = Vec::with_capacity(parts.len());
     let mut iterations = 0;
     for bounce in 0..ctx.max_bounces {
         let (mut flying, mut hop_sum, mut hop_n) = (0usize, 0.0f64, 0usize);
+        if draw_lanes {
+            to_fly.clear();
+            to_fly.extend((0..parts.len() as u32).filter(|&i| parts[i as usize].state == STATE_FLYING));
+        }
         // every launch of this bounce first, then every flight (`fly_particle` says why)
         let factors_drawn = match ph.randomise {
             RANDOMISE_EVERY_LAUNCH => true,
@@ -141,14 +146,11 @@ pub fn run_particles<T: Real>(
         };
         if draw_lanes && factors_drawn {
             // the launch factors' draws sixteen particles at a time
-            to_fly.clear();
-            to_fly.extend(parts.iter().enumerate().filter(|(_, p)| p.state == STATE_FLYING).map(|(i, _)| i));
             for group in to_fly.chunks(16) {
-                let ids: [u32; 16] = std::array::from_fn(|l| group[l.min(group.len() - 1)] as u32);
-                let angle = lanes::uniforms(ph.seed, &ids[..group.len()], bounce, DRAW_ANGLE);
-                let speed = lanes::uniforms(ph.seed, &ids[..group.len()], bounce, DRAW_SPEED);
+                let angle = lanes::uniforms(ph.seed, group, bounce, DRAW_ANGLE);
+                let speed = lanes::uniforms(ph.seed, group, bounce, DRAW_SPEED);
                 for (l, &i) in group.iter().enumerate() {
-                    randomise_launch_drawn(&d, &ph, &mut parts[i], i as u32, bounce, Some([angle[l], speed[l]]));
+                    randomise_launch_drawn(&d, &ph, &mut parts[i as usize], i, bounce, Some([angle[l], speed[l]]));
                 }
             }
         } else {
@@ -179,45 +181,25 @@ pub fn run_particles<T: Real>(
             }
         };
         if let Some((d64, ph64)) = vector {
-            if !(draw_lanes && factors_drawn) {
-                to_fly.clear();
-                to_fly.extend(parts.iter().enumerate().filter(|(_, p)| p.state == STATE_FLYING).map(|(i, _)| i));
-            }
             for group in to_fly.chunks(lanes::LANES) {
                 let any_parts: &dyn Any = &parts;
                 let parts64 = any_parts.downcast_ref::<Vec<KParticle<f64>>>().expect("T is f64 here");
                 let hits = lanes::first_hits(d64, ph64, parts64, group, bounce);
-                if ph64.scatter_sigma == 0.0 {
-                    // the restitution law on the lanes too (impact scatter draws per grain)
+                // the restitution law on the lanes too, unless impact scatter draws a tilt
+                // per grain (then `land`, one grain at a time)
+                let bounced = (ph64.scatter_sigma == 0.0).then(|| {
                     let (mut v_in, mut normal) = ([[0.0; lanes::LANES]; 2], [[0.0; lanes::LANES]; 2]);
                     for (l, (h, &i)) in hits.iter().zip(group).enumerate() {
-                        // `land`: the vacuum flight's velocity at the impact, plus a zero drift
-                        let v = parts64[i].vel;
+                        // as `land`: the vacuum flight's velocity at the impact, plus a zero drift
+                        let v = parts64[i as usize].vel;
+                        let n = normal_of(d64, h.surface);
                         (v_in[0][l], v_in[1][l]) = (v[0] + 0.0, (v[1] - ph64.g * h.t) + 0.0);
-                        (normal[0][l], normal[1][l]) = (normal_of(d64, h.surface)[0], normal_of(d64, h.surface)[1]);
+                        (normal[0][l], normal[1][l]) = (n[0], n[1]);
                     }
-                    let out = lanes::bounce_velocities(&ph64.restitution, &v_in, &normal);
-                    for (l, (h, &i)) in hits.iter().zip(group).enumerate() {
-                        let p = &mut parts[i];
-                        let mut flown = Flown { from_tooth: p.tooth, from: p.pos, vel: p.vel, t: T::zero() };
-                        if h.found {
-                            let hit = Hit {
-                                found: true,
-                                t: T::c(h.t),
-                                pos: [T::c(h.pos[0]), T::c(h.pos[1])],
-                                tooth: h.tooth,
-                                surface: h.surface,
-                            };
-                            settle(&d, &ph, p, &hit, [T::c(out[0][l] - 0.0), T::c(out[1][l] - 0.0)]);
-                            flown.t = hit.t;
-                        } else {
-                            p.state = STATE_LOST;
-                        }
-                        record(i, p, flown);
-                    }
-                    continue;
-                }
-                for (h, &i) in hits.iter().zip(group) {
+                    lanes::bounce_velocities(&ph64.restitution, &v_in, &normal)
+                });
+                for (l, (h, &i)) in hits.iter().zip(group).enumerate() {
+                    let p = &mut parts[i as usize];
                     let hit = Hit {
                         found: h.found,
                         t: T::c(h.t),
@@ -225,10 +207,16 @@ pub fn run_particles<T: Real>(
                         tooth: h.tooth,
                         surface: h.surface,
                     };
-                    let p = &mut parts[i];
-                    let fl = Flight { p0: p.pos, v0: p.vel, g: ph.g, k: p.k_drag, drift: [T::zero(); 2] };
-                    let flown = land(&d, &ph, p, i as u32, bounce, hit, &fl, T::zero());
-                    record(i, p, flown);
+                    let flown = if let (Some(out), true) = (&bounced, hit.found) {
+                        // as `land`, with the rebound from the lanes (less the zero drift)
+                        let flown = Flown { from_tooth: p.tooth, from: p.pos, vel: p.vel, t: hit.t };
+                        settle(&d, &ph, p, &hit, [T::c(out[0][l] - 0.0), T::c(out[1][l] - 0.0)]);
+                        flown
+                    } else {
+                        let fl = Flight { p0: p.pos, v0: p.vel, g: ph.g, k: p.k_drag, drift: [T::zero(); 2] };
+                        land(&d, &ph, p, i, bounce, hit, &fl, T::zero())
+                    };
+                    record(i as usize, p, flown);
                 }
             }
         } else {

@@ -39,7 +39,7 @@ pub fn first_hits(
     d: &KDesign<f64>,
     ph: &KPhysics<f64>,
     parts: &[KParticle<f64>],
-    idx: &[usize],
+    idx: &[u32],
     bounce: u32,
 ) -> [Hit<f64>; LANES] {
     assert!(applies(ph) && available() && !idx.is_empty() && idx.len() <= LANES);
@@ -383,12 +383,12 @@ mod avx512 {
         d: &KDesign<f64>,
         ph: &KPhysics<f64>,
         parts: &[KParticle<f64>],
-        idx: &[usize],
+        idx: &[u32],
         bounce: u32,
     ) -> [Hit<f64>; LANES] {
         let mut a = [[0.0; LANES]; 6];
         for l in 0..LANES {
-            let p = &parts[idx[if l < idx.len() { l } else { 0 }]];
+            let p = &parts[idx[if l < idx.len() { l } else { 0 }] as usize];
             (a[0][l], a[1][l], a[2][l], a[3][l]) = (p.pos[0], p.pos[1], p.vel[0], p.vel[1]);
             (a[4][l], a[5][l]) = (p.surface as f64, p.tooth as f64);
         }
@@ -573,7 +573,8 @@ mod tests {
                     for (i, p) in parts.iter_mut().enumerate().filter(|(_, p)| p.state == STATE_FLYING) {
                         randomise_launch(&d, &ph, p, i as u32, bounce);
                     }
-                    let flying: Vec<usize> = (0..parts.len()).filter(|&i| parts[i].state == STATE_FLYING).collect();
+                    let flying: Vec<u32> =
+                        (0..parts.len() as u32).filter(|&i| parts[i as usize].state == STATE_FLYING).collect();
                     if flying.is_empty() {
                         break;
                     }
@@ -584,7 +585,7 @@ mod tests {
                         let (group, tail) = rest.split_at(size.min(rest.len()));
                         let hits = first_hits(&d, &ph, &parts, group, bounce);
                         for (h, &i) in hits.iter().zip(group) {
-                            let scalar = first_hit(&d, &ph, &parts[i], bounce);
+                            let scalar = first_hit(&d, &ph, &parts[i as usize], bounce);
                             assert_eq!(bits(h), bits(&scalar), "case {c}, bounce {bounce}, particle {i}");
                             compared += 1;
                             on_teeth += usize::from(scalar.found && scalar.surface != SURFACE_BASE);
@@ -593,7 +594,7 @@ mod tests {
                         size = size % LANES + 1;
                     }
                     for &i in &flying {
-                        fly_particle(&d, &ph, &mut parts[i], i as u32, bounce);
+                        fly_particle(&d, &ph, &mut parts[i as usize], i, bounce);
                     }
                 }
             }
