@@ -58,11 +58,7 @@ pub fn write_atomic_with(path: &Path, write: impl FnOnce(&mut dyn Write) -> anyh
     if path == Path::new("/dev/stdout") {
         // through this process's own stdout, so that what else it prints follows in order
         // even when stdout is a file (a second open of /dev/stdout has its own offset)
-        let mut out = std::io::stdout().lock();
-        let mut w = BufWriter::new(&mut out);
-        write(&mut w).with_context(|| format!("writing {}", path.display()))?;
-        w.flush().with_context(|| format!("writing {}", path.display()))?;
-        return Ok(());
+        return write_buffered(path, &mut std::io::stdout().lock(), write);
     }
     let resolved;
     let mut path = path;
@@ -76,10 +72,7 @@ pub fn write_atomic_with(path: &Path, write: impl FnOnce(&mut dyn Write) -> anyh
                 .truncate(meta.is_file())
                 .open(path)
                 .with_context(|| format!("writing {}: opening it", path.display()))?;
-            let mut w = BufWriter::new(&mut stream);
-            write(&mut w).with_context(|| format!("writing {}", path.display()))?;
-            w.flush().with_context(|| format!("writing {}", path.display()))?;
-            return Ok(());
+            return write_buffered(path, &mut stream, write);
         }
         if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) {
             resolved = std::fs::canonicalize(path).with_context(|| format!("writing {}", path.display()))?;
@@ -111,11 +104,7 @@ pub fn write_atomic_with(path: &Path, write: impl FnOnce(&mut dyn Write) -> anyh
         .suffix(TMP_SUFFIX)
         .tempfile_in(dir)
         .with_context(|| format!("writing {}: creating a temporary file in {}", path.display(), dir.display()))?;
-    {
-        let mut w = BufWriter::new(tmp.as_file_mut());
-        write(&mut w).with_context(|| format!("writing {}", path.display()))?;
-        w.flush().with_context(|| format!("writing {}", path.display()))?;
-    }
+    write_buffered(path, tmp.as_file_mut(), write)?;
     tmp.as_file().sync_all().with_context(|| format!("writing {}: fsync", path.display()))?;
     // On failure the temporary file is removed when `e.file` drops.
     tmp.persist(path)
@@ -127,6 +116,17 @@ pub fn write_atomic_with(path: &Path, write: impl FnOnce(&mut dyn Write) -> anyh
         let _ = d.sync_all();
     }
     Ok(())
+}
+
+/// `write` through a buffer into `out`, flushed; errors name `path`.
+fn write_buffered(
+    path: &Path,
+    out: &mut dyn Write,
+    write: impl FnOnce(&mut dyn Write) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let mut w = BufWriter::new(out);
+    write(&mut w).with_context(|| format!("writing {}", path.display()))?;
+    w.flush().with_context(|| format!("writing {}", path.display()))
 }
 
 /// True for the names of temporary files a killed atomic write can leave behind: this
