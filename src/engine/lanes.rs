@@ -77,8 +77,7 @@ pub fn uniforms(seed_word: u32, particles: &[u32], bounce: u32, draw: u32) -> [f
     let h = unsafe { avx512::uniform_bits(seed_word, &ids, bounce, draw) };
     #[cfg(not(target_arch = "x86_64"))]
     let h: [u32; 16] = unreachable!("available() is false off x86-64");
-    // as `uniform01`: 24 random bits, exact in f64
-    h.map(|h| (h >> 8) as f64 * (1.0 / 16_777_216.0))
+    h.map(crate::model::rng::unit_from_hash)
 }
 
 #[cfg(target_arch = "x86_64")]

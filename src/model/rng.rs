@@ -41,7 +41,14 @@ pub fn seed_word(seed: u64) -> u32 {
 pub fn uniform01(seed_word: u32, particle: u32, bounce: u32, draw: u32) -> f64 {
     // Two rounds: one round of pcg4d leaves visible structure for small consecutive keys.
     let h = pcg4d(pcg4d([particle, bounce, draw, seed_word]));
-    (h[0] >> 8) as f64 * (1.0 / 16_777_216.0)
+    unit_from_hash(h[0])
+}
+
+/// The uniform number of a hash word: its top 24 bits as a fraction of 2^24 (exact in f32
+/// and f64). Shared by [`uniform01`] and the cpu engine's sixteen-lane draws.
+#[inline(always)]
+pub fn unit_from_hash(word: u32) -> f64 {
+    (word >> 8) as f64 * (1.0 / 16_777_216.0)
 }
 
 /// The draw ids (which draw of a particle's launch or bounce a number is), declared once for
