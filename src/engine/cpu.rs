@@ -119,8 +119,8 @@ pub fn run_particles<T: Real>(
         .enumerate()
         .map(|(i, l)| init_particle(&d, &ph, [T::c(l[0]), T::c(l[1])], i as u32))
         .collect();
-    // vacuum flights of the text's physics in f64 (the lunar batches) are searched eight at
-    // a time on SIMD lanes, to the same bits (`lanes`)
+    // flights of the text's physics in f64 (the lunar and Earth batches) are searched eight
+    // at a time on SIMD lanes, to the same bits (`lanes`)
     let any_d: &dyn Any = &d;
     let any_ph: &dyn Any = &ph;
     let vector = match (any_d.downcast_ref::<KDesign<f64>>(), any_ph.downcast_ref::<KPhysics<f64>>()) {
@@ -190,10 +190,12 @@ pub fn run_particles<T: Real>(
                 let bounced = (ph64.scatter_sigma == 0.0).then(|| {
                     let (mut v_in, mut normal) = ([[0.0; lanes::LANES]; 2], [[0.0; lanes::LANES]; 2]);
                     for (l, (h, &i)) in hits.iter().zip(group).enumerate() {
-                        // as `land`: the vacuum flight's velocity at the impact, plus a zero drift
-                        let v = parts64[i as usize].vel;
+                        // as `land`: the flight's velocity at the impact, plus a zero drift
+                        let p = &parts64[i as usize];
+                        let fl = Flight { p0: p.pos, v0: p.vel, g: ph64.g, k: p.k_drag, drift: [0.0; 2] };
+                        let v = fl.vel(h.t);
                         let n = normal_of(d64, h.surface);
-                        (v_in[0][l], v_in[1][l]) = (v[0] + 0.0, (v[1] - ph64.g * h.t) + 0.0);
+                        (v_in[0][l], v_in[1][l]) = (v[0] + 0.0, v[1] + 0.0);
                         (normal[0][l], normal[1][l]) = (n[0], n[1]);
                     }
                     lanes::bounce_velocities(&ph64.restitution, &v_in, &normal)

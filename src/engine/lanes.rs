@@ -1,26 +1,29 @@
 //! The flight search of [`first_hit`](super::kernel::first_hit) for [`LANES`] particles at
-//! once, in f64, for vacuum flights of the text's physics (no drag, no sled motion, every
-//! hop an impact): the case of the lunar batches. The branches of the scalar search become
-//! masks and selects on AVX-512 lanes, and every lane does the scalar search's IEEE
-//! operations in the scalar search's order, so each lane's hit is the scalar hit to the bit
-//! (`tests` below, and `examples/engine_digest.rs`). A lane whose particle has finished its
-//! teeth idles while the others go on. Beside it, on the same lanes: the restitution law
-//! ([`bounce_velocities`]) and the counter-based generator's hash ([`uniforms`]). Only on
-//! CPUs with AVX-512F ([`available`]); elsewhere the cpu engine runs the scalar kernel.
+//! once, in f64, for flights of the text's physics in one piece (no sled motion or quadratic
+//! drag, every hop an impact): vacuum parabolas (the lunar batches) and Stokes flights
+//! (Earth's). The branches of the scalar search become masks and selects on AVX-512 lanes,
+//! and every lane does the scalar search's IEEE operations in the scalar search's order, so
+//! each lane's hit is the scalar hit to the bit (`tests` below, and
+//! `examples/engine_digest.rs`). A lane whose particle has finished its teeth (or its
+//! Halley steps) idles while the others go on. libm's functions (`expm1`, `ln`, `ln_1p`)
+//! have no vector form with the same bits, so a drag flight's lanes call them one lane at a
+//! time. Beside it, on the same lanes: the restitution law ([`bounce_velocities`]) and the
+//! counter-based generator's hash ([`uniforms`]). Only on CPUs with AVX-512F
+//! ([`available`]); elsewhere the cpu engine runs the scalar kernel.
 //! Why intrinsics: written as loops over eight-element arrays the compiler left the search
 //! scalar, 45 % slower than the one-particle search (BENCHMARKS.md).
 
-use super::kernel::{Hit, KDesign, KParticle, KPhysics, SURFACE_BASE, SURFACE_CATCH, SURFACE_RAMP};
+use super::kernel::{first_hit, Hit, KDesign, KParticle, KPhysics, SURFACE_BASE, SURFACE_CATCH, SURFACE_RAMP};
 use crate::model::collision::Restitution;
 
 /// Particles searched together: eight f64 lanes, one AVX-512 register.
 pub const LANES: usize = 8;
 
-/// Whether [`first_hits`] gives the scalar search's hits for these physics: vacuum (so
-/// every grain's k_drag is 0), no flight split in pieces (sled motion, quadratic drag), and
-/// no minimum hop (the listing mode's 1e-3 mm rule skips roots the lanes would take).
+/// Whether [`first_hits`] gives the scalar search's hits for these physics: a flight in one
+/// piece (no sled motion, no quadratic drag) and no minimum hop (the listing mode's 1e-3 mm
+/// rule skips roots the lanes would take). Vacuum (the Moon) and Stokes drag (Earth) both.
 pub fn applies(ph: &KPhysics<f64>) -> bool {
-    ph.k_drag == 0.0 && ph.sled_speed == 0.0 && ph.qd_step == 0.0 && ph.min_hop == 0.0
+    ph.sled_speed == 0.0 && ph.qd_step == 0.0 && ph.min_hop == 0.0
 }
 
 /// Whether this CPU runs [`first_hits`] (AVX-512F; the caller searches one particle at a
@@ -35,6 +38,7 @@ pub fn available() -> bool {
 /// The first impact of each of the particles `parts[idx[l]]` (as `kernel::first_hit` finds
 /// it), for physics where [`applies`] holds, on a CPU where [`available`] holds. `idx` has
 /// 1 to [`LANES`] entries; lanes beyond it repeat the first particle and are dropped.
+#[inline]
 pub fn first_hits(
     d: &KDesign<f64>,
     ph: &KPhysics<f64>,
@@ -43,13 +47,38 @@ pub fn first_hits(
     bounce: u32,
 ) -> [Hit<f64>; LANES] {
     assert!(applies(ph) && available() && !idx.is_empty() && idx.len() <= LANES);
+    // every grain has drag when the air has (Stokes k_drag > 0, scaled per grain when
+    // polydisperse), none in vacuum
+    let drag = ph.k_drag > 0.0;
     #[cfg(target_arch = "x86_64")]
     // SAFETY: the CPU has AVX-512F (asserted above).
-    return unsafe { avx512::first_hits(d, ph, parts, idx, bounce) };
-    #[allow(unreachable_code)]
-    {
-        unreachable!("available() is false off x86-64")
+    let mut hits = unsafe {
+        if drag {
+            avx512::first_hits::<true>(d, ph, parts, idx, bounce)
+        } else {
+            avx512::first_hits::<false>(d, ph, parts, idx, bounce)
+        }
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let mut hits: [Hit<f64>; LANES] = unreachable!("available() is false off x86-64");
+    // a grain whose own k_drag rounds to 0 (polydisperse, an extreme draw) flies in vacuum:
+    // the scalar search, which picks the flight's form per grain, takes it (in vacuum every
+    // grain's k_drag is 0 times its factor, and the vacuum search never reads it)
+    if drag {
+        for (h, &i) in hits.iter_mut().zip(idx) {
+            let p = &parts[i as usize];
+            if p.k_drag.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+                *h = scalar_hit(d, ph, p, bounce);
+            }
+        }
     }
+    hits
+}
+
+/// The scalar search for the rare grain the lanes leave to it, kept out of line.
+#[inline(never)]
+fn scalar_hit(d: &KDesign<f64>, ph: &KPhysics<f64>, p: &KParticle<f64>, bounce: u32) -> Hit<f64> {
+    first_hit(d, ph, p, bounce)
 }
 
 /// `Restitution::bounce` of [`LANES`] impact velocities `v` on surfaces with normals `n`,
@@ -197,7 +226,7 @@ mod avx512 {
         r.n = _mm512_mask_add_pd(r.n, ok, r.n, sp(1.0));
     }
 
-    /// A flight's start and launch velocity in every lane.
+    /// A flight's start, launch velocity and drag in every lane.
     #[derive(Clone, Copy)]
     struct Fl {
         px: V,
@@ -206,31 +235,81 @@ mod avx512 {
         vy: V,
         /// 0.5 g, as the scalar position multiplies it.
         half_g: V,
+        /// Stokes k_drag (1/s; 0 in vacuum) and the terminal velocity -g/k of a drag flight.
+        k: V,
+        vinf: V,
     }
 
-    /// `Flight::pos` of a vacuum flight.
+    /// `f(x)` (a libm function) in the lanes of `mask`, one lane at a time: libm's functions
+    /// have no vector form with the same bits. The other lanes keep `x`.
     #[target_feature(enable = "avx512f")]
     #[inline]
-    fn pos_at(f: &Fl, t: V) -> (V, V) {
+    fn each(mask: M, x: V, f: fn(f64) -> f64) -> V {
+        if mask == 0 {
+            return x;
+        }
+        let mut a = store(x);
+        let mut m = mask;
+        while m != 0 {
+            let l = m.trailing_zeros() as usize;
+            a[l] = f(a[l]);
+            m &= m - 1;
+        }
+        load(&a)
+    }
+
+    /// `relax`, (1 - e^{-kt})/k (flight.rs), in the lanes of `mask`.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn relax(mask: M, k: V, t: V) -> V {
+        div(neg(each(mask, mul(neg(k), t), f64::exp_m1)), k)
+    }
+
+    /// `Flight::pos`, needed in the lanes of `mask` (a drag flight's exponential is taken
+    /// there only).
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn pos_at<const DRAG: bool>(f: &Fl, mask: M, t: V) -> (V, V) {
+        if DRAG {
+            // Eq. 4.53-4.54
+            let e = relax(mask, f.k, t);
+            return (add(f.px, mul(f.vx, e)), add(add(f.py, mul(f.vinf, t)), mul(sub(f.vy, f.vinf), e)));
+        }
         (add(f.px, mul(f.vx, t)), sub(add(f.py, mul(f.vy, t)), mul(mul(f.half_g, t), t)))
     }
 
-    /// `Flight::time_at_x` of a vacuum flight.
+    /// `Flight::time_at_x`, needed in the lanes of `mask`.
     #[target_feature(enable = "avx512f")]
     #[inline]
-    fn time_at_x(f: &Fl, x: V) -> V {
+    fn time_at_x<const DRAG: bool>(f: &Fl, mask: M, x: V) -> V {
         let dx = sub(x, f.px);
         let t = div(dx, f.vx);
         let never = eq(f.vx, sp(0.0)) | lt(t, sp(0.0));
-        sel(never, sel(eq(dx, sp(0.0)), sp(0.0), sp(f64::INFINITY)), t)
+        let behind = sel(eq(dx, sp(0.0)), sp(0.0), sp(f64::INFINITY));
+        if DRAG {
+            // beyond the drag asymptote x0 + vx/k when q <= 0
+            let q = sub(sp(1.0), div(mul(f.k, dx), f.vx));
+            let beyond = le(q, sp(0.0));
+            let t = div(neg(each(mask & !never & !beyond, q, f64::ln)), f.k);
+            return sel(never, behind, sel(beyond, sp(f64::INFINITY), t));
+        }
+        sel(never, behind, t)
     }
 
-    /// `Flight::y_at_x` of a vacuum flight: whether it gets there, and the height.
+    /// `Flight::y_at_x`, needed in the lanes of `mask`: whether it gets there, and the height.
     #[target_feature(enable = "avx512f")]
     #[inline]
-    fn y_at_x(f: &Fl, x: V) -> (M, V) {
+    fn y_at_x<const DRAG: bool>(f: &Fl, mask: M, x: V) -> (M, V) {
         let e = div(sub(x, f.px), f.vx);
-        (ne(f.vx, sp(0.0)) & !lt(e, sp(0.0)), sub(add(f.py, mul(f.vy, e)), mul(mul(f.half_g, e), e)))
+        let reaches = ne(f.vx, sp(0.0)) & !lt(e, sp(0.0));
+        if DRAG {
+            // Eq. 4.55
+            let q = sub(sp(1.0), mul(f.k, e));
+            let reaches = reaches & !le(q, sp(0.0));
+            let t = div(neg(each(mask & reaches, q, f64::ln)), f.k);
+            return (reaches, add(add(f.py, mul(f.vinf, t)), mul(sub(f.vy, f.vinf), e)));
+        }
+        (reaches, sub(add(f.py, mul(f.vy, e)), mul(mul(f.half_g, e), e)))
     }
 
     /// `Flight::line_crossings` of vacuum flights against the line through `a` with normal
@@ -278,6 +357,148 @@ mod avx512 {
         let swap = lt(y, x);
         push(&mut r, quad, sel(swap, y, x), t_min, t_max);
         push(&mut r, quad, sel(swap, x, y), t_min, t_max);
+        r
+    }
+
+    /// `stokes_f` (flight.rs), f(t) = c0 + a t + b E(t), in the lanes of `mask`.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn stokes_f(mask: M, (c0, ca, cb): (V, V, V), k: V, t: V) -> V {
+        add(add(c0, mul(ca, t)), mul(cb, relax(mask, k, t)))
+    }
+
+    /// `stokes_horizon` (flight.rs): a time by which f has its final sign.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn stokes_horizon((c0, a, b): (V, V, V), k: V) -> V {
+        let zero = sp(0.0);
+        let falling = max(div(add(c0, div(max(b, zero), k)), neg(a)), zero);
+        let rising = max(div(sub(neg(c0), div(min(b, zero), k)), a), zero);
+        sel(lt(a, zero), falling, sel(gt(a, zero), rising, div(sp(40.0), k)))
+    }
+
+    /// The first root `quadratic_roots` (flight.rs) keeps in (0, ∞) ∩ [t_min, t_max], and
+    /// the lanes that have one.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn first_quadratic_root(c2: V, c1: V, c0: V, t_min: V, t_max: V) -> (M, V) {
+        let zero = sp(0.0);
+        let kept = |t: V| gt(t, zero) & ge(t, t_min) & le(t, t_max);
+        let linear = eq(c2, zero);
+        let t_lin = div(neg(c0), c1);
+        let lin_ok = linear & ne(c1, zero) & kept(t_lin);
+        let disc = sub(mul(c1, c1), mul(mul(sp(4.0), c2), c0));
+        let sq = sqrt(disc);
+        let q = sel(ge(c1, zero), mul(sp(-0.5), add(c1, sq)), mul(sp(-0.5), sub(c1, sq)));
+        let quad = !linear & !lt(disc, zero) & !eq(q, zero);
+        let (x, y) = (div(q, c2), div(c0, q));
+        let swap = lt(y, x);
+        let (small, large) = (sel(swap, y, x), sel(swap, x, y));
+        let (ok_small, ok_large) = (quad & kept(small), quad & kept(large));
+        (lin_ok | ok_small | ok_large, sel(lin_ok, t_lin, sel(ok_small, small, large)))
+    }
+
+    /// `bracketed_newton` (flight.rs) in the lanes of `mask`: each lane takes the scalar
+    /// function's steps and stops where it returns; the group runs as many steps as its
+    /// slowest lane.
+    #[allow(clippy::too_many_arguments)]
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn bracketed_newton(mask: M, (c0, ca, cb): (V, V, V), k: V, mut lo: V, mut hi: V, f_lo: V, f_hi: V) -> V {
+        let (zero, one) = (sp(0.0), sp(1.0));
+        let lo_positive = gt(f_lo, zero);
+        let (has, root) = first_quadratic_root(mul(mul(sp(-0.5), k), cb), add(ca, cb), c0, lo, hi);
+        let mut t = sel(has, root, lo);
+        let regula =
+            sel(ne(f_hi, f_lo), sub(lo, div(mul(f_lo, sub(hi, lo)), sub(f_hi, f_lo))), mul(sp(0.5), add(lo, hi)));
+        t = sel(gt(t, lo) & lt(t, hi), t, regula);
+        t = sel(gt(t, lo) & lt(t, hi), t, mul(sp(0.5), add(lo, hi)));
+        let (mut active, mut result) = (mask, t);
+        for _ in 0..48 {
+            if active == 0 {
+                break;
+            }
+            // f and its derivatives share e^{-kt}: one expm1 per step
+            let m = each(active, mul(neg(k), t), f64::exp_m1);
+            let ft = sub(add(c0, mul(ca, t)), div(mul(cb, m), k));
+            let d = add(ca, mul(cb, add(one, m)));
+            let on_root = active & eq(ft, zero);
+            result = sel(on_root, t, result);
+            active &= !on_root;
+            let same_side = !(gt(ft, zero) ^ lo_positive);
+            lo = sel(active & same_side, t, lo);
+            hi = sel(active & !same_side, t, hi);
+            let d2 = mul(mul(neg(k), cb), add(one, m));
+            let den = sub(mul(mul(sp(2.0), d), d), mul(ft, d2));
+            let halley = sel(ne(den, zero), sub(t, div(mul(mul(sp(2.0), ft), d), den)), sub(lo, one));
+            let tol = mul(sp(f64::EPSILON * 4.0), max(abs(t), sp(f64::MIN_POSITIVE)));
+            let inside = gt(halley, lo) & lt(halley, hi);
+            let step = abs(sub(halley, t));
+            let c = abs(add(div(mul(d2, d2), mul(mul(sp(4.0), d), d)), div(mul(k, d2), mul(sp(6.0), d))));
+            let short = le(step, mul(sp(1e-3), abs(t))) & le(mul(mul(mul(c, step), step), step), tol);
+            let halley_final = active & inside & (le(step, tol) | short);
+            let next = mul(sp(0.5), add(lo, hi));
+            let bisection_final = active & !inside & le(abs(sub(next, t)), tol);
+            result = sel(halley_final, halley, sel(bisection_final, next, result));
+            active &= !(halley_final | bisection_final);
+            t = sel(inside, halley, next);
+        }
+        sel(active, t, result)
+    }
+
+    /// `Flight::line_crossings` of Stokes flights (the second half of the scalar function:
+    /// at most two roots, each bracketed on a monotone interval), in the lanes of `mask`.
+    #[allow(clippy::too_many_arguments)]
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn stokes_crossings(
+        mask: M,
+        f: &Fl,
+        (ax, ay): (V, V),
+        (nx, ny): (V, V),
+        departing: M,
+        t_min: V,
+        t_max: V,
+    ) -> Roots {
+        let (zero, inf) = (sp(0.0), sp(f64::INFINITY));
+        let c0 = sel(departing, zero, add(mul(nx, sub(f.px, ax)), mul(ny, sub(f.py, ay))));
+        let nv = add(mul(nx, f.vx), mul(ny, f.vy));
+        let nw = add(mul(nx, zero), mul(ny, zero)); // the drift term, zero here
+        let mut r = Roots { n: zero, r0: zero, r1: zero };
+        let vinf_n = mul(f.vinf, ny);
+        let (ca, cb) = (add(vinf_n, nw), sub(nv, vinf_n));
+        let coef = (c0, ca, cb);
+        // the extremum t* = ln(1 + x)/k, where x = n·v/(-a) > 0
+        let x = sel(ne(ca, zero), div(add(nv, nw), neg(ca)), zero);
+        let has_star = mask & gt(x, zero) & lt(abs(x), inf);
+        let t_star = div(each(has_star, x, f64::ln_1p), f.k);
+        let t_end = min(t_max, stokes_horizon(coef, f.k));
+        let active = mask & !gt(t_min, t_end);
+        if active == 0 {
+            return r;
+        }
+        let mut lo = max(t_min, zero);
+        let from_zero = eq(lo, zero);
+        let mut f_lo = sel(from_zero, c0, stokes_f(active & !from_zero, coef, f.k, lo));
+        for (present, hi) in [(has_star, t_star), (!0, t_end)] {
+            let go = active & present & !le(hi, lo);
+            if go == 0 {
+                continue;
+            }
+            let hi = min(hi, t_end);
+            let f_hi = stokes_f(go, coef, f.k, hi);
+            let starts_on_line = eq(lo, zero) & (departing | eq(f_lo, zero));
+            // lift-off below rounding: the flight is back on its surface at t*
+            let lift_off = go & departing & gt(lo, zero) & le(f_lo, zero) & eq(r.n, zero);
+            push(&mut r, lift_off, lo, t_min, t_max);
+            let bracket = go & !lift_off & !starts_on_line & (gt(f_lo, zero) ^ gt(f_hi, zero));
+            if bracket != 0 {
+                let t = bracketed_newton(bracket, coef, f.k, lo, hi, f_lo, f_hi);
+                push(&mut r, bracket, t, t_min, t_max);
+            }
+            lo = sel(go, hi, lo);
+            f_lo = sel(go, f_hi, f_lo);
+        }
         r
     }
 
@@ -375,23 +596,52 @@ mod avx512 {
         min(max(x, sp(-1e9)), sp(1e9))
     }
 
+    /// `Flight::line_crossings` in the lanes of `mask`, for vacuum or Stokes flights.
+    #[allow(clippy::too_many_arguments)]
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn crossings<const DRAG: bool>(
+        mask: M,
+        f: &Fl,
+        c2_g: f64,
+        a: (V, V),
+        n: (V, V),
+        departing: M,
+        t_min: V,
+        t_max: V,
+    ) -> Roots {
+        if DRAG {
+            stokes_crossings(mask, f, a, n, departing, t_min, t_max)
+        } else {
+            line_crossings(mask, f, c2_g, a, n, departing, t_min, t_max)
+        }
+    }
+
     /// [`super::first_hits`] on eight AVX-512 lanes: `kernel::first_hit_in` for a flight
     /// without drift or time limit, step by step; whole numbers (teeth, codes) ride as f64.
+    /// `DRAG`: every lane's grain has Stokes drag (k_drag > 0), else none has.
     #[target_feature(enable = "avx512f")]
-    pub fn first_hits(
+    pub fn first_hits<const DRAG: bool>(
         d: &KDesign<f64>,
         ph: &KPhysics<f64>,
         parts: &[KParticle<f64>],
         idx: &[u32],
         bounce: u32,
     ) -> [Hit<f64>; LANES] {
-        let mut a = [[0.0; LANES]; 6];
+        let mut a = [[0.0; LANES]; 7];
         for l in 0..LANES {
             let p = &parts[idx[if l < idx.len() { l } else { 0 }] as usize];
             (a[0][l], a[1][l], a[2][l], a[3][l]) = (p.pos[0], p.pos[1], p.vel[0], p.vel[1]);
             (a[4][l], a[5][l]) = (p.surface as f64, p.tooth as f64);
+            if DRAG {
+                a[6][l] = p.k_drag;
+            }
         }
-        let f = Fl { px: load(&a[0]), py: load(&a[1]), vx: load(&a[2]), vy: load(&a[3]), half_g: sp(0.5 * ph.g) };
+        let k = load(&a[6]);
+        let (px, py, vx, vy) = (load(&a[0]), load(&a[1]), load(&a[2]), load(&a[3]));
+        // the terminal velocity as `Flight` computes it, -g / k
+        let vinf = if DRAG { div(neg(sp(ph.g)), k) } else { sp(0.0) };
+        let f = Fl { px, py, vx, vy, half_g: sp(0.5 * ph.g), k, vinf };
         let (surface, kf) = (load(&a[4]), load(&a[5]));
         let c2_g = -0.5 * ph.g;
         let (zero, inf) = (sp(0.0), sp(f64::INFINITY));
@@ -401,7 +651,7 @@ mod avx512 {
         // The base line through every p1; its crossing bounds the flight.
         let n_base = (sp(d.n_base[0]), sp(d.n_base[1]));
         let departing_base = eq(surface, sp(SURFACE_BASE as f64));
-        let mut roots = line_crossings(!0, &f, c2_g, (zero, zero), n_base, departing_base, zero, inf);
+        let mut roots = crossings::<DRAG>(!0, &f, c2_g, (zero, zero), n_base, departing_base, zero, inf);
         let s0 = mul(neg(kf), sp(d.pitch_len));
         let s1 = add(s0, sp(d.base_length));
         let (tb0, tb1) = (sp(d.t_base[0]), sp(d.t_base[1]));
@@ -412,7 +662,7 @@ mod avx512 {
         // every hop counts, so the first root is the base crossing
         let has = ge(roots.n, sp(1.0));
         let t = roots.r0;
-        let (qx, qy) = pos_at(&f, t);
+        let (qx, qy) = pos_at::<DRAG>(&f, has, t);
         let s = add(mul(qx, tb0), mul(qy, tb1));
         let mut found = has & ge(s, s0) & le(s, add(sp(d.base_length), s0));
         let horizon = sel(has, t, inf);
@@ -425,7 +675,7 @@ mod avx512 {
 
         // The teeth whose x-extent overlaps the flight's x-range before the horizon.
         let finite = lt(abs(horizon), inf);
-        let x_end = sel(finite, pos_at(&f, horizon).0, sel(ge(f.vx, zero), inf, sp(f64::NEG_INFINITY)));
+        let x_end = sel(finite, pos_at::<DRAG>(&f, finite, horizon).0, sel(ge(f.vx, zero), inf, sp(f64::NEG_INFINITY)));
         let forward = ge(x_end, f.px);
         let (xmin, xmax) = (sel(forward, f.px, x_end), sel(forward, x_end, f.px));
         let lo = add(to_index(ceil(div(sub(xmin, sp(d.ext_max)), sp(d.pitch[0])))), kf);
@@ -449,10 +699,12 @@ mod avx512 {
             let xa = max(add(base, sp(d.ext_min)), lo);
             let xb = min(add(base, sp(d.ext_max)), hi);
             let top = add(mul(dj, sp(d.pitch[1])), top_rel);
-            let (sa, ya) = y_at_x(&f, xa);
-            let (sb, yb) = y_at_x(&f, xb);
+            let in_range = lt(stepf, count);
+            let reached = in_range & !gt(xa, xb);
+            let (sa, ya) = y_at_x::<DRAG>(&f, reached, xa);
+            let (sb, yb) = y_at_x::<DRAG>(&f, reached, xb);
             let flies_over = gt(xa, xb) | (sa & sb & gt(ya, top) & gt(yb, top));
-            let live = lt(stepf, count) & !flies_over;
+            let live = in_range & !flies_over;
             if live == 0 {
                 continue;
             }
@@ -476,22 +728,24 @@ mod avx512 {
                 let x_out = sel(backward, xa, xb);
                 let moving = gt(f.vx, zero) | lt(f.vx, zero);
                 let inside = ge(f.px, xa) & le(f.px, xb);
-                let t_lo = sel(moving, time_at_x(&f, x_in), sel(inside, zero, inf));
-                let t_hi = sel(moving, time_at_x(&f, x_out), inf);
-                let search = on & !gt(t_lo, t_max);
-                let mut roots = line_crossings(search, &f, c2_g, (ax, ay), n, departing, t_lo, min(t_max, t_hi));
+                let t_lo = sel(moving, time_at_x::<DRAG>(&f, on & moving, x_in), sel(inside, zero, inf));
+                let search_lo = on & !gt(t_lo, t_max);
+                let t_hi = sel(moving, time_at_x::<DRAG>(&f, search_lo & moving, x_out), inf);
+                let search = search_lo;
+                let mut roots = crossings::<DRAG>(search, &f, c2_g, (ax, ay), n, departing, t_lo, min(t_max, t_hi));
                 let over = on & !departing & contact(d.pitch_len, &f, rel_vel, (ax, ay), (bx, by), n);
                 roots.n = sel(over, sp(1.0), roots.n);
                 roots.r0 = sel(over, zero, roots.r0);
                 // the first root on the segment itself (0 <= s <= 1) is this segment's hit
                 let (ex, ey) = (sub(bx, ax), sub(by, ay));
                 let ee = add(mul(ex, ex), mul(ey, ey));
-                let q0 = pos_at(&f, roots.r0);
+                let has0 = on & ge(roots.n, sp(1.0));
+                let q0 = pos_at::<DRAG>(&f, has0, roots.r0);
                 let s0 = div(add(mul(sub(q0.0, ax), ex), mul(sub(q0.1, ay), ey)), ee);
-                let ok0 = on & ge(roots.n, sp(1.0)) & !(lt(s0, zero) | gt(s0, sp(1.0)));
+                let ok0 = has0 & !(lt(s0, zero) | gt(s0, sp(1.0)));
                 let second = on & ge(roots.n, sp(2.0)) & !ok0;
                 let (q1, ok1) = if second != 0 {
-                    let q1 = pos_at(&f, roots.r1);
+                    let q1 = pos_at::<DRAG>(&f, second, roots.r1);
                     let s1 = div(add(mul(sub(q1.0, ax), ex), mul(sub(q1.1, ay), ey)), ee);
                     (q1, second & !(lt(s1, zero) | gt(s1, sp(1.0))))
                 } else {
@@ -536,20 +790,14 @@ mod tests {
         (h.found, h.t.to_bits(), [h.pos[0].to_bits(), h.pos[1].to_bits()], h.tooth, h.surface)
     }
 
-    /// Every lane finds the hit the scalar search finds, to the bit, at every bounce of
-    /// every particle: random valid lunar designs, slopes from 0 to 40°, with and without
-    /// the effects that change launches and bounces, on Halton and random launch points,
-    /// in groups of every size from one to eight.
-    #[test]
-    fn each_lane_finds_the_scalar_hit_to_the_bit() {
-        if !available() {
-            eprintln!("skipped: this CPU lacks AVX-512F, so the engine does not use the lanes");
-            return;
-        }
+    /// The scenarios the lane tests run: `base` at slopes from 0 to 40°, plain and with the
+    /// effects that change launches, bounces and (polydisperse) each grain's drag, on Halton
+    /// and random launch points.
+    fn cases(base: Scenario, particles: u32) -> Vec<Scenario> {
         let mut cases = Vec::new();
         for alpha in [0.0, 20.0, 35.0, 40.0] {
-            let mut s = Scenario::lunar();
-            s.sim.particles = 120;
+            let mut s = base.clone();
+            s.sim.particles = particles;
             s.environment.alpha_deg = alpha;
             cases.push(s.clone());
             s.effects.impact_scatter = Some(ImpactScatter { sigma_deg: 6.0, form: TiltForm::default() });
@@ -558,11 +806,42 @@ mod tests {
             s.sim.launch_points = LaunchPoints::Random;
             cases.push(s);
         }
+        cases
+    }
+
+    /// Every lane finds the hit the scalar search finds, to the bit, at every bounce of
+    /// every particle: random valid lunar designs (vacuum flights) in [`cases`], in groups of
+    /// every size from one to eight.
+    #[test]
+    fn each_lane_finds_the_scalar_hit_to_the_bit() {
+        let Some((compared, on_teeth)) = compare_lane_hits(&cases(Scenario::lunar(), 120)) else {
+            return;
+        };
+        assert!(compared > 20_000 && on_teeth > compared / 3, "{compared} flights compared, {on_teeth} on teeth");
+    }
+
+    /// The same for Earth's designs: flights with Stokes drag, whose root search (Halley
+    /// steps, one `expm1` each) the lanes run to the scalar search's bits.
+    #[test]
+    fn each_lane_finds_the_scalar_hit_to_the_bit_with_drag() {
+        let Some((compared, on_teeth)) = compare_lane_hits(&cases(Scenario::earth(), 120)) else {
+            return;
+        };
+        assert!(compared > 10_000 && on_teeth > compared / 3, "{compared} flights compared, {on_teeth} on teeth");
+    }
+
+    /// Lane hits against scalar hits over `cases`: how many flights were compared, and how
+    /// many of them end on a tooth (not the base line or lost); None on a CPU without the lanes.
+    fn compare_lane_hits(cases: &[Scenario]) -> Option<(usize, usize)> {
+        if !available() {
+            eprintln!("skipped: this CPU lacks AVX-512F, so the engine does not use the lanes");
+            return None;
+        }
         let (mut compared, mut on_teeth) = (0usize, 0usize);
         for (c, s) in cases.iter().enumerate() {
             let ctx = Context::new(s);
             let ph = kernel_physics::<f64>(&ctx);
-            assert!(applies(&ph), "case {c} is a vacuum flight of the text's physics");
+            assert!(applies(&ph), "case {c} is a one-piece flight of the text's physics");
             for design in random_valid_designs(s, 5, 7 + c as u64) {
                 let prep = prepare(s, &design).unwrap();
                 let d = kernel_design::<f64>(&prep);
@@ -598,7 +877,7 @@ mod tests {
                 }
             }
         }
-        assert!(compared > 20_000 && on_teeth > compared / 3, "{compared} flights compared, {on_teeth} on teeth");
+        Some((compared, on_teeth))
     }
 
     /// The restitution law on lanes gives the scalar law's bits, over impacts of every
@@ -665,7 +944,7 @@ mod tests {
 
     /// The cpu engine with its lanes leaves every particle as the scalar kernel's bounce
     /// loop does (randomise every launch, fly, land, one particle at a time): lunar designs
-    /// with and without launch randomisation, with and without the effects.
+    /// with and without launch randomisation, Earth's (drag), with and without the effects.
     #[test]
     fn the_engine_on_lanes_leaves_every_particle_as_the_scalar_loop() {
         if !available() {
@@ -673,13 +952,14 @@ mod tests {
             return;
         }
         let mut cases = Vec::new();
-        for randomise in [true, false] {
-            let mut s = Scenario::lunar();
+        for (base, randomise) in [(Scenario::lunar(), true), (Scenario::lunar(), false), (Scenario::earth(), true)] {
+            let mut s = base;
             s.sim.particles = 150;
             s.sim.randomise = randomise;
             cases.push(s.clone());
             s.effects.impact_scatter = Some(ImpactScatter { sigma_deg: 4.0, form: TiltForm::default() });
             s.effects.launch_spread = Some(LaunchSpread { speed_spread: 0.2, angle_sigma_deg: 5.0 });
+            s.effects.polydisperse = Some(Polydisperse { sigma_ln: 0.3, form: SizeForm::default() });
             cases.push(s);
         }
         for (c, s) in cases.iter().enumerate() {
@@ -710,13 +990,22 @@ mod tests {
         }
     }
 
-    /// What the vector search does not cover it says so: drag, a flight in pieces, the
-    /// listing's minimum hop.
+    /// What the vector search does not cover it says so: a flight in pieces (sled motion,
+    /// quadratic drag), the listing's minimum hop. Vacuum and Stokes flights it covers.
     #[test]
-    fn the_vector_search_is_only_for_plain_vacuum_flights() {
+    fn the_vector_search_is_only_for_one_piece_flights_of_the_texts_physics() {
+        use crate::model::effects::{QuadraticDrag, SledMotion};
         let physics = |s: &Scenario| kernel_physics::<f64>(&Context::new(s));
         assert!(applies(&physics(&Scenario::lunar())));
-        assert!(!applies(&physics(&Scenario::earth())));
+        assert!(applies(&physics(&Scenario::earth())));
         assert!(!applies(&physics(&Scenario::lunar().into_listing_compat())));
+        assert!(!applies(&physics(&Scenario::earth().into_listing_compat())));
+        let mut s = Scenario::earth();
+        s.effects.quadratic_drag = Some(QuadraticDrag { diameter_m: 1e-4, density_kg_m3: 3100.0 });
+        assert!(!applies(&physics(&s)));
+        let mut s = Scenario::lunar();
+        s.effects.sled_motion =
+            Some(SledMotion { delay_s: 0.01, return_speed_m_s: 0.5, direction: Default::default() });
+        assert!(!applies(&physics(&s)));
     }
 }
