@@ -145,10 +145,21 @@ pub fn run_particles<T: Real>(
             _ => false,
         };
         if draw_lanes && factors_drawn {
-            // the launch factors' draws sixteen particles at a time
+            // the launch factors' draws sixteen particles at a time, and in f64 the launches
+            // eight at a time (unless the launch spread draws more)
+            let launch_lanes = vector.filter(|(_, ph64)| lanes::randomises(ph64));
             for group in to_fly.chunks(16) {
                 let angle = lanes::uniforms(ph.seed, group, bounce, DRAW_ANGLE);
                 let speed = lanes::uniforms(ph.seed, group, bounce, DRAW_SPEED);
+                if let Some((d64, ph64)) = launch_lanes {
+                    let any_parts: &mut dyn Any = &mut parts;
+                    let parts64 = any_parts.downcast_mut::<Vec<KParticle<f64>>>().expect("T is f64 here");
+                    for (h, half) in group.chunks(lanes::LANES).enumerate() {
+                        let from = h * lanes::LANES;
+                        lanes::randomise_launches(d64, ph64, parts64, half, &angle[from..], &speed[from..]);
+                    }
+                    continue;
+                }
                 for (l, &i) in group.iter().enumerate() {
                     randomise_launch_drawn(&d, &ph, &mut parts[i as usize], i, bounce, Some([angle[l], speed[l]]));
                 }

@@ -10,6 +10,7 @@ pub mod cpu;
 pub mod gpu;
 pub mod kernel;
 pub mod lanes;
+mod lanes_libm;
 pub mod listing;
 pub mod shared;
 
