@@ -13,6 +13,7 @@ pub mod diagnose;
 pub mod engine;
 pub mod fit;
 pub mod io;
+pub mod libm_lanes;
 pub mod model;
 pub mod optim;
 pub mod plot;

@@ -16,7 +16,7 @@
 use super::kernel::{
     first_hit, Hit, KDesign, KParticle, KPhysics, SURFACE_BASE, SURFACE_CATCH, SURFACE_NONE, SURFACE_RAMP,
 };
-use super::lanes_libm;
+use crate::libm_lanes;
 use crate::model::collision::Restitution;
 
 /// Particles searched together: eight f64 lanes, one AVX-512 register.
@@ -271,7 +271,7 @@ mod avx512 {
         /// Stokes k_drag (1/s; 0 in vacuum) and the terminal velocity -g/k of a drag flight.
         k: V,
         vinf: V,
-        /// Whether the lane `expm1` gives this libm's (`lanes_libm::expm1_ported`).
+        /// Whether the lane `expm1` gives this libm's (`libm_lanes::expm1_ported`).
         lane_expm1: bool,
     }
 
@@ -301,14 +301,14 @@ mod avx512 {
     }
 
     /// `f64::exp_m1` in the lanes of `mask`: on the lanes where this libm's is the one
-    /// ported (`lanes_libm::expm1_ported`), else one lane at a time.
+    /// ported (`libm_lanes::expm1_ported`), else one lane at a time.
     #[target_feature(enable = "avx512f")]
     #[inline]
     fn exp_m1(f: &Fl, mask: M, x: V) -> V {
         if f.lane_expm1 {
             // SAFETY: `first_hits` runs only where AVX-512F is, and FMA comes with it
             // (`expm1_ported` is false without either)
-            unsafe { lanes_libm::avx512::expm1(mask, x) }
+            unsafe { libm_lanes::avx512::expm1(mask, x) }
         } else {
             each(mask, x, f64::exp_m1)
         }
@@ -653,14 +653,14 @@ mod avx512 {
     }
 
     /// `f64::sin_cos` in every lane: on the lanes where this libm's `sincos` is the one
-    /// ported (`lanes_libm::sincos_ported`), else one lane at a time.
+    /// ported (`libm_lanes::sincos_ported`), else one lane at a time.
     #[target_feature(enable = "avx512f")]
     #[inline]
     fn sin_cos(x: V) -> (V, V) {
-        if lanes_libm::sincos_ported() {
+        if libm_lanes::sincos_ported() {
             // SAFETY: the caller runs only where AVX-512F is, and FMA comes with it
             // (`sincos_ported` is false without either)
-            return unsafe { lanes_libm::avx512::sincos(x) };
+            return unsafe { libm_lanes::avx512::sincos(x) };
         }
         let a = store(x);
         let (mut s, mut c) = ([0.0; LANES], [0.0; LANES]);
@@ -768,7 +768,7 @@ mod avx512 {
         let (px, py, vx, vy) = (load(&a[0]), load(&a[1]), load(&a[2]), load(&a[3]));
         // the terminal velocity as `Flight` computes it, -g / k
         let vinf = if DRAG { div(neg(sp(ph.g)), k) } else { sp(0.0) };
-        let f = Fl { px, py, vx, vy, half_g: sp(0.5 * ph.g), k, vinf, lane_expm1: DRAG && lanes_libm::expm1_ported() };
+        let f = Fl { px, py, vx, vy, half_g: sp(0.5 * ph.g), k, vinf, lane_expm1: DRAG && libm_lanes::expm1_ported() };
         let (surface, kf) = (load(&a[4]), load(&a[5]));
         let c2_g = -0.5 * ph.g;
         let (zero, inf) = (sp(0.0), sp(f64::INFINITY));

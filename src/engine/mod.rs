@@ -10,7 +10,6 @@ pub mod cpu;
 pub mod gpu;
 pub mod kernel;
 pub mod lanes;
-mod lanes_libm;
 pub mod listing;
 pub mod shared;
 

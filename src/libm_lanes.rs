@@ -4,10 +4,11 @@
 //! `s_sin.c`/`s_sincos.c` compiled with -mfma, so GCC contracted some multiply-adds). Each
 //! port repeats the compiled code's operations in its order, read from the disassembly, its
 //! branches as masks and the table lookups as gathers; lanes outside the ported range call
-//! libm. The lane search (`lanes`) takes a port only where [`expm1_ported`] /
-//! [`sincos_ported`] find it equal to this process's libm on probes over every branch, and
-//! calls libm one lane at a time otherwise: the results never depend on the port being
-//! right for another libm. Tests compare each port with libm over millions of arguments.
+//! libm. The cpu engine's lanes (`engine::lanes`) and the fill arc (`model::fill`) take a
+//! port only where [`expm1_ported`] / [`sincos_ported`] find it equal to this process's
+//! libm on probes over every branch, and call libm one value at a time otherwise: the
+//! results never depend on the port being right for another libm. Tests compare each port
+//! with libm over millions of arguments.
 
 /// Whether the lane `expm1` gives this process's libm `expm1` on 4 124 probes over each of
 /// its branches; checked once.
@@ -55,6 +56,23 @@ pub fn sincos_ported() -> bool {
         probes.push(f64::from_bits(0x3ffa_d1fb_5444_2d18)); // where libm's sincos and sin differ
         agrees(&probes, |x| std::hint::black_box(x).sin_cos(), lanes_sincos)
     })
+}
+
+/// `(x.sin(), x.cos())` of every angle, in order: eight at a time on the lanes where the
+/// port is this libm's `sincos` ([`sincos_ported`]), else one at a time. The same bits as
+/// `f64::sin_cos` (libm's `sincos`) either way.
+pub fn sin_cos_all(angles: &[f64]) -> Vec<(f64, f64)> {
+    if !sincos_ported() {
+        return angles.iter().map(|x| x.sin_cos()).collect();
+    }
+    let mut out = Vec::with_capacity(angles.len());
+    for chunk in angles.chunks(8) {
+        let mut a = [chunk[0]; 8];
+        a[..chunk.len()].copy_from_slice(chunk);
+        let (s, c) = lanes_sincos(a);
+        out.extend((0..chunk.len()).map(|l| (s[l], c[l])));
+    }
+    out
 }
 
 /// Whether `lanes(x)` (eight at a time) equals `scalar(x)` to the bit on every probe; false
@@ -111,7 +129,7 @@ fn lanes_sincos(x: [f64; 8]) -> ([f64; 8], [f64; 8]) {
 }
 
 #[cfg(target_arch = "x86_64")]
-pub(super) mod avx512 {
+pub mod avx512 {
     use std::arch::x86_64::*;
 
     // sincos: the constants and table (addresses: their place in Debian 12's libm.so.6,
@@ -809,7 +827,7 @@ pub(super) mod avx512 {
     /// The CPU must have AVX-512F and FMA.
     #[target_feature(enable = "avx512f,fma")]
     #[inline]
-    pub(in crate::engine) unsafe fn expm1(mask: __mmask8, x: __m512d) -> __m512d {
+    pub unsafe fn expm1(mask: __mmask8, x: __m512d) -> __m512d {
         const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
         const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
         const INV_LN2: f64 = f64::from_bits(0x3ff7_1547_652b_82fe);
@@ -905,7 +923,7 @@ pub(super) mod avx512 {
     /// The CPU must have AVX-512F and FMA.
     #[target_feature(enable = "avx512f,fma")]
     #[inline]
-    pub(in crate::engine) unsafe fn sincos(x: __m512d) -> (__m512d, __m512d) {
+    pub unsafe fn sincos(x: __m512d) -> (__m512d, __m512d) {
         // k = u.i[HIGH_HALF] & 0x7fffffff
         let bits = _mm512_castpd_si512(x);
         let k = _mm512_and_si512(_mm512_srli_epi64::<32>(bits), _mm512_set1_epi64(0x7fff_ffff));
