@@ -1007,6 +1007,54 @@ mod tests {
         Some((compared, on_teeth))
     }
 
+    /// The launch randomisation on lanes gives `randomise_launch_drawn`'s velocities to the
+    /// bit, for first launches and rebounds off every surface: the particles of random valid
+    /// lunar and Earth designs at every bounce, with the same draws.
+    #[test]
+    fn lane_launches_are_the_scalar_launches_to_the_bit() {
+        use crate::engine::kernel::randomise_launch_drawn;
+        use crate::model::rng::{uniform01, DRAW_ANGLE, DRAW_SPEED};
+        if !available() {
+            eprintln!("skipped: this CPU lacks AVX-512F, so the engine does not use the lanes");
+            return;
+        }
+        let mut compared = [0usize; 4]; // by the surface left: none (first launch), base, ramp, catch
+        for base in [Scenario::lunar(), Scenario::earth()] {
+            for (c, s) in cases(base, 80).iter().filter(|s| s.effects.launch_spread.is_none()).enumerate() {
+                let ctx = Context::new(s);
+                let ph = kernel_physics::<f64>(&ctx);
+                assert!(randomises(&ph));
+                for design in random_valid_designs(s, 3, 50 + c as u64) {
+                    let prep = prepare(s, &design).unwrap();
+                    let d = kernel_design::<f64>(&prep);
+                    let mut parts: Vec<KParticle<f64>> =
+                        prep.launches.iter().enumerate().map(|(i, l)| init_particle(&d, &ph, *l, i as u32)).collect();
+                    for bounce in 0..ctx.max_bounces {
+                        let flying: Vec<u32> =
+                            (0..parts.len() as u32).filter(|&i| parts[i as usize].state == STATE_FLYING).collect();
+                        if flying.is_empty() {
+                            break;
+                        }
+                        let mut lanes = parts.clone();
+                        for group in flying.chunks(LANES) {
+                            let draw = |k| group.iter().map(|&i| uniform01(ph.seed, i, bounce, k)).collect::<Vec<_>>();
+                            randomise_launches(&d, &ph, &mut lanes, group, &draw(DRAW_ANGLE), &draw(DRAW_SPEED));
+                        }
+                        for &i in &flying {
+                            let p = &mut parts[i as usize];
+                            compared[p.surface as usize] += 1;
+                            randomise_launch_drawn(&d, &ph, p, i, bounce, None);
+                            let b = |v: [f64; 2]| [v[0].to_bits(), v[1].to_bits()];
+                            assert_eq!(b(lanes[i as usize].vel), b(p.vel), "case {c}, bounce {bounce}, particle {i}");
+                            fly_particle(&d, &ph, p, i, bounce);
+                        }
+                    }
+                }
+            }
+        }
+        assert!(compared.iter().all(|&n| n > 500), "launches compared by surface left: {compared:?}");
+    }
+
     /// The restitution law on lanes gives the scalar law's bits, over impacts of every
     /// speed (both sides of the plastic limit) and angle, in both modes' laws.
     #[test]
