@@ -1025,20 +1025,28 @@ pub mod avx512 {
         _mm512_div_pd(a, b)
     }
 
-    /// `f(x)` in the lanes of `mask`, one lane at a time.
-    #[inline(always)]
-    unsafe fn each(mask: __mmask8, x: __m512d, f: fn(f64) -> f64) -> __m512d {
+    /// `f(x)` (a libm function) in the lanes of `mask`, one lane at a time: what the ports
+    /// leave to libm, and the functions without a port. The other lanes keep `x`.
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512F (callers with that target feature call it safely).
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub fn each(mask: __mmask8, x: __m512d, f: fn(f64) -> f64) -> __m512d {
         if mask == 0 {
             return x;
         }
-        let mut a = store(x);
-        let mut m = mask;
-        while m != 0 {
-            let l = m.trailing_zeros() as usize;
-            a[l] = f(a[l]);
-            m &= m - 1;
+        // SAFETY: the target feature is enabled here; eight f64 fit each array
+        unsafe {
+            let mut a = store(x);
+            let mut m = mask;
+            while m != 0 {
+                let l = m.trailing_zeros() as usize;
+                a[l] = f(a[l]);
+                m &= m - 1;
+            }
+            load(&a)
         }
-        load(&a)
     }
 }
 

@@ -145,6 +145,8 @@ pub fn uniforms(seed_word: u32, particles: &[u32], bounce: u32, draw: u32) -> [f
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
     use super::*;
+    // libm one lane at a time
+    use crate::libm_lanes::avx512::each;
     use std::arch::x86_64::*;
 
     type V = __m512d;
@@ -273,24 +275,6 @@ mod avx512 {
         vinf: V,
         /// Whether the lane `expm1` gives this libm's (`libm_lanes::expm1_ported`).
         lane_expm1: bool,
-    }
-
-    /// `f(x)` (a libm function) in the lanes of `mask`, one lane at a time: libm's functions
-    /// have no vector form with the same bits. The other lanes keep `x`.
-    #[target_feature(enable = "avx512f")]
-    #[inline]
-    fn each(mask: M, x: V, f: fn(f64) -> f64) -> V {
-        if mask == 0 {
-            return x;
-        }
-        let mut a = store(x);
-        let mut m = mask;
-        while m != 0 {
-            let l = m.trailing_zeros() as usize;
-            a[l] = f(a[l]);
-            m &= m - 1;
-        }
-        load(&a)
     }
 
     /// `relax`, (1 - e^{-kt})/k (flight.rs), in the lanes of `mask`.
