@@ -1,11 +1,12 @@
 //! libm's functions on AVX-512 lanes, to the bit of the libm they were ported from: glibc
-//! 2.36's `expm1` and `sincos` as glibc runs them on CPUs with FMA (`__expm1_fma`,
-//! `__sincos_fma`: fdlibm's `s_expm1.c` and the IBM Accurate Mathematical Library's
-//! `s_sin.c`/`s_sincos.c` compiled with -mfma, so GCC contracted some multiply-adds). Each
+//! 2.36's `expm1`, `sincos` and `atan2` as glibc runs them on CPUs with FMA (`__expm1_fma`,
+//! `__sincos_fma`, `__ieee754_atan2_fma`: fdlibm's `s_expm1.c` and the IBM Accurate
+//! Mathematical Library's `s_sin.c`/`s_sincos.c`/`e_atan2.c` compiled with -mfma, so GCC
+//! contracted some multiply-adds). Each
 //! port repeats the compiled code's operations in its order, read from the disassembly, its
 //! branches as masks and the table lookups as gathers; lanes outside the ported range call
 //! libm. The cpu engine's lanes (`engine::lanes`) and the fill arc (`model::fill`) take a
-//! port only where [`expm1_ported`] / [`sincos_ported`] find it equal to this process's
+//! port only where [`expm1_ported`] / [`sincos_ported`] / [`atan2_ported`] find it equal to this process's
 //! libm on probes over every branch, and call libm one value at a time otherwise: the
 //! results never depend on the port being right for another libm. Tests compare each port
 //! with libm over millions of arguments.
@@ -56,6 +57,52 @@ pub fn sincos_ported() -> bool {
         probes.push(f64::from_bits(0x3ffa_d1fb_5444_2d18)); // where libm's sincos and sin differ
         agrees(&probes, |x| std::hint::black_box(x).sin_cos(), lanes_sincos)
     })
+}
+
+/// Whether the lane `atan2` gives this process's libm `atan2` on probes over every quadrant,
+/// both of its branches (the polynomial below |y/x| = 1/16 and the table) and their edges;
+/// checked once.
+pub fn atan2_ported() -> bool {
+    static PORTED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *PORTED.get_or_init(|| {
+        // points on circles of radii 10^-6 to 10 at 512 angles, and ratios at the branch
+        // edges (1/16, the table's rows, 1) in every quadrant
+        let mut probes: Vec<(f64, f64)> = Vec::new();
+        for r in [1e-6, 1e-3, 0.37, 1.0, 10.0] {
+            probes.extend((0..512).map(|i| {
+                let a = -std::f64::consts::PI + 2.0 * std::f64::consts::PI * (i as f64 + 0.5) / 512.0;
+                (r * a.sin(), r * a.cos())
+            }));
+        }
+        for u in [1.0f64 / 16.0, 17.0 / 256.0, 0.5, 1.0, 2.0, 16.0] {
+            for (sy, sx) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+                probes.extend([(sy * u, sx), (sy * f64::from_bits(u.to_bits() + 1), sx), (sy, sx * u)]);
+            }
+        }
+        probes.extend([(0.0, 1.0), (-0.0, -1.0), (1.0, 0.0), (0.0, 0.0)]);
+        let ys: Vec<f64> = probes.iter().map(|p| p.0).collect();
+        let xs: Vec<f64> = probes.iter().map(|p| p.1).collect();
+        available() && atan2_all(&ys, &xs).iter().zip(&probes).all(|(r, (y, x))| r.to_bits() == y.atan2(*x).to_bits())
+    })
+}
+
+/// The lane `atan2` of `ys[i]`, `xs[i]` (eight at a time), on a CPU where [`available`]
+/// holds.
+fn atan2_all(ys: &[f64], xs: &[f64]) -> Vec<f64> {
+    assert!(available() && ys.len() == xs.len());
+    let mut out = Vec::with_capacity(ys.len());
+    for (cy, cx) in ys.chunks(8).zip(xs.chunks(8)) {
+        let (mut y, mut x) = ([cy[0]; 8], [cx[0]; 8]);
+        y[..cy.len()].copy_from_slice(cy);
+        x[..cx.len()].copy_from_slice(cx);
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the CPU has AVX-512F and FMA (asserted above).
+        let r = unsafe { avx512::atan2_array(y, x) };
+        #[cfg(not(target_arch = "x86_64"))]
+        let r: [f64; 8] = unreachable!("available() is false off x86-64");
+        out.extend_from_slice(&r[..cy.len()]);
+    }
+    out
 }
 
 /// `(x.sin(), x.cos())` of every angle, in order: eight at a time on the lanes where the
@@ -129,8 +176,13 @@ fn lanes_sincos(x: [f64; 8]) -> ([f64; 8], [f64; 8]) {
 }
 
 #[cfg(target_arch = "x86_64")]
+mod atan2;
+
+#[cfg(target_arch = "x86_64")]
 pub mod avx512 {
     use std::arch::x86_64::*;
+
+    pub use super::atan2::atan2_lanes as atan2;
 
     // sincos: the constants and table (addresses: their place in Debian 12's libm.so.6,
     // where they were read and checked against glibc 2.36's source); do_sin, do_cos and
@@ -989,6 +1041,15 @@ pub mod avx512 {
         (store(s), store(c))
     }
 
+    /// [`atan2`] of arrays.
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512F and FMA.
+    #[target_feature(enable = "avx512f,fma")]
+    pub(super) unsafe fn atan2_array(y: [f64; 8], x: [f64; 8]) -> [f64; 8] {
+        store(atan2(load(&y), load(&x)))
+    }
+
     /// [`expm1`] of an array.
     ///
     /// # Safety
@@ -1090,6 +1151,84 @@ mod tests {
                     out[l]
                 );
             }
+        }
+    }
+
+    /// On the libm the ports come from (glibc 2.36 on a CPU with AVX-512F and FMA: this
+    /// project's machines) every probe passes, so the engine runs the ports and the tests
+    /// below compare them instead of skipping: a port that drifted from its libm fails here.
+    #[test]
+    fn the_ports_are_taken_on_the_libm_they_come_from() {
+        #[cfg(all(target_os = "linux", target_env = "gnu"))]
+        {
+            extern "C" {
+                fn gnu_get_libc_version() -> *const std::ffi::c_char;
+            }
+            // SAFETY: glibc returns a static NUL-terminated string
+            let version = unsafe { std::ffi::CStr::from_ptr(gnu_get_libc_version()) }.to_string_lossy().into_owned();
+            if version != "2.36" || !available() {
+                eprintln!("skipped: glibc {version}, AVX-512F and FMA {}: not the libm ported", available());
+                return;
+            }
+            assert!(expm1_ported(), "expm1");
+            assert!(sincos_ported(), "sincos");
+            assert!(atan2_ported(), "atan2");
+        }
+    }
+
+    /// The lane `atan2` is libm's to the bit: random pairs where the kernel takes them
+    /// (velocity components 10^-6 to 10 m/s, any signs) and far beyond, ratios at and next
+    /// to the branch edges and the table's rows in every quadrant, angles near the axes and
+    /// diagonals, and the special values (zeros, infinities, NaN, subnormals).
+    #[test]
+    fn lane_atan2_is_libms_to_the_bit() {
+        use rand::{Rng, SeedableRng};
+        if !atan2_ported() {
+            eprintln!("skipped: no AVX-512F and FMA, or this libm's atan2 is not the one ported");
+            return;
+        }
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(13);
+        let signed = |rng: &mut rand_chacha::ChaCha8Rng, m: f64| if rng.random_bool(0.5) { -m } else { m };
+        let mut pairs: Vec<(f64, f64)> = Vec::new();
+        for _ in 0..400_000 {
+            pairs.push((rng.random_range(-10.0..10.0), rng.random_range(-10.0..10.0)));
+            let (my, mx) = (10f64.powf(rng.random_range(-6.0..1.0)), 10f64.powf(rng.random_range(-6.0..1.0)));
+            pairs.push((signed(&mut rng, my), signed(&mut rng, mx)));
+            let (my, mx) = (10f64.powf(rng.random_range(-300.0..300.0)), 10f64.powf(rng.random_range(-300.0..300.0)));
+            pairs.push((signed(&mut rng, my), signed(&mut rng, mx)));
+        }
+        for row in 0..=256 {
+            // |y/x| at the polynomial's edge 1/16 and at and between the table's rows
+            let u = (row as f64 + 16.0) / 256.0;
+            for d in -3i64..=3 {
+                let u = f64::from_bits((u.to_bits() as i64 + d) as u64);
+                for (sy, sx) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+                    let x = rng.random_range(0.5..2.0);
+                    pairs.extend([(sy * u * x, sx * x), (sy * x, sx * u * x)]);
+                }
+            }
+        }
+        for k in -4..=4 {
+            // near the axes and the diagonals
+            let a = k as f64 * std::f64::consts::FRAC_PI_4;
+            for d in 1..2000 {
+                let a = a + d as f64 * 1e-12;
+                pairs.extend([(a.sin(), a.cos()), (-a.sin(), a.cos())]);
+            }
+        }
+        let specials =
+            [0.0, -0.0, 1.0, -1.0, 1e-310, -1e-310, f64::INFINITY, f64::NEG_INFINITY, f64::NAN, f64::MAX, 1e-300];
+        for y in specials {
+            pairs.extend(specials.iter().map(|&x| (y, x)));
+        }
+        let ys: Vec<f64> = pairs.iter().map(|p| p.0).collect();
+        let xs: Vec<f64> = pairs.iter().map(|p| p.1).collect();
+        for (r, (y, x)) in atan2_all(&ys, &xs).iter().zip(&pairs) {
+            let want = y.atan2(*x);
+            assert!(
+                r.to_bits() == want.to_bits() || (r.is_nan() && want.is_nan()),
+                "atan2({y:e}, {x:e}): lanes {r:e}, libm {want:e}"
+            );
         }
     }
 

@@ -686,7 +686,13 @@ mod avx512 {
         let (tx, ty) = (ny, neg(nx));
         let y = sel(first, vy, add(mul(vx, nx), mul(vy, ny)));
         let x = sel(first, vx, add(mul(vx, tx), mul(vy, ty)));
-        let ang = each2(!0, y, x, f64::atan2);
+        let ang = if libm_lanes::atan2_ported() {
+            // SAFETY: this runs only where AVX-512F is, and FMA comes with it (`atan2_ported`
+            // is false without either)
+            unsafe { libm_lanes::avx512::atan2(y, x) }
+        } else {
+            each2(!0, y, x, f64::atan2)
+        };
         // the first launch's angle kept in [0, 2π), a rebound's inside (0, π)
         let global = mul(sel(lt(ang, sp(0.0)), add(ang, sp(2.0 * std::f64::consts::PI)), ang), fa);
         let eps = 1e-6;
