@@ -2,14 +2,13 @@
 //! 2.36's `expm1`, `sincos` and `atan2` as glibc runs them on CPUs with FMA (`__expm1_fma`,
 //! `__sincos_fma`, `__ieee754_atan2_fma`: fdlibm's `s_expm1.c` and the IBM Accurate
 //! Mathematical Library's `s_sin.c`/`s_sincos.c`/`e_atan2.c` compiled with -mfma, so GCC
-//! contracted some multiply-adds). Each
-//! port repeats the compiled code's operations in its order, read from the disassembly, its
-//! branches as masks and the table lookups as gathers; lanes outside the ported range call
-//! libm. The cpu engine's lanes (`engine::lanes`) and the fill arc (`model::fill`) take a
-//! port only where [`expm1_ported`] / [`sincos_ported`] / [`atan2_ported`] find it equal to this process's
-//! libm on probes over every branch, and call libm one value at a time otherwise: the
-//! results never depend on the port being right for another libm. Tests compare each port
-//! with libm over millions of arguments.
+//! contracted some multiply-adds). Each port repeats the compiled code's operations in its
+//! order, read from the disassembly, its branches as masks and the table lookups as gathers;
+//! lanes outside the ported range call libm. The cpu engine's lanes (`engine::lanes`) and
+//! the fill arc (`model::fill`) take a port only where [`expm1_ported`], [`sincos_ported`]
+//! or [`atan2_ported`] finds it equal to this process's libm on probes over every branch,
+//! and call libm one value at a time otherwise: the results never depend on the port being
+//! right for another libm. Tests compare each port with libm over millions of arguments.
 
 /// Whether the lane `expm1` gives this process's libm `expm1` on 4 124 probes over each of
 /// its branches; checked once.

@@ -5,10 +5,11 @@
 //! and every lane does the scalar search's IEEE operations in the scalar search's order, so
 //! each lane's hit is the scalar hit to the bit (`tests` below, and
 //! `examples/engine_digest.rs`). A lane whose particle has finished its teeth (or its
-//! Halley steps) idles while the others go on. libm's functions (`expm1`, `ln`, `ln_1p`)
-//! have no vector form with the same bits, so a drag flight's lanes call them one lane at a
-//! time. Beside it, on the same lanes: the restitution law ([`bounce_velocities`]) and the
-//! counter-based generator's hash ([`uniforms`]). Only on CPUs with AVX-512F
+//! Halley steps) idles while the others go on. Beside it, on the same lanes: the launch
+//! randomisation ([`randomise_launches`]), the restitution law ([`bounce_velocities`]) and
+//! the counter-based generator's hash ([`uniforms`]). libm's `expm1`, `sincos` and `atan2`
+//! run as the ports of `crate::libm_lanes` where they are this libm's; `ln` and `ln_1p`,
+//! which have no port, are called one lane at a time. Only on CPUs with AVX-512F
 //! ([`available`]); elsewhere the cpu engine runs the scalar kernel.
 //! Why intrinsics: written as loops over eight-element arrays the compiler left the search
 //! scalar, 45 % slower than the one-particle search (BENCHMARKS.md).
