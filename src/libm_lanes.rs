@@ -81,26 +81,46 @@ pub fn atan2_ported() -> bool {
         probes.extend([(0.0, 1.0), (-0.0, -1.0), (1.0, 0.0), (0.0, 0.0)]);
         let ys: Vec<f64> = probes.iter().map(|p| p.0).collect();
         let xs: Vec<f64> = probes.iter().map(|p| p.1).collect();
-        available() && atan2_all(&ys, &xs).iter().zip(&probes).all(|(r, (y, x))| r.to_bits() == y.atan2(*x).to_bits())
+        available()
+            && atan2_on_lanes(&ys, &xs).iter().zip(&probes).all(|(r, (y, x))| r.to_bits() == y.atan2(*x).to_bits())
     })
 }
 
 /// The lane `atan2` of `ys[i]`, `xs[i]` (eight at a time), on a CPU where [`available`]
 /// holds.
-fn atan2_all(ys: &[f64], xs: &[f64]) -> Vec<f64> {
+fn atan2_on_lanes(ys: &[f64], xs: &[f64]) -> Vec<f64> {
     assert!(available() && ys.len() == xs.len());
     let mut out = Vec::with_capacity(ys.len());
-    for (cy, cx) in ys.chunks(8).zip(xs.chunks(8)) {
-        let (mut y, mut x) = ([cy[0]; 8], [cx[0]; 8]);
-        y[..cy.len()].copy_from_slice(cy);
-        x[..cx.len()].copy_from_slice(cx);
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: the CPU has AVX-512F and FMA (asserted above).
-        let r = unsafe { avx512::atan2_array(y, x) };
-        #[cfg(not(target_arch = "x86_64"))]
-        let r: [f64; 8] = unreachable!("available() is false off x86-64");
-        out.extend_from_slice(&r[..cy.len()]);
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: the CPU has AVX-512F and FMA (asserted above).
+    unsafe {
+        avx512::atan2_slice(ys, xs, &mut out)
+    };
+    out
+}
+
+/// `y.atan2(x)` of every pair `ys[i]`, `xs[i]`, in order: eight at a time where the port is
+/// this libm's `atan2` ([`atan2_ported`]), else one at a time. The same bits either way.
+pub fn atan2_all(ys: &[f64], xs: &[f64]) -> Vec<f64> {
+    assert_eq!(ys.len(), xs.len(), "as many y as x");
+    if !atan2_ported() {
+        return ys.iter().zip(xs).map(|(y, x)| y.atan2(*x)).collect();
     }
+    atan2_on_lanes(ys, xs)
+}
+
+/// `x.exp_m1()` of every argument, in order: eight at a time where the port is this libm's
+/// `expm1` ([`expm1_ported`]), else one at a time. The same bits either way.
+pub fn exp_m1_all(xs: &[f64]) -> Vec<f64> {
+    if !expm1_ported() {
+        return xs.iter().map(|x| x.exp_m1()).collect();
+    }
+    let mut out = Vec::with_capacity(xs.len());
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: the port is taken only where the CPU has AVX-512F and FMA.
+    unsafe {
+        avx512::expm1_slice(xs, &mut out)
+    };
     out
 }
 
@@ -112,12 +132,11 @@ pub fn sin_cos_all(angles: &[f64]) -> Vec<(f64, f64)> {
         return angles.iter().map(|x| x.sin_cos()).collect();
     }
     let mut out = Vec::with_capacity(angles.len());
-    for chunk in angles.chunks(8) {
-        let mut a = [chunk[0]; 8];
-        a[..chunk.len()].copy_from_slice(chunk);
-        let (s, c) = lanes_sincos(a);
-        out.extend((0..chunk.len()).map(|l| (s[l], c[l])));
-    }
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: the port is taken only where the CPU has AVX-512F and FMA.
+    unsafe {
+        avx512::sincos_slice(angles, &mut out)
+    };
     out
 }
 
@@ -1040,13 +1059,47 @@ pub mod avx512 {
         (store(s), store(c))
     }
 
-    /// [`atan2`] of arrays.
+    /// [`sincos`] of every angle, in order, appended to `out` (the loop compiled with the
+    /// ports' features, so that the port inlines into it).
     ///
     /// # Safety
     /// The CPU must have AVX-512F and FMA.
     #[target_feature(enable = "avx512f,fma")]
-    pub(super) unsafe fn atan2_array(y: [f64; 8], x: [f64; 8]) -> [f64; 8] {
-        store(atan2(load(&y), load(&x)))
+    pub(super) unsafe fn sincos_slice(x: &[f64], out: &mut Vec<(f64, f64)>) {
+        for chunk in x.chunks(8) {
+            let mut a = [chunk[0]; 8];
+            a[..chunk.len()].copy_from_slice(chunk);
+            let (s, c) = sincos(load(&a));
+            let (s, c) = (store(s), store(c));
+            out.extend((0..chunk.len()).map(|l| (s[l], c[l])));
+        }
+    }
+
+    /// [`atan2`] of every pair, in order, appended to `out`.
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512F and FMA.
+    #[target_feature(enable = "avx512f,fma")]
+    pub(super) unsafe fn atan2_slice(ys: &[f64], xs: &[f64], out: &mut Vec<f64>) {
+        for (cy, cx) in ys.chunks(8).zip(xs.chunks(8)) {
+            let (mut y, mut x) = ([cy[0]; 8], [cx[0]; 8]);
+            y[..cy.len()].copy_from_slice(cy);
+            x[..cx.len()].copy_from_slice(cx);
+            out.extend_from_slice(&store(atan2(load(&y), load(&x)))[..cy.len()]);
+        }
+    }
+
+    /// [`expm1`] of every argument, in order, appended to `out`.
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512F and FMA.
+    #[target_feature(enable = "avx512f,fma")]
+    pub(super) unsafe fn expm1_slice(xs: &[f64], out: &mut Vec<f64>) {
+        for chunk in xs.chunks(8) {
+            let mut a = [chunk[0]; 8];
+            a[..chunk.len()].copy_from_slice(chunk);
+            out.extend_from_slice(&store(expm1(0xff, load(&a)))[..chunk.len()]);
+        }
     }
 
     /// [`expm1`] of an array.
@@ -1153,6 +1206,26 @@ mod tests {
         }
     }
 
+    /// The slice functions give libm's values in order for every length, the tail of a
+    /// length that is no multiple of eight included, whether or not the ports are taken.
+    #[test]
+    fn the_slice_functions_are_libm_value_by_value() {
+        for n in [0usize, 1, 7, 8, 9, 100] {
+            let xs: Vec<f64> = (0..n).map(|i| -3.0 + 0.37 * i as f64).collect();
+            let ys: Vec<f64> = (0..n).map(|i| 2.0 - 0.29 * i as f64).collect();
+            let sc = sin_cos_all(&xs);
+            let at = atan2_all(&ys, &xs);
+            let em = exp_m1_all(&xs);
+            assert_eq!((sc.len(), at.len(), em.len()), (n, n, n));
+            for i in 0..n {
+                let (s, c) = xs[i].sin_cos();
+                assert_eq!((sc[i].0.to_bits(), sc[i].1.to_bits()), (s.to_bits(), c.to_bits()), "sincos {i}");
+                assert_eq!(at[i].to_bits(), ys[i].atan2(xs[i]).to_bits(), "atan2 {i}");
+                assert_eq!(em[i].to_bits(), xs[i].exp_m1().to_bits(), "expm1 {i}");
+            }
+        }
+    }
+
     /// On the libm the ports come from (glibc 2.36 on a CPU with AVX-512F and FMA: this
     /// project's machines) every probe passes, so the engine runs the ports and the tests
     /// below compare them instead of skipping: a port that drifted from its libm fails here.
@@ -1222,7 +1295,7 @@ mod tests {
         }
         let ys: Vec<f64> = pairs.iter().map(|p| p.0).collect();
         let xs: Vec<f64> = pairs.iter().map(|p| p.1).collect();
-        for (r, (y, x)) in atan2_all(&ys, &xs).iter().zip(&pairs) {
+        for (r, (y, x)) in atan2_on_lanes(&ys, &xs).iter().zip(&pairs) {
             let want = y.atan2(*x);
             assert!(
                 r.to_bits() == want.to_bits() || (r.is_nan() && want.is_nan()),
