@@ -182,9 +182,15 @@ fn first_hit(d: Design, p: Particle, bounce: u32) -> Hit {
     let p2 = vec2<f32>(d.p2_x, d.p2_y);
     let p4 = vec2<f32>(d.p4_x, d.p4_y);
     let margin = 64.0 * EPS * d.pitch_len;
-    for (var j = j_lo; j <= j_hi; j++) {
+    // Tooth by tooth, each lane first passes the teeth its flight clears (a cheap test) and
+    // then searches one it may hit: lanes that disagree on a branch run both sides, so with
+    // `continue` every lane would pay the search of each tooth in the range of the lane with
+    // the longest flight; this way they pay for the most teeth any lane searches.
+    var j = j_lo;
+    loop {
+        while (j <= j_hi && flies_over(d, fl, j - k, pos.x, x_far)) { j++; }
+        if (j > j_hi) { break; }
         let dj = j - k;
-        if (flies_over(d, fl, dj, pos.x, x_far)) { continue; }
         for (var si = 0u; si < 2u; si++) {
             var surface = SURFACE_RAMP;
             if (si == 1u) { surface = SURFACE_CATCH; }
@@ -237,6 +243,7 @@ fn first_hit(d: Design, p: Particle, bounce: u32) -> Hit {
                 break;
             }
         }
+        j++;
     }
     return best;
 }

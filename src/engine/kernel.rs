@@ -380,11 +380,17 @@ pub fn first_hit_in<T: Real>(
         return best;
     }
     let x_far = if best.found { best.pos[0] } else { x_end };
-    for j in j_lo..=j_hi {
-        let dj = j - k;
-        if !drifting && flies_over(d, &fl, dj, p.pos[0], x_far) {
-            continue;
+    // As the WGSL: first pass the teeth the flight clears, then search one it may hit (on a
+    // SIMD machine a `continue` would make every lane pay for each tooth any lane scans).
+    let mut j = j_lo;
+    loop {
+        while j <= j_hi && !drifting && flies_over(d, &fl, j - k, p.pos[0], x_far) {
+            j += 1;
         }
+        if j > j_hi {
+            break;
+        }
+        let dj = j - k;
         for surface in [SURFACE_RAMP, SURFACE_CATCH] {
             if surface == SURFACE_CATCH && bounce == 0 && j == 0 {
                 continue;
@@ -431,6 +437,7 @@ pub fn first_hit_in<T: Real>(
                 break;
             }
         }
+        j += 1;
     }
     best
 }
