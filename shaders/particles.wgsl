@@ -114,18 +114,72 @@ fn contact(d: Design, pos: vec2<f32>, vel: vec2<f32>, a: vec2<f32>, b: vec2<f32>
     return s >= 0.0 && s <= 1.0;
 }
 
-fn flies_over(d: Design, fl: Flight, dj: i32, x0: f32, x_far: f32) -> bool {
-    let base = f32(dj) * d.pitch_x;
-    let lo = min(x0, x_far);
-    let hi = max(x0, x_far);
-    let xa = max(base + d.ext_min, lo);
-    let xb = min(base + d.ext_max, hi);
+// The x-interval from tooth dj_first's left end to tooth dj_last's right end, clipped to
+// [lo, hi] (empty, x.x > x.y, when they do not meet). Rust twin: kernel.rs `teeth_span`.
+fn teeth_span(d: Design, dj_first: i32, dj_last: i32, lo: f32, hi: f32) -> vec2<f32> {
+    return vec2<f32>(max(f32(dj_first) * d.pitch_x + d.ext_min, lo), min(f32(dj_last) * d.pitch_x + d.ext_max, hi));
+}
+
+// Whether the flight is higher than need_a at x = xa and than need_b at x = xb (true when
+// xa > xb: it is not there at all). The trajectory is concave in x, so above a line at both
+// ends of an interval is above it over the whole interval. Rust twin: kernel.rs `above_at_ends`.
+fn above_at_ends(fl: Flight, xa: f32, xb: f32, need_a: f32, need_b: f32) -> bool {
     if (xa > xb) { return true; }
-    let top = f32(dj) * d.pitch_y + max(max(d.p2_y, d.p4_y), 0.0);
     let ya = y_at_x(fl, xa);
     let yb = y_at_x(fl, xb);
     if (ya.y == 0.0 || yb.y == 0.0) { return false; }
-    return ya.x > top && yb.x > top;
+    return ya.x > need_a && yb.x > need_b;
+}
+
+// True when the flight stays above tooth dj's peak over the tooth's x-extent (clipped to the
+// part of the flight before x_far): no point of a tooth is higher than its peak.
+fn flies_over(d: Design, fl: Flight, dj: i32, x0: f32, x_far: f32) -> bool {
+    let x = teeth_span(d, dj, dj, min(x0, x_far), max(x0, x_far));
+    let top = f32(dj) * d.pitch_y + max(max(d.p2_y, d.p4_y), 0.0);
+    return above_at_ends(fl, x.x, x.y, top, top);
+}
+
+// The first tooth from j_from on that the flight does not fly over (j_hi + 1 when none), in
+// few passes where it clears many teeth: after a tooth it clears, a run of the next teeth is
+// passed at once when the flight is above the line over the run's peaks by
+// RUN_CLEARANCE_PITCHES (far more than rounding, so `flies_over` would say the same of each
+// tooth); the run doubles while that holds and halves when not, down to one tooth tested by
+// `flies_over` itself. A pass is one test either way (lanes in different modes would run
+// both), and on a SIMD machine the scan lasts as long as its slowest lane's.
+// Rust twin: kernel.rs `next_tooth_to_search` (the same passes).
+fn next_tooth_to_search(d: Design, fl: Flight, j_from: i32, j_hi: i32, k: i32, x0: f32, x_far: f32) -> i32 {
+    let lo = min(x0, x_far);
+    let hi = max(x0, x_far);
+    let peak = max(max(d.p2_y, d.p4_y), 0.0);
+    // a line at least as high as each tooth's peak over that tooth's extent: it rises with
+    // the teeth and has tooth 0's peak height at the left end of its extent (uphill; the
+    // right end downhill)
+    let slope = d.pitch_y / d.pitch_x;
+    var x_ref = d.ext_min;
+    if (slope < 0.0) { x_ref = d.ext_max; }
+    let clearance = RUN_CLEARANCE_PITCHES * d.pitch_len;
+    var j = j_from;
+    var run = 0;
+    loop {
+        if (j > j_hi) { break; }
+        var last = j;
+        if (run > 0) { last = min(j + run - 1, j_hi); }
+        let x = teeth_span(d, j - k, last - k, lo, hi);
+        var need_a = f32(j - k) * d.pitch_y + peak; // flies_over's test of tooth j
+        var need_b = need_a;
+        if (run > 0) {
+            need_a = peak + slope * (x.x - x_ref) + clearance;
+            need_b = peak + slope * (x.y - x_ref) + clearance;
+        }
+        if (above_at_ends(fl, x.x, x.y, need_a, need_b)) {
+            j = last + 1;
+            run = max(2 * run, 1);
+        } else {
+            if (run == 0) { break; }
+            run = run / 2;
+        }
+    }
+    return j;
 }
 
 fn to_index(x: f32) -> i32 {
@@ -188,7 +242,7 @@ fn first_hit(d: Design, p: Particle, bounce: u32) -> Hit {
     // the longest flight; this way they pay for the most teeth any lane searches.
     var j = j_lo;
     loop {
-        while (j <= j_hi && flies_over(d, fl, j - k, pos.x, x_far)) { j++; }
+        j = next_tooth_to_search(d, fl, j, j_hi, k, pos.x, x_far);
         if (j > j_hi) { break; }
         let dj = j - k;
         for (var si = 0u; si < 2u; si++) {
@@ -233,15 +287,21 @@ fn first_hit(d: Design, p: Particle, bounce: u32) -> Hit {
             if (!departing && hop_ok(pos, pos) && contact(d, pos, vel, a, b, n)) { rs = Roots(1u, 0.0, 0.0); }
             let e = b - a;
             let ee = dot(e, e);
-            for (var i = 0u; i < rs.n; i++) {
-                var t = rs.t0;
-                if (i == 1u) { t = rs.t1; }
-                let q = flight_pos(fl, t);
-                let s = dot(q - a, e) / ee;
-                if (s < 0.0 || s > 1.0 || !hop_ok(pos, q)) { continue; }
-                if (t < best.t) { best = Hit(true, t, q, j, surface); }
-                break;
+            // the first root on the segment; both are tested side by side, without branches (a
+            // loop over them ran both passes for every lane anyway, one after the other)
+            let q0 = flight_pos(fl, rs.t0);
+            let q1 = flight_pos(fl, rs.t1);
+            let s0 = dot(q0 - a, e) / ee;
+            let s1 = dot(q1 - a, e) / ee;
+            let on0 = (rs.n >= 1u) & !((s0 < 0.0) | (s0 > 1.0) | !hop_ok(pos, q0));
+            let on1 = (rs.n >= 2u) & !((s1 < 0.0) | (s1 > 1.0) | !hop_ok(pos, q1));
+            var t = rs.t1;
+            var q = q1;
+            if (on0) {
+                t = rs.t0;
+                q = q0;
             }
+            if ((on0 | on1) & (t < best.t)) { best = Hit(true, t, q, j, surface); }
         }
         j++;
     }

@@ -38,6 +38,7 @@ use crate::model::rng::{
 
 /// The state, surface and randomisation codes, declared once for both sides (build.rs
 /// generates their WGSL twins from src/engine/shared.rs).
+use super::shared::RUN_CLEARANCE_PITCHES;
 pub use super::shared::{
     RANDOMISE_EVERY_LAUNCH, RANDOMISE_FIRST_LAUNCH, RANDOMISE_OFF, STATE_FLYING, STATE_LOST, STATE_RESTING,
     SURFACE_BASE, SURFACE_CATCH, SURFACE_NONE, SURFACE_RAMP,
@@ -384,8 +385,8 @@ pub fn first_hit_in<T: Real>(
     // SIMD machine a `continue` would make every lane pay for each tooth any lane scans).
     let mut j = j_lo;
     loop {
-        while j <= j_hi && !drifting && flies_over(d, &fl, j - k, p.pos[0], x_far) {
-            j += 1;
+        if !drifting {
+            j = next_tooth_to_search(d, &fl, j, j_hi, k, p.pos[0], x_far);
         }
         if j > j_hi {
             break;
@@ -425,16 +426,16 @@ pub fn first_hit_in<T: Real>(
             }
             let e = [b[0] - a[0], b[1] - a[1]];
             let ee = dot(e, e);
-            for t in roots.into_iter().flatten() {
+            // the first root on the segment (the WGSL tests both side by side)
+            let on_segment = |t: T| {
                 let q = fl.pos(t);
                 let s = dot([q[0] - a[0], q[1] - a[1]], e) / ee;
-                if s < T::zero() || s > T::one() || !hop_ok(ph, p.pos, q) {
-                    continue;
-                }
+                (s >= T::zero() && s <= T::one() && hop_ok(ph, p.pos, q)).then_some((t, q))
+            };
+            if let Some((t, q)) = roots[0].and_then(on_segment).or_else(|| roots[1].and_then(on_segment)) {
                 if t < best.t {
                     best = Hit { found: true, t, pos: q, tooth: j, surface };
                 }
-                break;
             }
         }
         j += 1;
@@ -442,23 +443,86 @@ pub fn first_hit_in<T: Real>(
     best
 }
 
-/// True when the flight stays above tooth `dj`'s peak over the tooth's whole x-extent
-/// (clipped to the part of the flight before `x_far`): the trajectory is concave in x, so its
-/// lowest point over an interval is at an end, and no tooth point is higher than p2.
+/// The x-interval from tooth `dj_first`'s left end to tooth `dj_last`'s right end, clipped to
+/// [lo, hi] (empty, `.0 > .1`, when they do not meet).
 #[inline(always)]
-fn flies_over<T: Real>(d: &KDesign<T>, fl: &Flight<T>, dj: i32, x0: T, x_far: T) -> bool {
-    let base = T::c(dj as f64) * d.pitch[0];
-    let (lo, hi) = if x_far >= x0 { (x0, x_far) } else { (x_far, x0) };
-    let xa = (base + d.ext_min).max(lo);
-    let xb = (base + d.ext_max).min(hi);
+fn teeth_span<T: Real>(d: &KDesign<T>, dj_first: i32, dj_last: i32, lo: T, hi: T) -> (T, T) {
+    let xa = (T::c(dj_first as f64) * d.pitch[0] + d.ext_min).max(lo);
+    let xb = (T::c(dj_last as f64) * d.pitch[0] + d.ext_max).min(hi);
+    (xa, xb)
+}
+
+/// Whether the flight is higher than `need_a` at x = `xa` and than `need_b` at x = `xb` (true
+/// when xa > xb: it is not there at all). The trajectory is concave in x, so above a line at
+/// both ends of an interval is above it over the whole interval.
+#[inline(always)]
+fn above_at_ends<T: Real>(fl: &Flight<T>, xa: T, xb: T, need_a: T, need_b: T) -> bool {
     if xa > xb {
-        return true; // not reached at all
+        return true;
     }
-    let top = T::c(dj as f64) * d.pitch[1] + d.p2[1].max(d.p4[1]).max(T::zero());
     match (fl.y_at_x(xa), fl.y_at_x(xb)) {
-        (Some(ya), Some(yb)) => ya > top && yb > top,
+        (Some(ya), Some(yb)) => ya > need_a && yb > need_b,
         _ => false,
     }
+}
+
+/// True when the flight stays above tooth `dj`'s peak over the tooth's x-extent (clipped to
+/// the part of the flight before `x_far`): no point of a tooth is higher than its peak.
+#[inline(always)]
+fn flies_over<T: Real>(d: &KDesign<T>, fl: &Flight<T>, dj: i32, x0: T, x_far: T) -> bool {
+    let (lo, hi) = if x_far >= x0 { (x0, x_far) } else { (x_far, x0) };
+    let (xa, xb) = teeth_span(d, dj, dj, lo, hi);
+    let top = T::c(dj as f64) * d.pitch[1] + d.p2[1].max(d.p4[1]).max(T::zero());
+    above_at_ends(fl, xa, xb, top, top)
+}
+
+/// The first tooth from `j_from` on that the flight does not fly over (`j_hi + 1` when none),
+/// in few passes where it clears many teeth: after a tooth it clears, a run of the next teeth
+/// is passed at once when the flight is above the line over the run's peaks by
+/// [`RUN_CLEARANCE_PITCHES`] (far more than rounding, so [`flies_over`] would say the same of
+/// each tooth); the run doubles while that holds and halves when not, down to one tooth tested
+/// by `flies_over` itself. The WGSL twin makes the same passes (on a SIMD machine the scan
+/// lasts as long as its slowest lane's, and one tooth at a time that was a quarter of the
+/// lunar kernel on lavapipe).
+#[inline(always)]
+fn next_tooth_to_search<T: Real>(
+    d: &KDesign<T>,
+    fl: &Flight<T>,
+    j_from: i32,
+    j_hi: i32,
+    k: i32,
+    x0: T,
+    x_far: T,
+) -> i32 {
+    let (lo, hi) = if x_far >= x0 { (x0, x_far) } else { (x_far, x0) };
+    let peak = d.p2[1].max(d.p4[1]).max(T::zero());
+    // a line at least as high as each tooth's peak over that tooth's extent: it rises with the
+    // teeth and has tooth 0's peak height at the left end of its extent (uphill; the right
+    // end downhill)
+    let slope = d.pitch[1] / d.pitch[0];
+    let x_ref = if slope < T::zero() { d.ext_max } else { d.ext_min };
+    let clearance = T::c(RUN_CLEARANCE_PITCHES) * d.pitch_len;
+    let mut j = j_from;
+    let mut run = 0;
+    while j <= j_hi {
+        let passed = if run == 0 {
+            flies_over(d, fl, j - k, x0, x_far)
+        } else {
+            let last = (j + run - 1).min(j_hi);
+            let (xa, xb) = teeth_span(d, j - k, last - k, lo, hi);
+            let need = |x: T| peak + slope * (x - x_ref) + clearance;
+            above_at_ends(fl, xa, xb, need(xa), need(xb))
+        };
+        if passed {
+            j = if run == 0 { j + 1 } else { (j + run - 1).min(j_hi) + 1 };
+            run = (2 * run).max(1);
+        } else if run == 0 {
+            break;
+        } else {
+            run /= 2;
+        }
+    }
+    j
 }
 
 /// What one flight did, for trajectory output.

@@ -83,6 +83,11 @@ path_switches! {
     IMPACT_SCATTER;
 }
 
+/// In `next_tooth_to_search` (kernel.rs, particles.wgsl): a run of teeth is passed at once
+/// only when the flight is higher than the line over their peaks by this many pitch lengths,
+/// far more than rounding moves a height, so `flies_over` would say the same of each tooth.
+pub const RUN_CLEARANCE_PITCHES: f64 = 1e-3;
+
 /// The generated WGSL: one `const` per shared constant, one `override` per path switch.
 pub fn wgsl_constants() -> String {
     let mut out =
@@ -90,6 +95,7 @@ pub fn wgsl_constants() -> String {
     for (name, value) in WGSL_U32 {
         out.push_str(&format!("const {name}: u32 = {value}u;\n"));
     }
+    out.push_str(&format!("const RUN_CLEARANCE_PITCHES: f32 = {RUN_CLEARANCE_PITCHES:?};\n"));
     for name in WGSL_PATH_SWITCHES {
         out.push_str(&format!("override {name}: bool = true;\n"));
     }
