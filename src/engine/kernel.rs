@@ -476,6 +476,24 @@ fn flies_over<T: Real>(d: &KDesign<T>, fl: &Flight<T>, dj: i32, x0: T, x_far: T)
     above_at_ends(fl, xa, xb, top, top)
 }
 
+/// True when the flight is higher, by [`RUN_CLEARANCE_PITCHES`], than a line at least as high
+/// as each peak of teeth `dj_first..=dj_last` over that tooth's extent (clipped as in
+/// [`flies_over`]): then `flies_over` is true of each of them. (The WGSL computes this test's
+/// inputs and `flies_over`'s in one place, so that a pass runs one test whichever it is.)
+#[inline(always)]
+fn clears_run<T: Real>(d: &KDesign<T>, fl: &Flight<T>, dj_first: i32, dj_last: i32, x0: T, x_far: T) -> bool {
+    let (lo, hi) = if x_far >= x0 { (x0, x_far) } else { (x_far, x0) };
+    let (xa, xb) = teeth_span(d, dj_first, dj_last, lo, hi);
+    let peak = d.p2[1].max(d.p4[1]).max(T::zero());
+    // the line rises with the teeth and has tooth 0's peak height at the left end of its
+    // extent (uphill; the right end downhill)
+    let slope = d.pitch[1] / d.pitch[0];
+    let x_ref = if slope < T::zero() { d.ext_max } else { d.ext_min };
+    let clearance = T::c(RUN_CLEARANCE_PITCHES) * d.pitch_len;
+    let need = |x: T| peak + slope * (x - x_ref) + clearance;
+    above_at_ends(fl, xa, xb, need(xa), need(xb))
+}
+
 /// The first tooth from `j_from` on that the flight does not fly over (`j_hi + 1` when none),
 /// in few passes where it clears many teeth: after a tooth it clears, a run of the next teeth
 /// is passed at once when the flight is above the line over the run's peaks by
@@ -494,24 +512,13 @@ fn next_tooth_to_search<T: Real>(
     x0: T,
     x_far: T,
 ) -> i32 {
-    let (lo, hi) = if x_far >= x0 { (x0, x_far) } else { (x_far, x0) };
-    let peak = d.p2[1].max(d.p4[1]).max(T::zero());
-    // a line at least as high as each tooth's peak over that tooth's extent: it rises with the
-    // teeth and has tooth 0's peak height at the left end of its extent (uphill; the right
-    // end downhill)
-    let slope = d.pitch[1] / d.pitch[0];
-    let x_ref = if slope < T::zero() { d.ext_max } else { d.ext_min };
-    let clearance = T::c(RUN_CLEARANCE_PITCHES) * d.pitch_len;
     let mut j = j_from;
     let mut run = 0;
     while j <= j_hi {
         let passed = if run == 0 {
             flies_over(d, fl, j - k, x0, x_far)
         } else {
-            let last = (j + run - 1).min(j_hi);
-            let (xa, xb) = teeth_span(d, j - k, last - k, lo, hi);
-            let need = |x: T| peak + slope * (x - x_ref) + clearance;
-            above_at_ends(fl, xa, xb, need(xa), need(xb))
+            clears_run(d, fl, j - k, (j + run - 1).min(j_hi) - k, x0, x_far)
         };
         if passed {
             j = if run == 0 { j + 1 } else { (j + run - 1).min(j_hi) + 1 };
@@ -826,4 +833,78 @@ pub fn reduce<T: Real>(
         out.distance_sum = out.distance_sum + s;
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::cpu::kernel_design;
+    use crate::engine::Context;
+    use crate::model::rng::uniform01;
+    use crate::model::sampling::random_valid_designs;
+    use crate::model::{prepare, Scenario};
+
+    /// The tooth a one-at-a-time scan with `flies_over` stops at.
+    fn one_by_one<T: Real>(d: &KDesign<T>, fl: &Flight<T>, j_from: i32, j_hi: i32, k: i32, x0: T, x_far: T) -> i32 {
+        let mut j = j_from;
+        while j <= j_hi && flies_over(d, fl, j - k, x0, x_far) {
+            j += 1;
+        }
+        j
+    }
+
+    /// Flights from every launch point of random valid designs (slopes 0-40°, Moon and Earth
+    /// with its drag), in random directions and at random speeds, each scanned from every
+    /// tooth it can reach: the runs stop where `flies_over` one tooth at a time stops, in f64
+    /// and in f32. Returns how many scans were compared and how many runs of four teeth
+    /// `clears_run` passed within them (so that the runs are taken, not only tried).
+    fn compare_scans<T: Real>() -> (usize, usize) {
+        let (mut compared, mut in_runs) = (0, 0);
+        for (c, base) in [Scenario::lunar(), Scenario::earth()].into_iter().enumerate() {
+            for (a, alpha) in [0.0, 20.0, 40.0].into_iter().enumerate() {
+                let mut s = base.clone();
+                s.environment.alpha_deg = alpha;
+                s.sim.particles = 20;
+                let ctx = Context::new(&s);
+                let (g, k_drag) = (T::c(ctx.g), T::c(ctx.k_drag));
+                for (n, design) in random_valid_designs(&s, 6, 11 + (3 * c + a) as u64).into_iter().enumerate() {
+                    let prep = prepare(&s, &design).unwrap();
+                    let d = kernel_design::<T>(&prep);
+                    for (i, launch) in prep.launches.iter().enumerate() {
+                        let key = (100 * n + i) as u32;
+                        let angle = std::f64::consts::PI * (0.05 + 0.9 * uniform01(7, key, c as u32, 0));
+                        let speed = 0.2 + 4.0 * uniform01(7, key, c as u32, 1);
+                        let v0 = [T::c(speed * angle.cos()), T::c(speed * angle.sin())];
+                        let fl =
+                            Flight { p0: [T::c(launch[0]), T::c(launch[1])], v0, g, k: k_drag, drift: [T::zero(); 2] };
+                        // x_far: somewhere along the flight, or its horizon far away
+                        let t_far = T::c(2.0 * speed / ctx.g * uniform01(7, key, c as u32, 2));
+                        let x_far = if i % 5 == 0 { T::c(1e3) } else { fl.pos(t_far)[0] };
+                        let (x0, k) = (fl.p0[0], 0);
+                        for j_from in -2..d.teeth.min(60) {
+                            let j_hi = d.teeth - 1;
+                            let expected = one_by_one(&d, &fl, j_from, j_hi, k, x0, x_far);
+                            let found = next_tooth_to_search(&d, &fl, j_from, j_hi, k, x0, x_far);
+                            assert_eq!(
+                                found, expected,
+                                "case {c}, slope {alpha}, design {n}, launch {i}, from {j_from}"
+                            );
+                            compared += 1;
+                            // runs of four the scan could pass at once from here
+                            let runs = (j_from..expected - 3).filter(|&j| clears_run(&d, &fl, j, j + 3, x0, x_far));
+                            in_runs += runs.count();
+                        }
+                    }
+                }
+            }
+        }
+        (compared, in_runs)
+    }
+
+    #[test]
+    fn the_run_scan_stops_where_the_one_by_one_scan_stops() {
+        for (compared, runs) in [compare_scans::<f64>(), compare_scans::<f32>()] {
+            assert!(compared > 40_000 && runs > compared, "{compared} scans, {runs} runs of four passed");
+        }
+    }
 }
