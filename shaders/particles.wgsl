@@ -131,22 +131,17 @@ fn above_at_ends(fl: Flight, xa: f32, xb: f32, need_a: f32, need_b: f32) -> bool
     return ya.x > need_a && yb.x > need_b;
 }
 
-// True when the flight stays above tooth dj's peak over the tooth's x-extent (clipped to the
-// part of the flight before x_far): no point of a tooth is higher than its peak.
-fn flies_over(d: Design, fl: Flight, dj: i32, x0: f32, x_far: f32) -> bool {
-    let x = teeth_span(d, dj, dj, min(x0, x_far), max(x0, x_far));
-    let top = f32(dj) * d.pitch_y + max(max(d.p2_y, d.p4_y), 0.0);
-    return above_at_ends(fl, x.x, x.y, top, top);
-}
-
-// The first tooth from j_from on that the flight does not fly over (j_hi + 1 when none), in
-// few passes where it clears many teeth: after a tooth it clears, a run of the next teeth is
-// passed at once when the flight is above the line over the run's peaks by
-// RUN_CLEARANCE_PITCHES (far more than rounding, so `flies_over` would say the same of each
-// tooth); the run doubles while that holds and halves when not, down to one tooth tested by
-// `flies_over` itself. A pass is one test either way (lanes in different modes would run
-// both), and on a SIMD machine the scan lasts as long as its slowest lane's.
-// Rust twin: kernel.rs `next_tooth_to_search` (the same passes).
+// The first tooth from j_from on that the flight does not fly over (j_hi + 1 when none): a
+// tooth is flown over when the flight stays above its peak over the tooth's x-extent
+// (clipped to the part of the flight before x_far; no point of a tooth is higher than its
+// peak). In few passes where the flight clears many teeth: after a tooth it clears, a run of
+// the next teeth is passed at once when the flight is above the line over the run's peaks by
+// RUN_CLEARANCE_PITCHES (far more than rounding, so the one-tooth test would say the same of
+// each tooth); the run doubles while that holds and halves when not, down to one tooth
+// tested exactly. A pass computes either test's inputs and runs one test (lanes in different
+// modes would otherwise run both), and on a SIMD machine the scan lasts as long as its
+// slowest lane's. Rust twin: kernel.rs `next_tooth_to_search` (the same passes; its
+// one-tooth test is `flies_over`, its run test `clears_run`).
 fn next_tooth_to_search(d: Design, fl: Flight, j_from: i32, j_hi: i32, k: i32, x0: f32, x_far: f32) -> i32 {
     let lo = min(x0, x_far);
     let hi = max(x0, x_far);
@@ -165,7 +160,7 @@ fn next_tooth_to_search(d: Design, fl: Flight, j_from: i32, j_hi: i32, k: i32, x
         var last = j;
         if (run > 0) { last = min(j + run - 1, j_hi); }
         let x = teeth_span(d, j - k, last - k, lo, hi);
-        var need_a = f32(j - k) * d.pitch_y + peak; // flies_over's test of tooth j
+        var need_a = f32(j - k) * d.pitch_y + peak; // tooth j's peak (kernel.rs flies_over)
         var need_b = need_a;
         if (run > 0) {
             need_a = peak + slope * (x.x - x_ref) + clearance;

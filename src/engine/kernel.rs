@@ -6,7 +6,11 @@
 //! |-----------------------------------|---------------------------------------------------|
 //! | `offset`, `normal_of`, `to_index` | same names here                                   |
 //! | `randomise_launch`, `hop_ok`      | same names here                                   |
-//! | `contact`, `flies_over`           | same names here                                   |
+//! | `contact`, `teeth_span`           | same names here                                   |
+//! | `above_at_ends`                   | same name here                                    |
+//! | `next_tooth_to_search`            | same name here (its passes call `flies_over` or   |
+//! |                                   | `clears_run`; the WGSL computes either's inputs   |
+//! |                                   | in one place and runs one test)                   |
 //! | `first_hit`, `step_particle`      | same names here (plus the cpu-only effects)       |
 //! | `fly_particle`                    | same name here                                    |
 //! | `end_tooth`                       | [`end_tooth`]                                     |
@@ -478,8 +482,7 @@ fn flies_over<T: Real>(d: &KDesign<T>, fl: &Flight<T>, dj: i32, x0: T, x_far: T)
 
 /// True when the flight is higher, by [`RUN_CLEARANCE_PITCHES`], than a line at least as high
 /// as each peak of teeth `dj_first..=dj_last` over that tooth's extent (clipped as in
-/// [`flies_over`]): then `flies_over` is true of each of them. (The WGSL computes this test's
-/// inputs and `flies_over`'s in one place, so that a pass runs one test whichever it is.)
+/// [`flies_over`]): then `flies_over` is true of each of them.
 #[inline(always)]
 fn clears_run<T: Real>(d: &KDesign<T>, fl: &Flight<T>, dj_first: i32, dj_last: i32, x0: T, x_far: T) -> bool {
     let (lo, hi) = if x_far >= x0 { (x0, x_far) } else { (x_far, x0) };
