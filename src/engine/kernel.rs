@@ -40,9 +40,9 @@ use crate::model::rng::{
     PER_PARTICLE,
 };
 
+use super::shared::RUN_CLEARANCE_PITCHES;
 /// The state, surface and randomisation codes, declared once for both sides (build.rs
 /// generates their WGSL twins from src/engine/shared.rs).
-use super::shared::RUN_CLEARANCE_PITCHES;
 pub use super::shared::{
     RANDOMISE_EVERY_LAUNCH, RANDOMISE_FIRST_LAUNCH, RANDOMISE_OFF, STATE_FLYING, STATE_LOST, STATE_RESTING,
     SURFACE_BASE, SURFACE_CATCH, SURFACE_NONE, SURFACE_RAMP,
