@@ -691,7 +691,7 @@ pub mod avx512 {
     // ---------------------------------------------------------------------------
 
     #[inline(always)]
-    unsafe fn splat(v: f64) -> __m512d {
+    pub(super) unsafe fn splat(v: f64) -> __m512d {
         _mm512_set1_pd(v)
     }
     #[inline(always)]
@@ -724,7 +724,7 @@ pub mod avx512 {
     }
     /// fabs
     #[inline(always)]
-    unsafe fn vabs(a: __m512d) -> __m512d {
+    pub(super) unsafe fn vabs(a: __m512d) -> __m512d {
         _mm512_castsi512_pd(_mm512_andnot_si512(sign_mask(), _mm512_castpd_si512(a)))
     }
     /// -a (xor with the sign bit, as glibc's `vxorpd` with -0.0)
@@ -734,7 +734,7 @@ pub mod avx512 {
     }
     /// copysign (mag, sgn)
     #[inline(always)]
-    unsafe fn vcopysign(mag: __m512d, sgn: __m512d) -> __m512d {
+    pub(super) unsafe fn vcopysign(mag: __m512d, sgn: __m512d) -> __m512d {
         let m = sign_mask();
         _mm512_castsi512_pd(_mm512_or_si512(
             _mm512_andnot_si512(m, _mm512_castpd_si512(mag)),
@@ -1129,7 +1129,7 @@ pub mod avx512 {
     }
 
     #[inline(always)]
-    unsafe fn lt(a: __m512d, b: __m512d) -> __mmask8 {
+    pub(super) unsafe fn lt(a: __m512d, b: __m512d) -> __mmask8 {
         _mm512_cmp_pd_mask::<_CMP_LT_OQ>(a, b)
     }
 

@@ -35,6 +35,11 @@
 
 use std::arch::x86_64::*;
 
+// the vector helpers the sincos and expm1 ports use: `vabs` is glibc's `fabs` (the vandpd
+// with 0x7fff... @0x84290) and `vcopysign(z, y)` its `signArctan2 (y, z)` (vandnpd / vandpd /
+// vorpd with the sign mask @0x842b0)
+use super::avx512::{lt, splat, vabs, vcopysign};
+
 // ---------------------------------------------------------------------------
 // Constants (atnat2.h, e_atan2.c).  Checked bit-for-bit against the .rodata of
 // libm.so.6 (address in the comment) (read from the ELF's LOAD segments).
@@ -65,38 +70,11 @@ const EP_EXP: i64 = 57;
 const SIGN: u64 = 0x8000_0000_0000_0000;
 const ABS: u64 = 0x7fff_ffff_ffff_ffff;
 
-#[inline(always)]
-unsafe fn splat(c: f64) -> __m512d {
-    _mm512_set1_pd(c)
-}
-
-/// `fabs` (vandpd with 0x7fff...: @0x84290).
-#[inline(always)]
-unsafe fn fabs(a: __m512d) -> __m512d {
-    _mm512_castsi512_pd(_mm512_and_si512(_mm512_castpd_si512(a), _mm512_set1_epi64(ABS as i64)))
-}
-
-/// `signArctan2 (y, z)` = copysign (z, y): vandnpd / vandpd / vorpd with
-/// the sign mask @0x842b0.
-#[inline(always)]
-unsafe fn copysign(z: __m512d, y: __m512d) -> __m512d {
-    let s = _mm512_set1_epi64(SIGN as i64);
-    _mm512_castsi512_pd(_mm512_or_si512(
-        _mm512_andnot_si512(s, _mm512_castpd_si512(z)),
-        _mm512_and_si512(s, _mm512_castpd_si512(y)),
-    ))
-}
-
 /// `s * w` for s = -1 in the lanes of `neg`, +1 elsewhere (sign-bit flip, exact).
 #[inline(always)]
 unsafe fn neg_in(neg: __mmask8, w: __m512d) -> __m512d {
     let wi = _mm512_castpd_si512(w);
     _mm512_castsi512_pd(_mm512_mask_xor_epi64(wi, neg, wi, _mm512_set1_epi64(SIGN as i64)))
-}
-
-#[inline(always)]
-unsafe fn lt(a: __m512d, b: __m512d) -> __mmask8 {
-    _mm512_cmp_pd_mask::<_CMP_LT_OQ>(a, b)
 }
 
 /// Gather column `j` of cij for the 8 row offsets `row7 = 7*i`.
@@ -136,17 +114,17 @@ unsafe fn atan2_kernel(y: __m512d, x: __m512d) -> (__m512d, __mmask8) {
     let de_big = _mm512_cmpge_epi64_mask(de, _mm512_set1_epi64(EP_EXP)); // de >= ep
     let de_small = _mm512_cmple_epi64_mask(de, _mm512_set1_epi64(-EP_EXP)); // de <= em
                                                                             // ax = (x < 0) ? -x : x ; ay = (y < 0) ? -y : y  (vblendvpd @0x6e33a)
-    let mut ax = fabs(x);
-    let mut ay = fabs(y);
+    let mut ax = vabs(x);
+    let mut ay = vabs(y);
     // de <= em, x > 0: z = ay / ax; ret = signArctan2 (y, z)  (@0x6e375)
     // (only computed when some lane needs it: saves a vdivpd)
     let de_small_pos = de_small & xpos & !(xz | yz);
     let mut r_small_pos = zero;
     if de_small_pos != 0 {
-        r_small_pos = copysign(_mm512_div_pd(ay, ax), y);
+        r_small_pos = vcopysign(_mm512_div_pd(ay, ax), y);
         // fabs (ret) < DBL_MIN -> libm forces underflow (+ errno in the
         // wrapper): leave those lanes to scalar libm.
-        let tiny = lt(fabs(r_small_pos), splat(DBL_MIN));
+        let tiny = lt(vabs(r_small_pos), splat(DBL_MIN));
         fallback |= de_small_pos & tiny;
     }
 
@@ -245,7 +223,7 @@ unsafe fn atan2_kernel(y: __m512d, x: __m512d) -> (__m512d, __mmask8) {
         //   t3 = u - cij[i][0];  EADD (t3, du, v, dv);
         let t3 = _mm512_sub_pd(u, c0); //                                vsubsd
         let v = _mm512_add_pd(du, t3); //                                vaddsd
-        let t3_big = lt(fabs(du), fabs(t3)); //   vcomisd %xmm1,%xmm4 ; jbe @0x6e963
+        let t3_big = lt(vabs(du), vabs(t3)); //   vcomisd %xmm1,%xmm4 ; jbe @0x6e963
         let dv_a = _mm512_add_pd(_mm512_sub_pd(t3, v), du); // ((t3 - v) + du)
         let dv_b = _mm512_add_pd(_mm512_sub_pd(du, v), t3); // ((du - v) + t3)  @0x6eaea
         let dv = _mm512_mask_blend_pd(t3_big, dv_b, dv_a);
@@ -276,20 +254,20 @@ unsafe fn atan2_kernel(y: __m512d, x: __m512d) -> (__m512d, __mmask8) {
     }
 
     // return signArctan2 (y, z);
-    let mut r = copysign(z, y);
+    let mut r = vcopysign(z, y);
 
     // ---- extreme exponent differences (C order: de >= ep first) ----------
     // de <= em: x > 0 ? signArctan2 (y, ay/ax) : (y > 0 ? opi : mopi)
-    let r_small = _mm512_mask_blend_pd(xpos, copysign(splat(OPI), y), r_small_pos);
+    let r_small = _mm512_mask_blend_pd(xpos, vcopysign(splat(OPI), y), r_small_pos);
     r = _mm512_mask_blend_pd(de_small, r, r_small);
     // de >= ep: (y > 0) ? hpi : mhpi
-    r = _mm512_mask_blend_pd(de_big, r, copysign(splat(HPI), y));
+    r = _mm512_mask_blend_pd(de_big, r, vcopysign(splat(HPI), y));
 
     // ---- x = +-0 (y != 0): hpi / mhpi by the sign of y -------------------
-    r = _mm512_mask_blend_pd(xz, r, copysign(splat(HPI), y));
+    r = _mm512_mask_blend_pd(xz, r, vcopysign(splat(HPI), y));
     // ---- y = +-0: x sign bit clear ? y (+0 / -0) : (+-opi by sign of y) ---
     let x_neg_bit = _mm512_test_epi64_mask(xb, _mm512_set1_epi64(SIGN as i64));
-    let r_yz = _mm512_mask_blend_pd(x_neg_bit, y, copysign(splat(OPI), y));
+    let r_yz = _mm512_mask_blend_pd(x_neg_bit, y, vcopysign(splat(OPI), y));
     r = _mm512_mask_blend_pd(yz, r, r_yz);
 
     (r, fallback)
