@@ -248,7 +248,8 @@ pub fn build_fill(
     };
 
     let (a2, a4) = profile.catch_arc_angles();
-    let arc = |angle: f64| [profile.p3[0] + profile.radius * angle.cos(), profile.p3[1] + profile.radius * angle.sin()];
+    // the arc's point in the direction with this sine and cosine
+    let arc_point = |(s, c): (f64, f64)| [profile.p3[0] + profile.radius * c, profile.p3[1] + profile.radius * s];
     // p4, [p1_2], p_fill, then the arc
     let mut polygon = Vec::with_capacity(3 + PHYSICAL_ARC_POINTS.max(10));
     polygon.push(p4_1);
@@ -258,20 +259,19 @@ pub fn build_fill(
     polygon.push(p_fill);
     match mode {
         PhysicsMode::Physical => {
-            // as `arc`, with the sines and cosines taken eight at a time (same bits)
+            // the sines and cosines taken eight at a time (the same bits as `f64::sin_cos`)
             let angles: Vec<f64> = (0..PHYSICAL_ARC_POINTS)
                 .map(|k| a2 + (k as f64 / (PHYSICAL_ARC_POINTS - 1) as f64) * (a4 - a2))
                 .collect();
-            for (s, c) in crate::libm_lanes::sin_cos_all(&angles) {
-                polygon.push([profile.p3[0] + profile.radius * c, profile.p3[1] + profile.radius * s]);
-            }
+            polygon.extend(crate::libm_lanes::sin_cos_all(&angles).into_iter().map(arc_point));
         }
         PhysicsMode::Listing => {
             // Listing lines 165-183: linspace(a2, a4 - 0.05, 1000), every 100th point.
             let n = 1000;
             for k in (0..n).step_by(100) {
                 let f = k as f64 / (n - 1) as f64;
-                polygon.push(arc(a2 + f * (a4 - 0.05 - a2)));
+                let angle = a2 + f * (a4 - 0.05 - a2);
+                polygon.push(arc_point((angle.sin(), angle.cos())));
             }
         }
     }
