@@ -34,6 +34,19 @@ for env in lunar earth; do
     done
 done
 
+# The pop-1000 generations again with the host preparing a slice of designs while the device
+# runs the slice before (SAWTOOTH_GPU_SLICE_DESIGNS; 0, the default, is the whole generation
+# at once, the rows above): whether that takes the preparation off a hardware GPU's critical
+# path. On lavapipe the device is the host's own cores, so there slices only cost.
+mkdir "$work/slices"
+for env in lunar earth; do
+    for slice in 500 250; do
+        n=$((n + 1))
+        SAWTOOTH_GPU_SLICE_DESIGNS=$slice $st bench --env $env --designs 1000 --sample random \
+            --engines cpu,gpu --repeats "$repeats" --json > "$work/slices/$n-$slice.json"
+    done
+done
+
 python3 - "$work" "$repeats" <<'EOF'
 import json, pathlib, sys
 work, repeats = pathlib.Path(sys.argv[1]), sys.argv[2]
@@ -52,4 +65,15 @@ for r in runs:
 print()
 for engine, device in runs[0]["devices"].items():
     print(f"- {engine}: {device}")
+print()
+print("pop-1000 generations in slices, the next prepared while one runs (SAWTOOTH_GPU_SLICE_DESIGNS;")
+print("the whole generation at once is the table above)")
+print()
+print("| generation | designs per slice | cpu | gpu | gpu / cpu |")
+print("|---|---|---|---|---|")
+for p in sorted((work / "slices").glob("*.json"), key=lambda p: int(p.stem.split("-")[0])):
+    r = json.loads(p.read_text())
+    s, rate = r["seconds_per_batch"], r["particle_bounces_per_s"]
+    print(f'| {r["env"]}, pop 1000 | {p.stem.split("-")[1]} | {s["cpu"] * 1e3:.4g} ms | {s["gpu"] * 1e3:.4g} ms '
+          f'| **{rate["gpu"] / rate["cpu"]:.2f}×** |')
 EOF

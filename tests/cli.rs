@@ -164,6 +164,27 @@ fn trajectories_go_to_stdout_in_order() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// The gpu engine's slice setting comes from the environment; a malformed one is refused by
+/// name before anything runs (read before the engine looks for an adapter).
+#[test]
+fn a_malformed_gpu_slice_setting_is_refused_by_name() {
+    // `auto` too: a malformed setting is not a missing GPU to fall back from
+    for engine in ["gpu", "auto"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_sawtooth"))
+            .args(["bench", "--engines", engine, "--designs", "2", "--particles", "10", "--repeats", "1"])
+            .env("SAWTOOTH_GPU_SLICE_DESIGNS", "250 designs")
+            .output()
+            .expect("run binary");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{engine}: {err}");
+        assert!(
+            err.contains("SAWTOOTH_GPU_SLICE_DESIGNS must be a whole number") && err.contains("'250 designs'"),
+            "{err}"
+        );
+        assert!(out.stdout.is_empty() && !err.contains("panicked"), "{engine}: {err}");
+    }
+}
+
 fn assert_bad_input(args: &[&str], needle: &str) {
     let (code, _, err) = sawtooth(args);
     assert_eq!(code, 2, "{args:?}: {err}");

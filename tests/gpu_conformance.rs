@@ -365,7 +365,9 @@ fn path_switches_change_no_result() {
 
 /// scripts/gpu-table.sh, the one command README gives for a GPU machine, runs conformance and
 /// prints BENCHMARKS.md's GPU table: six batches, each with three timings and two ratios,
-/// and the device of each engine. (Here on whatever adapter the suite has, one repeat.)
+/// and the device of each engine; then the pop-1000 generations in slices of 500 and 250
+/// designs, each with its gpu / cpu ratio. (Here on whatever adapter the suite has, one
+/// repeat.)
 #[test]
 fn the_gpu_table_script_prints_every_batch() {
     if gpu().is_none() {
@@ -382,7 +384,11 @@ fn the_gpu_table_script_prints_every_batch() {
     let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("conformance: PASS"), "{stderr}");
-    let rows: Vec<&str> = stdout.lines().filter(|l| l.starts_with("| lunar") || l.starts_with("| earth")).collect();
+    let (whole, sliced) = stdout.split_once("in slices").unwrap_or_else(|| panic!("no table of slices: {stdout}"));
+    let rows_of = |table: &'_ str| -> Vec<String> {
+        table.lines().filter(|l| l.starts_with("| lunar") || l.starts_with("| earth")).map(String::from).collect()
+    };
+    let rows = rows_of(whole);
     let batches: Vec<&str> = rows.iter().map(|r| r.split('|').nth(1).unwrap().trim()).collect();
     assert_eq!(
         batches,
@@ -407,11 +413,66 @@ fn the_gpu_table_script_prints_every_batch() {
     for engine in ["listing", "cpu", "gpu"] {
         assert!(stdout.lines().any(|l| l.starts_with(&format!("- {engine}: "))), "{stdout}");
     }
+    let slices: Vec<Vec<String>> = rows_of(sliced)
+        .iter()
+        .map(|r| r.split('|').map(str::trim).filter(|c| !c.is_empty()).map(String::from).collect())
+        .collect();
+    let kinds: Vec<(&str, &str)> = slices.iter().map(|c| (c[0].as_str(), c[1].as_str())).collect();
+    assert_eq!(
+        kinds,
+        [
+            ("lunar, pop 1000", "500"),
+            ("lunar, pop 1000", "250"),
+            ("earth, pop 1000", "500"),
+            ("earth, pop 1000", "250")
+        ],
+        "{stdout}"
+    );
+    for c in &slices {
+        assert_eq!(c.len(), 5, "{c:?}");
+        let x: f64 = c[4].trim_matches('*').trim_end_matches('×').parse().unwrap_or_else(|_| panic!("{c:?}"));
+        assert!(x > 0.0 && x.is_finite(), "{c:?}");
+    }
     // a repeat count that is not a whole number of at least one is refused before anything runs
     for bad in ["0", "two"] {
         let refused = script(bad);
         assert_eq!(refused.status.code(), Some(2), "{bad}");
         let err = String::from_utf8_lossy(&refused.stderr);
         assert!(err.contains("REPEATS must be a whole number of at least 1") && !err.contains("conformance"), "{err}");
+    }
+}
+
+/// A batch in slices (the host prepares one while the device runs the one before) gives what
+/// the whole batch at once gives, design by design and in the batch's order, with an invalid
+/// design's error kept in its place; a slice is one dispatch, a slice of invalid designs none.
+#[test]
+fn a_batch_in_slices_gives_what_the_whole_batch_gives() {
+    let Some(g) = gpu() else { return };
+    assert_eq!(g.slice_designs(), 0, "the default is the whole batch at once");
+    for mut s in [Scenario::lunar(), Scenario::earth()] {
+        s.sim.particles = 24;
+        let mut designs = sawtooth::model::sampling::random_valid_designs(&s, 17, 5);
+        let bad = Design { l_c: f64::NAN, ..designs[0] };
+        designs.splice(6..6, [bad; 4]); // designs 6..10 invalid: the slice 6..9 has no valid one
+        let before = g.dispatches();
+        let whole = g.evaluate(&s, &designs);
+        assert_eq!(g.dispatches() - before, 1);
+        g.set_slice_designs(3);
+        let before = g.dispatches();
+        let sliced = g.evaluate(&s, &designs);
+        g.set_slice_designs(0);
+        assert_eq!(g.dispatches() - before, 21usize.div_ceil(3) - 1, "one dispatch per slice with a valid design");
+        assert_eq!(sliced.len(), designs.len());
+        for (i, (w, c)) in whole.iter().zip(&sliced).enumerate() {
+            match (w, c) {
+                (Ok(w), Ok(c)) => {
+                    assert_eq!(w.sim, c.sim, "design {i}");
+                    assert_eq!(w.performance, c.performance, "design {i}");
+                }
+                (Err(w), Err(c)) => assert_eq!(w.to_string(), c.to_string(), "design {i}"), // NaN != NaN
+                _ => panic!("design {i}: whole {w:?}, sliced {c:?}"),
+            }
+        }
+        assert!((6..10).all(|i| sliced[i].is_err()) && sliced.iter().filter(|r| r.is_ok()).count() == 17);
     }
 }

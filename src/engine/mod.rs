@@ -321,6 +321,10 @@ pub fn make_engine_for(kind: EngineKind, scenario: &Scenario) -> anyhow::Result<
 
 /// Any engine by name. `gpu` without an adapter is an error; `auto` falls back to `cpu`.
 pub fn make_engine(kind: EngineKind) -> anyhow::Result<Box<dyn Engine>> {
+    if kind == EngineKind::Auto {
+        // a malformed setting is the user's error, not a missing GPU to fall back from
+        gpu::slice_designs_from_env()?;
+    }
     Ok(match kind {
         EngineKind::Listing | EngineKind::Cpu => particle_engine(kind),
         EngineKind::Gpu => {

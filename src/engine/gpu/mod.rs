@@ -59,6 +59,9 @@ pub struct GpuEngine {
     cpu_only_designs: AtomicUsize,
     /// Whether the warning about such designs has been printed (once per engine).
     warned_cpu_only: AtomicBool,
+    /// The most designs `evaluate_groups` prepares and submits at once, so that the host
+    /// prepares the next slice while the device runs this one; 0: the whole batch at once.
+    slice_designs: AtomicUsize,
 }
 
 /// The simulation pipelines of one variant of the kernel's optional paths.
@@ -98,8 +101,23 @@ struct ChunkResult {
     particles: Option<Vec<GpuParticle>>,
 }
 
+/// A dispatch submitted and not yet read back ([`GpuEngine::submit_chunk`]).
+struct PendingChunk {
+    readback: wgpu::Buffer,
+    index: wgpu::SubmissionIndex,
+    /// Answers once the readback buffer is mapped (or failed to be).
+    mapped: std::sync::mpsc::Receiver<Result<(), wgpu::BufferAsyncError>>,
+    outcome_size: u64,
+    hist_size: u64,
+    want_particles: bool,
+    designs: usize,
+    particles: usize,
+    t_submit: std::time::Instant,
+}
+
 impl GpuEngine {
     pub fn new(choice: AdapterChoice) -> anyhow::Result<Self> {
+        let slice_designs = slice_designs_from_env()?;
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
         let hardware = |a: &wgpu::Adapter| a.get_info().device_type != wgpu::DeviceType::Cpu;
@@ -199,15 +217,38 @@ impl GpuEngine {
             dispatches: AtomicUsize::new(0),
             cpu_only_designs: AtomicUsize::new(0),
             warned_cpu_only: AtomicBool::new(false),
+            slice_designs: AtomicUsize::new(slice_designs),
         })
     }
 
-    /// "name (backend, device type)" for logs and run manifests.
+    /// "name (backend, device type)" for logs and run manifests, and the slices when a batch
+    /// is split ([`GpuEngine::set_slice_designs`]).
     pub fn describe(&self) -> String {
+        let slices = match self.slice_designs() {
+            0 => String::new(),
+            n => format!("; batches in slices of {n} designs, the next prepared while one runs"),
+        };
         format!(
-            "{} ({:?}, {:?}, driver {})",
+            "{} ({:?}, {:?}, driver {}){slices}",
             self.info.name, self.info.backend, self.info.device_type, self.info.driver_info
         )
+    }
+
+    /// Split each batch of `evaluate`/`evaluate_groups` into slices of at most `designs`
+    /// designs (0: the whole batch at once, the default), so that the host prepares a slice
+    /// (fill area, launch points, records) while the device runs the one before. The results
+    /// are those of the whole batch at once, except where a slice's records need fewer of
+    /// the kernel's optional paths than the whole batch's (`paths.rs`: then the driver's f32
+    /// rounding may differ). On lavapipe, whose device is the host's own cores, slices cost
+    /// time (BENCHMARKS.md); on a hardware GPU whether they pay is measured by
+    /// `scripts/gpu-table.sh`. The CLI reads `SAWTOOTH_GPU_SLICE_DESIGNS`.
+    pub fn set_slice_designs(&self, designs: usize) {
+        self.slice_designs.store(designs, Ordering::Relaxed);
+    }
+
+    /// See [`GpuEngine::set_slice_designs`].
+    pub fn slice_designs(&self) -> usize {
+        self.slice_designs.load(Ordering::Relaxed)
     }
 
     pub fn is_hardware(&self) -> bool {
@@ -286,7 +327,21 @@ impl GpuEngine {
         want_particles: bool,
         paths: KernelPaths,
     ) -> anyhow::Result<ChunkResult> {
-        let t_chunk = std::time::Instant::now();
+        self.finish_chunk(self.submit_chunk(phys, designs, particles, want_particles, paths)?)
+    }
+
+    /// The first half of [`GpuEngine::run_chunk`]: the records uploaded, the kernels and the
+    /// copies to the readback buffer submitted, and its mapping requested; the device works
+    /// on it while the caller goes on (`evaluate_groups` prepares the next slice).
+    /// Validation and out-of-memory errors of the submission are reported here.
+    fn submit_chunk(
+        &self,
+        phys: &GpuPhysics,
+        designs: &[GpuDesign],
+        particles: &[GpuParticle],
+        want_particles: bool,
+        paths: KernelPaths,
+    ) -> anyhow::Result<PendingChunk> {
         let dev = &self.device;
         let n = designs.len();
         let scope = dev.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -385,20 +440,38 @@ impl GpuEngine {
         if let Some(e) = pollster::block_on(scope.pop()) {
             bail!("GPU validation error: {e}");
         }
-        let slice = readback.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
+        let (tx, mapped) = std::sync::mpsc::channel();
+        readback.slice(..).map_async(wgpu::MapMode::Read, move |r| {
             let _ = tx.send(r);
         });
-        dev.poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: Some(TIMEOUT) })
+        Ok(PendingChunk {
+            readback,
+            index,
+            mapped,
+            outcome_size,
+            hist_size,
+            want_particles,
+            designs: n,
+            particles: particles.len(),
+            t_submit,
+        })
+    }
+
+    /// The second half of [`GpuEngine::run_chunk`]: wait for the device, read the records back.
+    fn finish_chunk(&self, pending: PendingChunk) -> anyhow::Result<ChunkResult> {
+        let PendingChunk { readback, index, mapped, outcome_size, hist_size, want_particles, .. } = pending;
+        self.device
+            .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: Some(TIMEOUT) })
             .map_err(|e| anyhow!("GPU batch did not finish: {e}"))?;
-        rx.recv_timeout(TIMEOUT)
+        mapped
+            .recv_timeout(TIMEOUT)
             .map_err(|_| anyhow!("GPU readback never completed"))?
             .map_err(|e| anyhow!("GPU readback failed: {e}"))?;
         if let Some(e) = self.uncaptured.lock().unwrap().take() {
             bail!("GPU error: {e}");
         }
-        let waited = t_submit.elapsed();
+        let waited = pending.t_submit.elapsed();
+        let slice = readback.slice(..);
         let view = slice.get_mapped_range().map_err(|e| anyhow!("GPU readback mapping failed: {e:?}"))?;
         let bytes: &[u8] = &view;
         let (o, rest) = bytes.split_at(outcome_size as usize);
@@ -412,11 +485,10 @@ impl GpuEngine {
         readback.unmap();
         if std::env::var_os("SAWTOOTH_PROFILE").is_some() {
             eprintln!(
-                "profile gpu: {} designs, {} particles: submit-to-readback {:.3} ms (kernel + copies), total in run_chunk {:.3} ms",
-                n,
-                particles.len(),
+                "profile gpu: {} designs, {} particles: submit-to-readback {:.3} ms (kernel + copies)",
+                pending.designs,
+                pending.particles,
                 waited.as_secs_f64() * 1e3,
-                t_chunk.elapsed().as_secs_f64() * 1e3
             );
         }
         Ok(result)
@@ -447,6 +519,14 @@ impl GpuEngine {
     /// A chunk the GPU fails on is re-run on the `cpu` engine (f32) with a warning, so a
     /// failure loses no work.
     pub fn run_jobs(&self, jobs: &[(&Context, &Prepared)], want_particles: bool) -> Vec<DesignRun> {
+        let submitted = self.submit_jobs(jobs, want_particles);
+        self.collect_jobs(jobs, submitted)
+    }
+
+    /// The first half of [`GpuEngine::run_jobs`]: the designs with a cpu-only effect run, and
+    /// the others' dispatches submitted; [`GpuEngine::collect_jobs`] (with the same `jobs`)
+    /// waits for them.
+    fn submit_jobs(&self, jobs: &[(&Context, &Prepared)], want_particles: bool) -> Submitted {
         let mut out: Vec<Option<DesignRun>> = (0..jobs.len()).map(|_| None).collect();
         let mut batches: Vec<(GpuPhysics, Vec<usize>)> = Vec::new();
         let mut on_cpu: Vec<usize> = Vec::new();
@@ -481,26 +561,49 @@ impl GpuEngine {
                 out[i] = Some(r);
             }
         }
+        let mut in_flight = Vec::new();
         for (key, members) in batches {
             for chunk in members.chunks(self.chunk_designs(key.n_particles, key.teeth_hist)) {
-                for (i, r) in chunk.iter().zip(self.run_batch(key, jobs, chunk, want_particles)) {
-                    out[*i] = Some(r);
+                let pending = self.submit_batch(key, jobs, chunk, want_particles);
+                in_flight.push(InFlight { key, chunk: chunk.to_vec(), pending });
+            }
+        }
+        Submitted { runs: out, in_flight, want_particles }
+    }
+
+    /// The second half of [`GpuEngine::run_jobs`]: each dispatch read back and turned into
+    /// its designs' runs, in the order of `jobs`. A dispatch the GPU failed on is re-run on
+    /// the `cpu` engine (f32) with a warning.
+    fn collect_jobs(&self, jobs: &[(&Context, &Prepared)], submitted: Submitted) -> Vec<DesignRun> {
+        let Submitted { runs: mut out, in_flight, want_particles } = submitted;
+        for InFlight { key, chunk, pending } in in_flight {
+            let runs = match pending.and_then(|p| self.finish_chunk(p)) {
+                Ok(r) => design_runs(key, jobs, &chunk, &r),
+                Err(e) => {
+                    eprintln!(
+                        "warning: GPU failed on a batch of {} designs ({e:#}); re-running it on the cpu engine",
+                        chunk.len()
+                    );
+                    run_on_cpu(jobs, &chunk, want_particles)
                 }
+            };
+            for (i, r) in chunk.iter().zip(runs) {
+                out[*i] = Some(r);
             }
         }
         out.into_iter().map(|r| r.expect("every design is run")).collect()
     }
 
-    /// One dispatch of `jobs[chunk]`, which share the batch-wide record `key`.
-    fn run_batch(
+    /// The records of `jobs[chunk]` (which share the batch-wide record `key`) packed and
+    /// submitted as one dispatch.
+    fn submit_batch(
         &self,
         key: GpuPhysics,
         jobs: &[(&Context, &Prepared)],
         chunk: &[usize],
         want_particles: bool,
-    ) -> Vec<DesignRun> {
+    ) -> anyhow::Result<PendingChunk> {
         let n_particles = key.n_particles;
-        let teeth = key.teeth_hist;
         // The records, on every core: packing a pop-1000 generation's 100 000 particles one
         // design after another was host time the device waited for (issue 16).
         let t_pack = std::time::Instant::now();
@@ -530,42 +633,63 @@ impl GpuEngine {
         let phys = GpuPhysics { n_designs: chunk.len() as u32, ..key };
         // only the paths these records take are compiled in (paths.rs)
         let paths = KernelPaths::of(&designs, &particles);
-        match self.run_chunk(&phys, &designs, &particles, want_particles, paths) {
-            Ok(r) => chunk
-                .iter()
-                .enumerate()
-                .map(|(c, &i)| {
-                    let prep = jobs[i].1;
-                    let o = &r.outcomes[c];
-                    let hist = &r.histogram[c * teeth as usize..(c + 1) * teeth as usize];
-                    let sim = from_counts(
-                        hist,
-                        n_particles as usize,
-                        o.lost as usize,
-                        o.flying as usize,
-                        o.distance_sum as f64,
-                        o.advance_teeth as f64 * prep.profile.pitch_len,
-                        prep.fill.area,
-                        o.iterations,
-                        o.bounce_sum as u64,
-                    );
-                    let parts = r.particles.as_ref().map(|ps| {
-                        ps[c * n_particles as usize..(c + 1) * n_particles as usize]
-                            .iter()
-                            .map(|p| particle_end(prep, p))
-                            .collect()
-                    });
-                    (sim, parts)
-                })
-                .collect(),
-            Err(e) => {
-                eprintln!(
-                    "warning: GPU failed on a batch of {} designs ({e:#}); re-running it on the cpu engine",
-                    chunk.len()
-                );
-                run_on_cpu(jobs, chunk, want_particles)
-            }
-        }
+        self.submit_chunk(&phys, &designs, &particles, want_particles, paths)
+    }
+}
+
+/// Jobs handed to the device ([`GpuEngine::submit_jobs`]): the runs known already (designs
+/// with a cpu-only effect) and the dispatches in flight.
+struct Submitted {
+    runs: Vec<Option<DesignRun>>,
+    in_flight: Vec<InFlight>,
+    want_particles: bool,
+}
+
+/// One dispatch in flight: `jobs[chunk]` under the batch-wide record `key`.
+struct InFlight {
+    key: GpuPhysics,
+    chunk: Vec<usize>,
+    pending: anyhow::Result<PendingChunk>,
+}
+
+/// The runs of `jobs[chunk]` from their dispatch's records.
+fn design_runs(key: GpuPhysics, jobs: &[(&Context, &Prepared)], chunk: &[usize], r: &ChunkResult) -> Vec<DesignRun> {
+    let (n_particles, teeth) = (key.n_particles as usize, key.teeth_hist as usize);
+    chunk
+        .iter()
+        .enumerate()
+        .map(|(c, &i)| {
+            let prep = jobs[i].1;
+            let o = &r.outcomes[c];
+            let sim = from_counts(
+                &r.histogram[c * teeth..(c + 1) * teeth],
+                n_particles,
+                o.lost as usize,
+                o.flying as usize,
+                o.distance_sum as f64,
+                o.advance_teeth as f64 * prep.profile.pitch_len,
+                prep.fill.area,
+                o.iterations,
+                o.bounce_sum as u64,
+            );
+            let parts = r
+                .particles
+                .as_ref()
+                .map(|ps| ps[c * n_particles..(c + 1) * n_particles].iter().map(|p| particle_end(prep, p)).collect());
+            (sim, parts)
+        })
+        .collect()
+}
+
+/// The environment's `SAWTOOTH_GPU_SLICE_DESIGNS` ([`GpuEngine::set_slice_designs`]; unset: 0).
+pub(crate) fn slice_designs_from_env() -> anyhow::Result<usize> {
+    const VAR: &str = "SAWTOOTH_GPU_SLICE_DESIGNS";
+    match std::env::var(VAR) {
+        Err(std::env::VarError::NotPresent) => Ok(0),
+        Ok(v) => v.trim().parse().map_err(|_| {
+            anyhow!("{VAR} must be a whole number of designs per slice (0: the whole batch at once), got '{v}'")
+        }),
+        Err(e) => bail!("{VAR}: {e}"),
     }
 }
 
@@ -611,7 +735,8 @@ impl BatchEvaluator for GpuEngine {
     fn compiles_on_first_use(&self) -> bool {
         true
     }
-    /// The whole generation in one job (split only where device limits demand it).
+    /// The whole generation in one job (split where device limits demand it, or into the
+    /// slices of [`GpuEngine::set_slice_designs`]).
     fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
         self.evaluate_groups(&[(scenario.clone(), designs.to_vec())]).pop().unwrap_or_default()
     }
@@ -620,16 +745,39 @@ impl BatchEvaluator for GpuEngine {
     /// when their restitution (k_elastic, mu_friction), drag or effect parameters differ, as a
     /// calibration's candidates do; the conveyor angle lives in each design's geometry. See
     /// [`GpuEngine::run_jobs`] for the key, and for designs whose effects are cpu-only.
+    /// With [`GpuEngine::set_slice_designs`] the job goes in slices, each slice's dispatches
+    /// sharing as above.
     fn evaluate_groups(&self, groups: &[(Scenario, Vec<Design>)]) -> Vec<Vec<Result<Evaluation, Invalid>>> {
         let contexts: Vec<Context> = groups.iter().map(|(s, _)| Context::new(s)).collect();
-        // prepare every (group, design) pair in parallel: a calibration sends one-design groups
         let tasks: Vec<(usize, &Design)> =
             groups.iter().enumerate().flat_map(|(g, (_, ds))| ds.iter().map(move |d| (g, d))).collect();
-        let prepared: Vec<Result<Prepared, Invalid>> =
-            tasks.par_iter().map(|(g, d)| prepare(&groups[*g].0, d)).collect();
-        let jobs: Vec<(&Context, &Prepared)> =
-            tasks.iter().zip(&prepared).filter_map(|((g, _), p)| p.as_ref().ok().map(|p| (&contexts[*g], p))).collect();
-        let mut sims = self.run_jobs(&jobs, false).into_iter();
+        // In slices: the host prepares slice k + 1 (every (group, design) pair in parallel: a
+        // calibration sends one-design groups) while the device runs slice k.
+        let slice = match self.slice_designs() {
+            0 => tasks.len().max(1),
+            n => n,
+        };
+        let mut prepared: Vec<Result<Prepared, Invalid>> = Vec::with_capacity(tasks.len());
+        let mut sims: Vec<SimOutcome> = Vec::with_capacity(tasks.len());
+        let mut read_back = |slice: SliceInFlight| {
+            let runs = self.collect_jobs(&jobs_of(&contexts, slice.tasks, &slice.prepared), slice.submitted);
+            sims.extend(runs.into_iter().map(|(sim, _)| sim));
+            prepared.extend(slice.prepared);
+        };
+        let mut in_flight: Option<SliceInFlight> = None;
+        for part in tasks.chunks(slice) {
+            let part_prepared: Vec<Result<Prepared, Invalid>> =
+                part.par_iter().map(|(g, d)| prepare(&groups[*g].0, d)).collect();
+            let submitted = self.submit_jobs(&jobs_of(&contexts, part, &part_prepared), false);
+            // the slice before ran on the device while this one was prepared
+            if let Some(before) = in_flight.replace(SliceInFlight { tasks: part, prepared: part_prepared, submitted }) {
+                read_back(before);
+            }
+        }
+        if let Some(last) = in_flight {
+            read_back(last);
+        }
+        let mut sims = sims.into_iter();
         let mut prepared = prepared.into_iter();
         groups
             .iter()
@@ -638,13 +786,29 @@ impl BatchEvaluator for GpuEngine {
                     .by_ref()
                     .take(ds.len())
                     .map(|p| match p {
-                        Ok(prep) => Ok(finish_outcome(s, &prep, sims.next().expect("one outcome per valid design").0)),
+                        Ok(prep) => Ok(finish_outcome(s, &prep, sims.next().expect("one outcome per valid design"))),
                         Err(e) => Err(e),
                     })
                     .collect()
             })
             .collect()
     }
+}
+
+/// A slice of `evaluate_groups`' (group, design) pairs on the device.
+struct SliceInFlight<'t> {
+    tasks: &'t [(usize, &'t Design)],
+    prepared: Vec<Result<Prepared, Invalid>>,
+    submitted: Submitted,
+}
+
+/// The valid designs of `tasks` ((group, design) pairs) with their group's context.
+fn jobs_of<'a>(
+    contexts: &'a [Context],
+    tasks: &[(usize, &Design)],
+    prepared: &'a [Result<Prepared, Invalid>],
+) -> Vec<(&'a Context, &'a Prepared)> {
+    tasks.iter().zip(prepared).filter_map(|((g, _), p)| p.as_ref().ok().map(|p| (&contexts[*g], p))).collect()
 }
 
 impl ParticleEngine for GpuEngine {
