@@ -476,3 +476,28 @@ fn a_batch_in_slices_gives_what_the_whole_batch_gives() {
         assert!((6..10).all(|i| sliced[i].is_err()) && sliced.iter().filter(|r| r.is_ok()).count() == 17);
     }
 }
+
+/// A batch beyond the device's workgroups per dispatch is split into chunks, the next packed
+/// while one runs (two at most on the device at once): each design's result is the one it
+/// gets in a small batch (its particles' draws depend on nothing else), and every design of
+/// the batch is run, in its place.
+#[test]
+fn a_batch_over_the_device_limits_runs_in_chunks_with_every_design_in_place() {
+    let Some(g) = gpu() else { return };
+    let mut s = Scenario::lunar();
+    s.sim.particles = 1;
+    let few = sawtooth::model::sampling::random_valid_designs(&s, 7, 3);
+    let alone = g.evaluate(&s, &few);
+    // more than two dispatches' worth on any adapter that allows 65 535 workgroups per
+    // dimension (WebGPU's default; lavapipe's)
+    let n = 2 * 65_535 + 11;
+    let designs: Vec<Design> = few.iter().copied().cycle().take(n).collect();
+    let before = g.dispatches();
+    let out = g.evaluate(&s, &designs);
+    assert!(g.dispatches() - before >= 3, "{} dispatches", g.dispatches() - before);
+    assert_eq!(out.len(), n);
+    for (i, r) in out.iter().enumerate() {
+        let (got, want) = (r.as_ref().expect("valid"), alone[i % few.len()].as_ref().unwrap());
+        assert_eq!(got.sim, want.sim, "design {i}");
+    }
+}

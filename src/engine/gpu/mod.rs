@@ -561,9 +561,14 @@ impl GpuEngine {
                 out[i] = Some(r);
             }
         }
-        let mut in_flight = Vec::new();
+        let mut in_flight: Vec<InFlight> = Vec::new();
         for (key, members) in batches {
             for chunk in members.chunks(self.chunk_designs(key.n_particles, key.teeth_hist)) {
+                // a batch the device limits split: one chunk on the device while the next is
+                // packed, so no more than two chunks' buffers at once
+                if in_flight.len() == 2 {
+                    self.read_back(jobs, in_flight.remove(0), &mut out, want_particles);
+                }
                 let pending = self.submit_batch(key, jobs, chunk, want_particles);
                 in_flight.push(InFlight { key, chunk: chunk.to_vec(), pending });
             }
@@ -572,26 +577,38 @@ impl GpuEngine {
     }
 
     /// The second half of [`GpuEngine::run_jobs`]: each dispatch read back and turned into
-    /// its designs' runs, in the order of `jobs`. A dispatch the GPU failed on is re-run on
-    /// the `cpu` engine (f32) with a warning.
+    /// its designs' runs, in the order of `jobs`.
     fn collect_jobs(&self, jobs: &[(&Context, &Prepared)], submitted: Submitted) -> Vec<DesignRun> {
         let Submitted { runs: mut out, in_flight, want_particles } = submitted;
-        for InFlight { key, chunk, pending } in in_flight {
-            let runs = match pending.and_then(|p| self.finish_chunk(p)) {
-                Ok(r) => design_runs(key, jobs, &chunk, &r),
-                Err(e) => {
-                    eprintln!(
-                        "warning: GPU failed on a batch of {} designs ({e:#}); re-running it on the cpu engine",
-                        chunk.len()
-                    );
-                    run_on_cpu(jobs, &chunk, want_particles)
-                }
-            };
-            for (i, r) in chunk.iter().zip(runs) {
-                out[*i] = Some(r);
-            }
+        for flight in in_flight {
+            self.read_back(jobs, flight, &mut out, want_particles);
         }
         out.into_iter().map(|r| r.expect("every design is run")).collect()
+    }
+
+    /// One dispatch read back into its designs' places in `out`; one the GPU failed on is
+    /// re-run on the `cpu` engine (f32) with a warning.
+    fn read_back(
+        &self,
+        jobs: &[(&Context, &Prepared)],
+        flight: InFlight,
+        out: &mut [Option<DesignRun>],
+        want_particles: bool,
+    ) {
+        let InFlight { key, chunk, pending } = flight;
+        let runs = match pending.and_then(|p| self.finish_chunk(p)) {
+            Ok(r) => design_runs(key, jobs, &chunk, &r),
+            Err(e) => {
+                eprintln!(
+                    "warning: GPU failed on a batch of {} designs ({e:#}); re-running it on the cpu engine",
+                    chunk.len()
+                );
+                run_on_cpu(jobs, &chunk, want_particles)
+            }
+        };
+        for (i, r) in chunk.iter().zip(runs) {
+            out[*i] = Some(r);
+        }
     }
 
     /// The records of `jobs[chunk]` (which share the batch-wide record `key`) packed and
@@ -759,7 +776,7 @@ impl BatchEvaluator for GpuEngine {
         };
         let mut prepared: Vec<Result<Prepared, Invalid>> = Vec::with_capacity(tasks.len());
         let mut sims: Vec<SimOutcome> = Vec::with_capacity(tasks.len());
-        let mut read_back = |slice: SliceInFlight| {
+        let mut finish_slice = |slice: SliceInFlight| {
             let runs = self.collect_jobs(&jobs_of(&contexts, slice.tasks, &slice.prepared), slice.submitted);
             sims.extend(runs.into_iter().map(|(sim, _)| sim));
             prepared.extend(slice.prepared);
@@ -771,11 +788,11 @@ impl BatchEvaluator for GpuEngine {
             let submitted = self.submit_jobs(&jobs_of(&contexts, part, &part_prepared), false);
             // the slice before ran on the device while this one was prepared
             if let Some(before) = in_flight.replace(SliceInFlight { tasks: part, prepared: part_prepared, submitted }) {
-                read_back(before);
+                finish_slice(before);
             }
         }
         if let Some(last) = in_flight {
-            read_back(last);
+            finish_slice(last);
         }
         let mut sims = sims.into_iter();
         let mut prepared = prepared.into_iter();
