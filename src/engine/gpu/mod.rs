@@ -101,7 +101,8 @@ struct ChunkResult {
     particles: Option<Vec<GpuParticle>>,
 }
 
-/// A dispatch submitted and not yet read back ([`GpuEngine::submit_chunk`]).
+/// A dispatch submitted and not yet read back ([`GpuEngine::submit_chunk`],
+/// [`GpuEngine::finish_chunk`]).
 struct PendingChunk {
     readback: wgpu::Buffer,
     index: wgpu::SubmissionIndex,
@@ -315,25 +316,15 @@ impl GpuEngine {
         particles: &[GpuParticle],
         paths: KernelPaths,
     ) -> anyhow::Result<(Vec<GpuOutcome>, Vec<u32>, Vec<GpuParticle>)> {
-        let r = self.run_chunk(phys, designs, particles, true, paths)?;
+        let r = self.finish_chunk(self.submit_chunk(phys, designs, particles, true, paths)?)?;
         Ok((r.outcomes, r.histogram, r.particles.unwrap_or_default()))
     }
 
-    fn run_chunk(
-        &self,
-        phys: &GpuPhysics,
-        designs: &[GpuDesign],
-        particles: &[GpuParticle],
-        want_particles: bool,
-        paths: KernelPaths,
-    ) -> anyhow::Result<ChunkResult> {
-        self.finish_chunk(self.submit_chunk(phys, designs, particles, want_particles, paths)?)
-    }
-
-    /// The first half of [`GpuEngine::run_chunk`]: the records uploaded, the kernels and the
-    /// copies to the readback buffer submitted, and its mapping requested; the device works
-    /// on it while the caller goes on (`evaluate_groups` prepares the next slice).
-    /// Validation and out-of-memory errors of the submission are reported here.
+    /// One dispatch of a chunk of designs, up to its submission: the records uploaded, the
+    /// kernels and the copies to the readback buffer submitted, and its mapping requested;
+    /// the device works on it while the caller goes on (packing the next chunk, preparing the
+    /// next slice) until [`GpuEngine::finish_chunk`]. Validation and out-of-memory errors of
+    /// the submission are reported here.
     fn submit_chunk(
         &self,
         phys: &GpuPhysics,
@@ -457,7 +448,7 @@ impl GpuEngine {
         })
     }
 
-    /// The second half of [`GpuEngine::run_chunk`]: wait for the device, read the records back.
+    /// The rest of a [`GpuEngine::submit_chunk`]: wait for the device, read the records back.
     fn finish_chunk(&self, pending: PendingChunk) -> anyhow::Result<ChunkResult> {
         let PendingChunk { readback, index, mapped, outcome_size, hist_size, want_particles, .. } = pending;
         self.device
