@@ -518,13 +518,11 @@ fn next_tooth_to_search<T: Real>(
     let mut j = j_from;
     let mut run = 0;
     while j <= j_hi {
-        let passed = if run == 0 {
-            flies_over(d, fl, j - k, x0, x_far)
-        } else {
-            clears_run(d, fl, j - k, (j + run - 1).min(j_hi) - k, x0, x_far)
-        };
+        let last = if run == 0 { j } else { (j + run - 1).min(j_hi) };
+        let passed =
+            if run == 0 { flies_over(d, fl, j - k, x0, x_far) } else { clears_run(d, fl, j - k, last - k, x0, x_far) };
         if passed {
-            j = if run == 0 { j + 1 } else { (j + run - 1).min(j_hi) + 1 };
+            j = last + 1;
             run = (2 * run).max(1);
         } else if run == 0 {
             break;
