@@ -131,6 +131,39 @@ fn above_at_ends(fl: Flight, xa: f32, xb: f32, need_a: f32, need_b: f32) -> bool
     return ya.x > need_a && yb.x > need_b;
 }
 
+// How many teeth from j on a vacuum flight clears by the run test, worked out instead of
+// searched for: the parabola minus the run test's line is a quadratic in time, so the flight
+// is above the line between its two roots, and every tooth from j to the last one ending
+// before the later root (in x) is cleared when tooth j starts after the earlier one. 1 (the
+// doubling's first run) when tooth j does not start inside, 0 when the interval ends within
+// tooth j. Rounding may make the count one too many: the run is still tested, and halved when
+// the test fails. Rust twin: kernel.rs `vacuum_run`.
+fn vacuum_run(d: Design, fl: Flight, j: i32, j_hi: i32, k: i32, x0: f32, x_far: f32) -> i32 {
+    let lo = min(x0, x_far);
+    let hi = max(x0, x_far);
+    let peak = max(max(d.p2_y, d.p4_y), 0.0);
+    let slope = d.pitch_y / d.pitch_x;
+    var x_ref = d.ext_min;
+    if (slope < 0.0) { x_ref = d.ext_max; }
+    let clearance = RUN_CLEARANCE_PITCHES * d.pitch_len;
+    // y(t) - line(x(t)) = -g/2 t^2 + b t + c
+    let vx = fl.v0.x;
+    let b = fl.v0.y - slope * vx;
+    let c = fl.p0.y - peak - slope * (fl.p0.x - x_ref) - clearance;
+    let disc = b * b + 2.0 * fl.g * c;
+    if (!(disc > 0.0) || !(fl.g > 0.0) || vx == 0.0) { return 1; }
+    let sq = sqrt(disc);
+    let x1 = fl.p0.x + vx * ((b - sq) / fl.g);
+    let x2 = fl.p0.x + vx * ((b + sq) / fl.g);
+    let xl = min(x1, x2);
+    let xr = max(x1, x2);
+    let xa = max(f32(j - k) * d.pitch_x + d.ext_min, lo);
+    if (!(xa > xl)) { return 1; }
+    if (xr >= hi) { return max(j_hi - j + 1, 0); }
+    let last = to_index(floor((xr - d.ext_max) / d.pitch_x)) + k;
+    return max(min(last, j_hi) - j + 1, 0);
+}
+
 // The first tooth from j_from on that the flight does not fly over (j_hi + 1 when none): a
 // tooth is flown over when the flight stays above its peak over the tooth's x-extent
 // (clipped to the part of the flight before x_far; no point of a tooth is higher than its
@@ -138,7 +171,8 @@ fn above_at_ends(fl: Flight, xa: f32, xb: f32, need_a: f32, need_b: f32) -> bool
 // the next teeth is passed at once when the flight is above the line over the run's peaks by
 // RUN_CLEARANCE_PITCHES (far more than rounding, so the one-tooth test would say the same of
 // each tooth); the run doubles while that holds and halves when not, down to one tooth
-// tested exactly. A pass computes either test's inputs and runs one test (lanes in different
+// tested exactly. A vacuum flight's run is worked out instead (`vacuum_run`), and after it
+// passes the next tooth is tested alone. A pass computes either test's inputs and runs one test (lanes in different
 // modes would otherwise run both), and on a SIMD machine the scan lasts as long as its
 // slowest lane's. Rust twin: kernel.rs `next_tooth_to_search` (the same passes; its
 // one-tooth test is `flies_over`, its run test `clears_run`).
@@ -168,7 +202,13 @@ fn next_tooth_to_search(d: Design, fl: Flight, j_from: i32, j_hi: i32, k: i32, x
         }
         if (above_at_ends(fl, x.x, x.y, need_a, need_b)) {
             j = last + 1;
-            run = max(2 * run, 1);
+            if (flight_drag(fl)) {
+                run = max(2 * run, 1);
+            } else if (run == 0) {
+                run = vacuum_run(d, fl, j, j_hi, k, x0, x_far);
+            } else {
+                run = 0;
+            }
         } else {
             if (run == 0) { break; }
             run = run / 2;
