@@ -320,23 +320,27 @@ fn first_hit(d: Design, p: Particle, bounce: u32) -> Hit {
             var rs = Roots(0u, 0.0, 0.0);
             if (!(t_lo > t_max)) { rs = line_crossings(fl, a, n, departing, t_lo, min(t_max, t_hi)); }
             if (!departing && hop_ok(pos, pos) && contact(d, pos, vel, a, b, n)) { rs = Roots(1u, 0.0, 0.0); }
-            let e = b - a;
-            let ee = dot(e, e);
             // the first root on the segment; both are tested side by side, without branches (a
-            // loop over them ran both passes for every lane anyway, one after the other)
-            let q0 = flight_pos(fl, rs.t0);
-            let q1 = flight_pos(fl, rs.t1);
-            let s0 = dot(q0 - a, e) / ee;
-            let s1 = dot(q1 - a, e) / ee;
-            let on0 = (rs.n >= 1u) & !((s0 < 0.0) | (s0 > 1.0) | !hop_ok(pos, q0));
-            let on1 = (rs.n >= 2u) & !((s1 < 0.0) | (s1 > 1.0) | !hop_ok(pos, q1));
-            var t = rs.t1;
-            var q = q1;
-            if (on0) {
-                t = rs.t0;
-                q = q0;
+            // loop over them ran both passes for every lane anyway, one after the other), and
+            // not at all where no lane has a root (a lavapipe that skips a block no lane
+            // enters then skips it: 3 % of the lunar kernel on Mesa 25)
+            if (rs.n > 0u) {
+                let e = b - a;
+                let ee = dot(e, e);
+                let q0 = flight_pos(fl, rs.t0);
+                let q1 = flight_pos(fl, rs.t1);
+                let s0 = dot(q0 - a, e) / ee;
+                let s1 = dot(q1 - a, e) / ee;
+                let on0 = (rs.n >= 1u) & !((s0 < 0.0) | (s0 > 1.0) | !hop_ok(pos, q0));
+                let on1 = (rs.n >= 2u) & !((s1 < 0.0) | (s1 > 1.0) | !hop_ok(pos, q1));
+                var t = rs.t1;
+                var q = q1;
+                if (on0) {
+                    t = rs.t0;
+                    q = q0;
+                }
+                if ((on0 | on1) & (t < best.t)) { best = Hit(true, t, q, j, surface); }
             }
-            if ((on0 | on1) & (t < best.t)) { best = Hit(true, t, q, j, surface); }
         }
         j++;
     }
