@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The test command of the README: installs what the tests need, then runs them all.
 # The GPU tests need a Vulkan adapter; without a GPU driver, Mesa's software Vulkan
-# (lavapipe) is installed from Debian's packages. Usage: bash scripts/test.sh
+# (lavapipe) is installed from Debian's packages (scripts/lavapipe.sh). Usage: bash scripts/test.sh
 # Campaigns (issue 15): tests/campaign_slurm.rs itself runs scripts/slurm-local.sh, which
 # installs slurm-wlm and munge when missing and starts/stops a private single-node Slurm
 # (needs root or sudo; with CI=true a Slurm that cannot start fails that test).
@@ -16,12 +16,10 @@ have_vulkan_icd() {
     done
     return 1
 }
+# On Debian 12 lavapipe comes from bookworm-backports (Mesa 25; scripts/lavapipe.sh says why).
 if ! have_vulkan_icd; then
-    echo "test.sh: no Vulkan driver found; installing Mesa lavapipe (mesa-vulkan-drivers libvulkan1)"
-    SUDO=""
-    if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-    $SUDO apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq mesa-vulkan-drivers libvulkan1 >/dev/null
+    echo "test.sh: no Vulkan driver found; installing Mesa lavapipe (scripts/lavapipe.sh)"
+    bash scripts/lavapipe.sh
 fi
 # lavapipe's WSI probing warns without a runtime dir; the tests draw nothing on screen.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
