@@ -7,7 +7,7 @@
 //! | `offset`, `normal_of`, `to_index` | same names here                                   |
 //! | `randomise_launch`, `hop_ok`      | same names here                                   |
 //! | `contact`, `teeth_span`           | same names here                                   |
-//! | `above_at_ends`                   | same name here                                    |
+//! | `above_at_ends`, `vacuum_run`     | same names here                                   |
 //! | `next_tooth_to_search`            | same name here (its passes call `flies_over` or   |
 //! |                                   | `clears_run`; the WGSL computes either's inputs   |
 //! |                                   | in one place and runs one test)                   |
