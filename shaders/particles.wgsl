@@ -131,6 +131,24 @@ fn above_at_ends(fl: Flight, xa: f32, xb: f32, need_a: f32, need_b: f32) -> bool
     return ya.x > need_a && yb.x > need_b;
 }
 
+// The run test's line, at least as high as each tooth's peak over that tooth's extent: it
+// rises with the teeth (slope) and has tooth 0's peak height at the left end of its extent
+// (x_ref; uphill, the right end downhill); the run test asks for `clearance` above it. Rust
+// twin: kernel.rs `run_line`.
+struct RunLine {
+    peak: f32,
+    slope: f32,
+    x_ref: f32,
+    clearance: f32,
+}
+
+fn run_line(d: Design) -> RunLine {
+    let slope = d.pitch_y / d.pitch_x;
+    var x_ref = d.ext_min;
+    if (slope < 0.0) { x_ref = d.ext_max; }
+    return RunLine(max(max(d.p2_y, d.p4_y), 0.0), slope, x_ref, RUN_CLEARANCE_PITCHES * d.pitch_len);
+}
+
 // How many teeth from j on a vacuum flight clears by the run test, worked out instead of
 // searched for: the parabola minus the run test's line is a quadratic in time, so the flight
 // is above the line between its two roots, and every tooth from j to the last one ending
@@ -141,15 +159,11 @@ fn above_at_ends(fl: Flight, xa: f32, xb: f32, need_a: f32, need_b: f32) -> bool
 fn vacuum_run(d: Design, fl: Flight, j: i32, j_hi: i32, k: i32, x0: f32, x_far: f32) -> i32 {
     let lo = min(x0, x_far);
     let hi = max(x0, x_far);
-    let peak = max(max(d.p2_y, d.p4_y), 0.0);
-    let slope = d.pitch_y / d.pitch_x;
-    var x_ref = d.ext_min;
-    if (slope < 0.0) { x_ref = d.ext_max; }
-    let clearance = RUN_CLEARANCE_PITCHES * d.pitch_len;
+    let line = run_line(d);
     // y(t) - line(x(t)) = -g/2 t^2 + b t + c
     let vx = fl.v0.x;
-    let b = fl.v0.y - slope * vx;
-    let c = fl.p0.y - peak - slope * (fl.p0.x - x_ref) - clearance;
+    let b = fl.v0.y - line.slope * vx;
+    let c = fl.p0.y - line.peak - line.slope * (fl.p0.x - line.x_ref) - line.clearance;
     let disc = b * b + 2.0 * fl.g * c;
     if (!(disc > 0.0) || !(fl.g > 0.0) || vx == 0.0) { return 1; }
     let sq = sqrt(disc);
@@ -172,21 +186,14 @@ fn vacuum_run(d: Design, fl: Flight, j: i32, j_hi: i32, k: i32, x0: f32, x_far: 
 // RUN_CLEARANCE_PITCHES (far more than rounding, so the one-tooth test would say the same of
 // each tooth); the run doubles while that holds and halves when not, down to one tooth
 // tested exactly. A vacuum flight's run is worked out instead (`vacuum_run`), and after it
-// passes the next tooth is tested alone. A pass computes either test's inputs and runs one test (lanes in different
-// modes would otherwise run both), and on a SIMD machine the scan lasts as long as its
-// slowest lane's. Rust twin: kernel.rs `next_tooth_to_search` (the same passes; its
-// one-tooth test is `flies_over`, its run test `clears_run`).
+// passes the next tooth is tested alone. A pass computes either test's inputs and runs one
+// test (lanes in different modes would otherwise run both), and on a SIMD machine the scan
+// lasts as long as its slowest lane's. Rust twin: kernel.rs `next_tooth_to_search` (the
+// same passes; its one-tooth test is `flies_over`, its run test `clears_run`).
 fn next_tooth_to_search(d: Design, fl: Flight, j_from: i32, j_hi: i32, k: i32, x0: f32, x_far: f32) -> i32 {
     let lo = min(x0, x_far);
     let hi = max(x0, x_far);
-    let peak = max(max(d.p2_y, d.p4_y), 0.0);
-    // a line at least as high as each tooth's peak over that tooth's extent: it rises with
-    // the teeth and has tooth 0's peak height at the left end of its extent (uphill; the
-    // right end downhill)
-    let slope = d.pitch_y / d.pitch_x;
-    var x_ref = d.ext_min;
-    if (slope < 0.0) { x_ref = d.ext_max; }
-    let clearance = RUN_CLEARANCE_PITCHES * d.pitch_len;
+    let line = run_line(d);
     var j = j_from;
     var run = 0;
     loop {
@@ -194,11 +201,11 @@ fn next_tooth_to_search(d: Design, fl: Flight, j_from: i32, j_hi: i32, k: i32, x
         var last = j;
         if (run > 0) { last = min(j + run - 1, j_hi); }
         let x = teeth_span(d, j - k, last - k, lo, hi);
-        var need_a = f32(j - k) * d.pitch_y + peak; // tooth j's peak (kernel.rs flies_over)
+        var need_a = f32(j - k) * d.pitch_y + line.peak; // tooth j's peak (kernel.rs flies_over)
         var need_b = need_a;
         if (run > 0) {
-            need_a = peak + slope * (x.x - x_ref) + clearance;
-            need_b = peak + slope * (x.y - x_ref) + clearance;
+            need_a = line.peak + line.slope * (x.x - line.x_ref) + line.clearance;
+            need_b = line.peak + line.slope * (x.y - line.x_ref) + line.clearance;
         }
         if (above_at_ends(fl, x.x, x.y, need_a, need_b)) {
             j = last + 1;

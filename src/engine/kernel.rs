@@ -8,6 +8,7 @@
 //! | `randomise_launch`, `hop_ok`      | same names here                                   |
 //! | `contact`, `teeth_span`           | same names here                                   |
 //! | `above_at_ends`, `vacuum_run`     | same names here                                   |
+//! | `run_line` (`RunLine`)            | same names here                                   |
 //! | `next_tooth_to_search`            | same name here (its passes call `flies_over` or   |
 //! |                                   | `clears_run`; the WGSL computes either's inputs   |
 //! |                                   | in one place and runs one test)                   |
@@ -487,14 +488,32 @@ fn flies_over<T: Real>(d: &KDesign<T>, fl: &Flight<T>, dj: i32, x0: T, x_far: T)
 fn clears_run<T: Real>(d: &KDesign<T>, fl: &Flight<T>, dj_first: i32, dj_last: i32, x0: T, x_far: T) -> bool {
     let (lo, hi) = if x_far >= x0 { (x0, x_far) } else { (x_far, x0) };
     let (xa, xb) = teeth_span(d, dj_first, dj_last, lo, hi);
-    let peak = d.p2[1].max(d.p4[1]).max(T::zero());
-    // the line rises with the teeth and has tooth 0's peak height at the left end of its
-    // extent (uphill; the right end downhill)
+    let line = run_line(d);
+    let need = |x: T| line.peak + line.slope * (x - line.x_ref) + line.clearance;
+    above_at_ends(fl, xa, xb, need(xa), need(xb))
+}
+
+/// The line of [`clears_run`], at least as high as each tooth's peak over that tooth's
+/// extent: it rises with the teeth (`slope`) and has tooth 0's peak height at the left end of
+/// its extent (`x_ref`; uphill, the right end downhill); the run test asks for `clearance`
+/// above it. WGSL twin: `RunLine`, `run_line`.
+struct RunLine<T> {
+    peak: T,
+    slope: T,
+    x_ref: T,
+    clearance: T,
+}
+
+#[inline(always)]
+fn run_line<T: Real>(d: &KDesign<T>) -> RunLine<T> {
     let slope = d.pitch[1] / d.pitch[0];
     let x_ref = if slope < T::zero() { d.ext_max } else { d.ext_min };
-    let clearance = T::c(RUN_CLEARANCE_PITCHES) * d.pitch_len;
-    let need = |x: T| peak + slope * (x - x_ref) + clearance;
-    above_at_ends(fl, xa, xb, need(xa), need(xb))
+    RunLine {
+        peak: d.p2[1].max(d.p4[1]).max(T::zero()),
+        slope,
+        x_ref,
+        clearance: T::c(RUN_CLEARANCE_PITCHES) * d.pitch_len,
+    }
 }
 
 /// How many teeth from `j` on a vacuum flight clears by [`clears_run`]'s test, worked out
@@ -504,17 +523,16 @@ fn clears_run<T: Real>(d: &KDesign<T>, fl: &Flight<T>, dj_first: i32, dj_last: i
 /// one. 1 (the doubling's first run) when tooth `j` does not start inside, 0 when the interval
 /// ends within tooth `j` (then it is tested alone). Rounding may make the count one too many:
 /// `next_tooth_to_search` still tests the run, and halves it when the test fails.
+// `!(a > b)` as in the WGSL twin: a NaN takes the cautious branch
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 #[inline(always)]
 fn vacuum_run<T: Real>(d: &KDesign<T>, fl: &Flight<T>, j: i32, j_hi: i32, k: i32, x0: T, x_far: T) -> i32 {
     let (lo, hi) = if x_far >= x0 { (x0, x_far) } else { (x_far, x0) };
-    let peak = d.p2[1].max(d.p4[1]).max(T::zero());
-    let slope = d.pitch[1] / d.pitch[0];
-    let x_ref = if slope < T::zero() { d.ext_max } else { d.ext_min };
-    let clearance = T::c(RUN_CLEARANCE_PITCHES) * d.pitch_len;
+    let line = run_line(d);
     // y(t) - line(x(t)) = -g/2 t^2 + b t + c
     let vx = fl.v0[0];
-    let b = fl.v0[1] - slope * vx;
-    let c = fl.p0[1] - peak - slope * (fl.p0[0] - x_ref) - clearance;
+    let b = fl.v0[1] - line.slope * vx;
+    let c = fl.p0[1] - line.peak - line.slope * (fl.p0[0] - line.x_ref) - line.clearance;
     let disc = b * b + T::c(2.0) * fl.g * c;
     if !(disc > T::zero()) || !(fl.g > T::zero()) || vx == T::zero() {
         return 1;
