@@ -155,11 +155,9 @@ fn run_line(d: Design) -> RunLine {
 // before the later root (in x) is cleared when tooth j starts after the earlier one. 1 (the
 // doubling's first run) when tooth j does not start inside, 0 when the interval ends within
 // tooth j. Rounding may make the count one too many: the run is still tested, and halved when
-// the test fails. Rust twin: kernel.rs `vacuum_run`.
-fn vacuum_run(d: Design, fl: Flight, j: i32, j_hi: i32, k: i32, x0: f32, x_far: f32) -> i32 {
-    let lo = min(x0, x_far);
-    let hi = max(x0, x_far);
-    let line = run_line(d);
+// the test fails. `line` is the design's `run_line`, [lo, hi] the flight's x-range as the scan
+// clips it. Rust twin: kernel.rs `vacuum_run`.
+fn vacuum_run(d: Design, fl: Flight, line: RunLine, j: i32, j_hi: i32, k: i32, lo: f32, hi: f32) -> i32 {
     // y(t) - line(x(t)) = -g/2 t^2 + b t + c
     let vx = fl.v0.x;
     let b = fl.v0.y - line.slope * vx;
@@ -212,7 +210,7 @@ fn next_tooth_to_search(d: Design, fl: Flight, j_from: i32, j_hi: i32, k: i32, x
             if (flight_drag(fl)) {
                 run = max(2 * run, 1);
             } else if (run == 0) {
-                run = vacuum_run(d, fl, j, j_hi, k, x0, x_far);
+                run = vacuum_run(d, fl, line, j, j_hi, k, lo, hi);
             } else {
                 run = 0;
             }

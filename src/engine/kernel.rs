@@ -522,13 +522,22 @@ fn run_line<T: Real>(d: &KDesign<T>) -> RunLine<T> {
 /// one ending before the later root (in x) is cleared when tooth `j` starts after the earlier
 /// one. 1 (the doubling's first run) when tooth `j` does not start inside, 0 when the interval
 /// ends within tooth `j` (then it is tested alone). Rounding may make the count one too many:
-/// `next_tooth_to_search` still tests the run, and halves it when the test fails.
-// `!(a > b)` as in the WGSL twin: a NaN takes the cautious branch
-#[allow(clippy::neg_cmp_op_on_partial_ord)]
+/// `next_tooth_to_search` still tests the run, and halves it when the test fails. `line` is
+/// the design's [`run_line`], `[lo, hi]` the flight's x-range as the scan clips it.
+// `!(a > b)` as in the WGSL twin: a NaN takes the cautious branch; the arguments are the
+// WGSL twin's
+#[allow(clippy::neg_cmp_op_on_partial_ord, clippy::too_many_arguments)]
 #[inline(always)]
-fn vacuum_run<T: Real>(d: &KDesign<T>, fl: &Flight<T>, j: i32, j_hi: i32, k: i32, x0: T, x_far: T) -> i32 {
-    let (lo, hi) = if x_far >= x0 { (x0, x_far) } else { (x_far, x0) };
-    let line = run_line(d);
+fn vacuum_run<T: Real>(
+    d: &KDesign<T>,
+    fl: &Flight<T>,
+    line: &RunLine<T>,
+    j: i32,
+    j_hi: i32,
+    k: i32,
+    lo: T,
+    hi: T,
+) -> i32 {
     // y(t) - line(x(t)) = -g/2 t^2 + b t + c
     let vx = fl.v0[0];
     let b = fl.v0[1] - line.slope * vx;
@@ -582,7 +591,8 @@ fn next_tooth_to_search<T: Real>(
             run = if fl.drag() {
                 (2 * run).max(1)
             } else if run == 0 {
-                vacuum_run(d, fl, j, j_hi, k, x0, x_far)
+                let (lo, hi) = if x_far >= x0 { (x0, x_far) } else { (x_far, x0) };
+                vacuum_run(d, fl, &run_line(d), j, j_hi, k, lo, hi)
             } else {
                 0
             };
@@ -961,7 +971,8 @@ mod tests {
                             // a vacuum flight's worked-out run from here, as the scan takes it
                             // after a tooth it flew over, passes the run test
                             if !fl.drag() && j_from >= 0 && j_from <= j_hi {
-                                let m = vacuum_run(&d, &fl, j_from, j_hi, k, x0, x_far);
+                                let (lo, hi) = if x_far >= x0 { (x0, x_far) } else { (x_far, x0) };
+                                let m = vacuum_run(&d, &fl, &run_line(&d), j_from, j_hi, k, lo, hi);
                                 if m >= 2 {
                                     let passed = clears_run(&d, &fl, j_from, (j_from + m - 1).min(j_hi), x0, x_far);
                                     worked_out[usize::from(!passed)] += 1;
