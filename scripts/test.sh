@@ -1,5 +1,8 @@
 #!/usr/bin/env bash
-# The test command of the README: installs what the tests need, then runs them all.
+# The test command of the README, the full tier: installs what the tests need, then runs them
+# all. Plain `cargo test` is the fast tier (no apt, no network, a few minutes): it skips the
+# heavy tests, each saying so on stderr; SAWTOOTH_TEST_TIER=full (set below) or CI=true runs
+# them (tests/common/mod.rs, `full_tier`; docs/testing.md lists them).
 # The GPU tests need a Vulkan adapter; without a GPU driver, Mesa's software Vulkan
 # (lavapipe) is installed from Debian's packages (scripts/lavapipe.sh). Usage: bash scripts/test.sh
 # Campaigns (issue 15): tests/campaign_slurm.rs itself runs scripts/slurm-local.sh, which
@@ -8,6 +11,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export CARGO_TERM_COLOR=never
+# the heavy tests: the withheld-effect diagnoses, the big lavapipe conformance, the Slurm campaign
+export SAWTOOTH_TEST_TIER=full
 
 have_vulkan_icd() {
     local f

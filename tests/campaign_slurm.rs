@@ -10,6 +10,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
+mod common;
+
 fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_sawtooth")
 }
@@ -149,6 +151,12 @@ fn plan_and_local(cmd: &[&str], ga: &[&str], name: &str) -> (PathBuf, PathBuf) {
 
 #[test]
 fn a_sweep_and_a_study_run_as_slurm_arrays_and_a_cancelled_task_resumes() {
+    if !common::full_tier(
+        "campaign_slurm::a_sweep_and_a_study_run_as_slurm_arrays_and_a_cancelled_task_resumes",
+        "installs and starts a single-node Slurm on fixed ports, needs root",
+    ) {
+        return;
+    }
     let Some(_slurm) = Slurm::start() else { return };
     let t0 = Instant::now();
 

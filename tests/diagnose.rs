@@ -23,6 +23,9 @@ use serde_json::Value;
 /// default), so the suite stays CI-sized.
 const CI_BUDGET: [&str; 2] = ["--max-particles", "6000"];
 
+/// Why a campaign test belongs to the full tier (docs/testing.md): plain `cargo test` skips it.
+const HEAVY: &str = "a three-condition diagnosis with every candidate, 0.5-1.5 min on 2 cores";
+
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_sawtooth"))
 }
@@ -193,6 +196,9 @@ fn rig_campaign(dir: &Path, effect: Option<&str>, seed: u64) -> Value {
 
 #[test]
 fn launch_spread_is_found() {
+    if !common::full_tier("diagnose::launch_spread_is_found", HEAVY) {
+        return;
+    }
     let d = tmp("ls");
     let v = rig_campaign(&d, Some("launch-spread=0.3,6"), 30);
     check_found(&v, "launch-spread");
@@ -208,6 +214,9 @@ fn launch_spread_is_found() {
 
 #[test]
 fn polydispersity_is_found() {
+    if !common::full_tier("diagnose::polydispersity_is_found", HEAVY) {
+        return;
+    }
     let d = tmp("pd");
     let v = rig_campaign(&d, Some("polydisperse=0.35"), 40);
     check_found(&v, "polydisperse");
@@ -216,6 +225,9 @@ fn polydispersity_is_found() {
 
 #[test]
 fn uniform_sizes_are_found_as_polydispersity() {
+    if !common::full_tier("diagnose::uniform_sizes_are_found_as_polydispersity", HEAVY) {
+        return;
+    }
     // the data's sizes are uniform in number, the candidate's log-normal: another form
     let d = tmp("pdu");
     let makers: Vec<String> = RIG
@@ -232,6 +244,9 @@ fn uniform_sizes_are_found_as_polydispersity() {
 
 #[test]
 fn impact_scatter_is_found() {
+    if !common::full_tier("diagnose::impact_scatter_is_found", HEAVY) {
+        return;
+    }
     let d = tmp("is");
     let v = rig_campaign(&d, Some("impact-scatter=10"), 60);
     check_found(&v, "impact-scatter");
@@ -240,6 +255,9 @@ fn impact_scatter_is_found() {
 
 #[test]
 fn uniform_tilt_on_random_launch_points_is_found_as_impact_scatter() {
+    if !common::full_tier("diagnose::uniform_tilt_on_random_launch_points_is_found_as_impact_scatter", HEAVY) {
+        return;
+    }
     // two forms differ from the model's at once: the data's impact tilt is uniform (the
     // candidate's is normal, same sd) and its launch points are independent uniform draws
     // (the model's are Halton points)
@@ -263,6 +281,9 @@ fn uniform_tilt_on_random_launch_points_is_found_as_impact_scatter() {
 
 #[test]
 fn sled_returning_along_the_launch_direction_is_found_as_sled_motion() {
+    if !common::full_tier("diagnose::sled_returning_along_the_launch_direction_is_found_as_sled_motion", HEAVY) {
+        return;
+    }
     // as below, but the data's sled returns along the launch direction, the candidate's
     // down the slope; the setup states the delay and speed, not the direction
     let d = tmp("sml");
@@ -287,6 +308,9 @@ fn sled_returning_along_the_launch_direction_is_found_as_sled_motion() {
 
 #[test]
 fn sled_motion_is_found() {
+    if !common::full_tier("diagnose::sled_motion_is_found", HEAVY) {
+        return;
+    }
     // one condition's sled returns at once at 0.3 m/s and its setup says so; the others rest
     // 5 s (as in the practice campaign 4)
     let d = tmp("sm");
@@ -306,6 +330,9 @@ fn sled_motion_is_found() {
 
 #[test]
 fn quadratic_drag_is_found() {
+    if !common::full_tier("diagnose::quadratic_drag_is_found", HEAVY) {
+        return;
+    }
     // Schiller-Naumann drag on 150 µm beads: a linear k_drag cannot serve a slow and a fast
     // launch alike
     let d = tmp("qd");
@@ -316,6 +343,9 @@ fn quadratic_drag_is_found() {
 
 #[test]
 fn no_effect_no_best() {
+    if !common::full_tier("diagnose::no_effect_no_best", HEAVY) {
+        return;
+    }
     let d = tmp("none");
     let v = rig_campaign(&d, None, 90);
     eprintln!("none: {}", summary(&v));

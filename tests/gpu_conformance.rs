@@ -1,11 +1,15 @@
 //! The GPU engine against the CPU reference (issue 3 §2) on a few hundred random valid
 //! designs, both environments, drag on and off. Runs on any Vulkan adapter; in CI that is
-//! Mesa's lavapipe, installed by scripts/test.sh. With CI=true a missing adapter FAILS.
+//! Mesa's lavapipe, installed by scripts/test.sh. With CI=true a missing adapter FAILS. The
+//! 240-design conformance and the GPU-table script belong to the full tier (docs/testing.md);
+//! `cargo test` skips them.
 
 use sawtooth::engine::conformance::{run, run_merged, scenarios, Tolerances};
 use sawtooth::engine::gpu::{AdapterChoice, GpuEngine};
 use sawtooth::engine::{BatchEvaluator, ParticleEngine};
 use sawtooth::model::{Design, Scenario};
+
+mod common;
 
 fn gpu() -> Option<GpuEngine> {
     match GpuEngine::new(AdapterChoice::Any) {
@@ -22,6 +26,9 @@ fn gpu() -> Option<GpuEngine> {
 
 #[test]
 fn gpu_conforms_to_the_cpu_reference() {
+    if !common::full_tier("gpu_conformance::gpu_conforms_to_the_cpu_reference", "240 designs through the kernel") {
+        return;
+    }
     let Some(g) = gpu() else { return };
     let cases = scenarios(&[Scenario::lunar(), Scenario::earth()], 50);
     let report = run(&g, &cases, 60, 7, Tolerances::default());
@@ -370,7 +377,11 @@ fn path_switches_change_no_result() {
 /// repeat.)
 #[test]
 fn the_gpu_table_script_prints_every_batch() {
-    if gpu().is_none() {
+    if !common::full_tier(
+        "gpu_conformance::the_gpu_table_script_prints_every_batch",
+        "conformance on 50 designs, then every batch of the GPU table timed with three engines",
+    ) || gpu().is_none()
+    {
         return;
     }
     let script = |repeats: &str| {

@@ -35,3 +35,21 @@ pub fn assert_png_beside(svg_path: &std::path::Path) {
     assert_eq!((be(&png[16..20]), be(&png[20..24])), (attr("width"), attr("height")), "{}", png_path.display());
     assert!(png.len() > 5000, "{} holds only {} bytes", png_path.display(), png.len());
 }
+
+/// Whether the heavy tests run: the full tier (`bash scripts/test.sh` sets
+/// `SAWTOOTH_TEST_TIER=full`) or CI (`CI=true`, where nothing may be left out). Plain
+/// `cargo test` is the fast tier; there a heavy test says on stderr that it was skipped and
+/// how to run it, written past libtest's output capture so that it shows on a passing run.
+pub fn full_tier(test: &str, why_heavy: &str) -> bool {
+    let full = std::env::var("SAWTOOTH_TEST_TIER").is_ok_and(|v| v == "full")
+        || std::env::var("CI").is_ok_and(|v| v == "true");
+    if !full {
+        use std::io::Write;
+        let _ = writeln!(
+            std::io::stderr(),
+            "SKIPPED {test} (fast tier; {why_heavy}): runs in the full tier, `bash scripts/test.sh`, \
+             or with SAWTOOTH_TEST_TIER=full cargo test --release --test <target>"
+        );
+    }
+    full
+}
