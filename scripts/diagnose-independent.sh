@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Diagnose the independent practice campaigns (../shared/campaigns/independent, made by a
+# Diagnose the independent practice campaigns (data/practice_campaigns, made by a
 # simulator that is not this project's) and grade them against answers.json with the rule of
 # that folder's README. Usage:
 #   bash scripts/diagnose-independent.sh [OUT_DIR] [extra diagnose flags...]
@@ -7,7 +7,7 @@
 # exits 1 when fewer than 5 of 6 are right. About 2-3 min a campaign on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-root="${CAMPAIGNS:-../shared/campaigns/independent}"
+root="${CAMPAIGNS:-data/practice_campaigns}"
 out="${1:-runs/independent}"
 shift || true
 cargo build --release --locked --quiet

@@ -1,26 +1,28 @@
 //! `diagnose` on campaigns made by an **independent simulator** of the thesis's model
-//! (`../shared/campaigns/independent`, issue 11): data this project's code did not make,
+//! (`data/practice_campaigns`, issue 11): data this project's code did not make,
 //! with its own numerical choices. A CI-sized subset runs here: one subtle effect (a normal
 //! tilt of 8° at every impact, where the refitted baseline misses by ~6× the true model) and
 //! the control without an effect. All six, at the default budget, with the grading of that
-//! folder's README: `bash scripts/diagnose-independent.sh` (README, "Diagnosis").
+//! folder's README: `bash scripts/diagnose-independent.sh` (docs/calibrate-and-diagnose.md).
+//! Both tests belong to the full tier (`bash scripts/test.sh`); plain `cargo test` skips them.
 
 use std::path::PathBuf;
 use std::process::Command;
 
 use serde_json::Value;
 
+mod common;
+
 /// The default solver budget with fewer particles (the defaults take 2-3 min a campaign),
 /// so the suite stays CI-sized.
 const CI_BUDGET: [&str; 2] = ["--max-particles", "6000"];
 
+/// Why a campaign test belongs to the full tier (docs/testing.md): plain `cargo test` skips it.
+const HEAVY: &str = "a three-condition diagnosis with every candidate, 0.5-1.5 min on 2 cores";
+
 fn campaigns() -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/campaigns/independent");
-    assert!(
-        dir.join("answers.json").exists(),
-        "the practice campaigns are missing: {} (shared/ beside the checkout)",
-        dir.display()
-    );
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/practice_campaigns");
+    assert!(dir.join("answers.json").exists(), "the practice campaigns are missing: {}", dir.display());
     dir
 }
 
@@ -64,6 +66,9 @@ fn graded_right(v: &Value, truth: &str) -> bool {
 
 #[test]
 fn a_subtle_impact_scatter_from_another_simulator_is_named() {
+    if !common::full_tier("independent_campaigns::a_subtle_impact_scatter_from_another_simulator_is_named", HEAVY) {
+        return;
+    }
     let truth = answer("campaign_1").expect("campaign_1 withholds an effect");
     let v = diagnose("campaign_1");
     eprintln!("campaign_1 ({truth}): {}", summary(&v));
@@ -72,6 +77,9 @@ fn a_subtle_impact_scatter_from_another_simulator_is_named() {
 
 #[test]
 fn the_control_from_another_simulator_names_no_effect() {
+    if !common::full_tier("independent_campaigns::the_control_from_another_simulator_names_no_effect", HEAVY) {
+        return;
+    }
     assert_eq!(answer("campaign_3"), None);
     let v = diagnose("campaign_3");
     eprintln!("campaign_3 (none): {}", summary(&v));
