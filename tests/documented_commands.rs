@@ -1,7 +1,8 @@
-//! Every `sawtooth` command written in README.md and BENCHMARKS.md is one the command line
-//! accepts: its subcommand, flags and values parse (clap's rules; the checks a command makes
-//! once it runs, such as `--pop` against the algorithm, are the commands' own tests'). A
-//! renamed or removed flag fails here instead of in a new user's terminal.
+//! Every `sawtooth` command written in README.md, BENCHMARKS.md and the pages of docs/ is one
+//! the command line accepts: its subcommand, flags and values parse (clap's rules; the checks
+//! a command makes once it runs, such as `--pop` against the algorithm, are the commands' own
+//! tests'). A renamed or removed flag fails here instead of in a new user's terminal. And
+//! every relative link between those pages leads to a file that exists.
 
 use clap::Parser;
 use sawtooth::cli::Cli;
@@ -44,7 +45,10 @@ fn documented_commands(file: &str) -> Vec<(usize, Vec<String>)> {
                 || before.ends_with("./")
                 || before.ends_with("time")
                 || before.ends_with("%e s wall\"")
-                || before.ends_with("do");
+                || before.ends_with("do")
+                // environment assignments before the command: `SAWTOOTH_PROFILE=1 cargo run …`
+                || (joined[..at].ends_with(' ')
+                    && before.split_whitespace().all(|w| w.split_once('=').is_some_and(|(k, v)| is_env_name(k) && !v.is_empty())));
             if !starts_command {
                 continue;
             }
@@ -55,6 +59,13 @@ fn documented_commands(file: &str) -> Vec<(usize, Vec<String>)> {
         }
     }
     commands
+}
+
+/// A shell variable's name: letters, digits and underscores, not starting with a digit.
+fn is_env_name(k: &str) -> bool {
+    !k.is_empty()
+        && !k.starts_with(|c: char| c.is_ascii_digit())
+        && k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
 /// A line without its `#` comment (a `#` that starts a word, outside quotes).
@@ -121,20 +132,88 @@ fn check(file: &str, at_least: usize) {
     assert!(failures.is_empty(), "documented commands the CLI refuses:\n{}", failures.join("\n"));
 }
 
+/// The Markdown pages of docs/, by path relative to the repository's root.
+fn docs_pages() -> Vec<String> {
+    let dir = format!("{}/docs", env!("CARGO_MANIFEST_DIR"));
+    let mut pages: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .filter(|n| n.ends_with(".md"))
+        .map(|n| format!("docs/{n}"))
+        .collect();
+    pages.sort();
+    pages
+}
+
 #[test]
 fn every_command_in_the_readme_parses() {
-    check("README.md", 30);
+    check("README.md", 8);
+}
+
+#[test]
+fn every_command_in_the_docs_pages_parses() {
+    let pages = docs_pages();
+    // the workflow pages the README's index links to, each with commands of its own
+    for page in ["simulate", "calibrate-and-diagnose", "optimise", "campaigns", "engines", "physics"] {
+        let path = format!("docs/{page}.md");
+        assert!(pages.contains(&path), "{path} is missing: {pages:?}");
+        check(&path, 1);
+    }
+    for page in &pages {
+        check(page, 0);
+    }
+    let total: usize = pages.iter().map(|p| documented_commands(p).len()).sum();
+    assert!(total >= 30, "the docs pages hold only {total} commands");
+}
+
+/// The relative link targets of a Markdown file (`[text](target)`, without `#anchor`;
+/// web addresses and pure anchors left out).
+fn relative_links(text: &str) -> Vec<String> {
+    let mut links = Vec::new();
+    for (at, _) in text.match_indices("](") {
+        let rest = &text[at + 2..];
+        let Some(end) = rest.find(')') else { continue };
+        let target = rest[..end].split('#').next().unwrap();
+        if !target.is_empty() && !target.contains("://") && !target.starts_with("mailto:") {
+            links.push(target.to_string());
+        }
+    }
+    links
+}
+
+#[test]
+fn every_relative_link_leads_to_a_file() {
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut broken = Vec::new();
+    let mut seen = 0;
+    for page in ["README.md".to_string(), "BENCHMARKS.md".to_string()].into_iter().chain(docs_pages()) {
+        let path = root.join(&page);
+        let text = std::fs::read_to_string(&path).unwrap();
+        for link in relative_links(&text) {
+            seen += 1;
+            if !path.parent().unwrap().join(&link).exists() {
+                broken.push(format!("{page}: {link}"));
+            }
+        }
+    }
+    assert!(seen >= 20, "only {seen} relative links found: the extraction is broken");
+    assert!(broken.is_empty(), "links to files that do not exist:\n{}", broken.join("\n"));
 }
 
 #[test]
 fn every_command_in_the_benchmarks_parses() {
-    check("BENCHMARKS.md", 15);
+    check("BENCHMARKS.md", 8);
 }
 
 #[test]
 fn the_extraction_sees_continuations_comments_and_quotes() {
     assert_eq!(strip_comment("a --b 'x # y' # note"), "a --b 'x # y' ");
     assert_eq!(words("simulate --plot 'a b.svg' --env $env"), ["simulate", "--plot", "a b.svg", "--env", "lunar"]);
+    assert!(is_env_name("SAWTOOTH_PROFILE") && !is_env_name("--flag") && !is_env_name("1X"));
+    assert_eq!(
+        relative_links("[a](docs/x.md#y), [b](https://e.org), [c](#z), ![f](figures/p.png)"),
+        ["docs/x.md", "figures/p.png"]
+    );
     // and a refused flag is caught: the check can fail
     let bad = Cli::try_parse_from(["sawtooth", "simulate", "--no-such-flag"]);
     assert!(bad.is_err_and(|e| e.use_stderr()));

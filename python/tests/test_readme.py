@@ -1,4 +1,4 @@
-"""The README's Python quickstart runs as written (its python blocks, in order, one namespace)."""
+"""The Python quickstart of docs/python.md runs as written (its python blocks, in order, one namespace)."""
 
 import re
 from pathlib import Path
@@ -7,14 +7,14 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_readme_python_quickstart_runs(tmp_path, monkeypatch):
-    text = (ROOT / "README.md").read_text()
+    text = (ROOT / "docs" / "python.md").read_text()
     section = re.search(r"<!-- python-quickstart.*?-->(.*?)<!-- /python-quickstart -->", text, re.S)
-    assert section, "README lost its python-quickstart markers"
+    assert section, "docs/python.md lost its python-quickstart markers"
     blocks = re.findall(r"```python\n(.*?)```", section.group(1), re.S)
     assert len(blocks) == 4
     monkeypatch.chdir(tmp_path)
     ns = {}
-    run = lambda b: exec(compile(b, "README.md", "exec"), ns)  # noqa: E731
+    run = lambda b: exec(compile(b, "docs/python.md", "exec"), ns)  # noqa: E731
     run(blocks[0])
     assert ns["r"]["w_spec_j_kg"].shape == (25,)
     run(blocks[1])
