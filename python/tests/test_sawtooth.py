@@ -262,7 +262,7 @@ def test_pymoo_nsga2_runs_a_few_generations_on_the_problem():
     assert problem.last["seed"] == seed_for(5, 3)
 
 
-BEST_REQ = [49.991, 49.910, 31.073, 36.234, 88.01, 12.34, 0.805, 77.36]  # README: best lunar design over 0-40 deg
+BEST_REQ = [49.991, 49.910, 31.073, 36.234, 88.01, 12.34, 0.805, 77.36]  # docs/optimise.md: best lunar design over 0-40 deg
 
 
 def test_problem_with_requirements_is_the_clis_verdict_over_the_slopes():
@@ -292,7 +292,7 @@ def test_problem_with_requirements_is_the_clis_verdict_over_the_slopes():
             assert r["m_dot_kg_s"][i] == shown["performance"]["m_dot_kg_s"]
         else:
             assert r["invalid_rule"][i] == shown["invalid"]
-    # the README's best design over 0-40 deg complies at 20-40; solution C fails at 20 deg
+    # docs/optimise.md's best design over 0-40 deg complies at 20-40; solution C fails at 20 deg
     assert r["compliant"].tolist() == [False, True, False]
     assert r["binding_requirement"][0] == "1.1 feed rate" and r["binding_requirement"][1] == ""
     # the optimiser's violation: requirement shortfalls added, unsimulated ranked behind them all
