@@ -28,7 +28,7 @@ pub struct Cli {
 }
 
 // Every command's --help ends with examples that run as written from the repository root
-// (tests/cli.rs runs the help of each; the README shows the same commands).
+// (tests/cli.rs runs the help of each; the docs/ pages show the same commands).
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Simulate one design: tooth distribution, d_avg, performance.

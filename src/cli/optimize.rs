@@ -240,7 +240,7 @@ fn cli_name(v: impl ValueEnum) -> String {
 }
 
 /// With `--resume`, scenario and requirement flags may repeat the run's own command (the
-/// README's `… --resume`), but must not describe another run: they would be ignored.
+/// docs/optimise.md's `… --resume`), but must not describe another run: they would be ignored.
 fn refuse_other_scenario(a: &OptimizeArgs, m: &Manifest) -> anyhow::Result<()> {
     let given: Vec<&str> = a.scenario.given_flags().into_iter().chain(a.requirements.given_flags()).collect();
     if given.is_empty() {

@@ -19,7 +19,7 @@
 //!
 //! [`MeasuredRuns::mean_fractions`] is therefore the fraction of the mean masses;
 //! [`MeasuredRuns::mean_run_fractions`] is the other reading. For Test 3 both give
-//! 42.28/33.47/20.73/3.52 %. The README's Test 3 figures (42.3/33.7/20.9/3.6 %, summing to
+//! 42.28/33.47/20.73/3.52 %. docs/physics.md's Test 3 figures (42.3/33.7/20.9/3.6 %, summing to
 //! 100.5 %) are not reproducible from the raw runs: they are Table B.3's *rounded* means
 //! 0.83/0.66/0.41/0.07 g divided by the rounded mean total 1.96 g (teeth 2 and 3 differ by
 //! 0.23 and 0.17 points from the raw data).
@@ -435,7 +435,7 @@ mod tests {
         for (g, w) in real(2).mean_fractions().iter().zip([36.08, 28.35, 26.80, 8.76]) {
             assert!((100.0 * g - w).abs() < 0.005);
         }
-        // Test 3: the raw runs give 42.28/33.47/20.73/3.52 %. The README's 42.3/33.7/20.9/3.6 %
+        // Test 3: the raw runs give 42.28/33.47/20.73/3.52 %. docs/physics.md's 42.3/33.7/20.9/3.6 %
         // (sum 100.5 %) are Table B.3's rounded means over its rounded mean total 1.96 g.
         let got = real(3).mean_fractions();
         for (g, w) in got.iter().zip([42.28, 33.47, 20.73, 3.52]) {

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum PhysicsMode {
-    /// The thesis text's physics (Ch. 4-5), with the errata fixed. See README's deviation table.
+    /// The thesis text's physics (Ch. 4-5), with the errata fixed. See the deviation table in docs/physics.md.
     #[default]
     Physical,
     /// What listing D.1-D.8 did, where determinable (errata 4-9, 13, 15, 16, 18-20),
