@@ -15,7 +15,7 @@
 //! `flight_drag` = [`Flight::drag`], which on the GPU also reads the path switches of
 //! src/engine/gpu/paths.rs,
 //! `time_at_x`, `y_at_x`, `line_crossings`); WGSL `expm1_`/`log1p_` stand in for the
-//! [`Real`] methods `exp_m1`/`ln_1p`, which WGSL lacks. The Rust side adds only the
+//! [`Real`] methods `kexp_m1`/`ln_1p`, which WGSL lacks. The Rust side adds only the
 //! sled-motion `drift` (cpu-only effect).
 
 use super::real::Real;
@@ -37,7 +37,7 @@ pub struct Flight<T> {
 /// (1 - e^{-kt}) / k, accurate for small kt. WGSL twin: `relax`.
 #[inline(always)]
 fn relax<T: Real>(k: T, t: T) -> T {
-    -(-k * t).exp_m1() / k
+    -(-k * t).kexp_m1() / k
 }
 
 impl<T: Real> Flight<T> {
@@ -279,7 +279,7 @@ pub fn bracketed_newton<T: Real>(c0: T, ca: T, cb: T, k: T, mut lo: T, mut hi: T
     }
     for _ in 0..48 {
         // f and its derivatives share e^{-kt}: one expm1 per step
-        let m = (-k * t).exp_m1();
+        let m = (-k * t).kexp_m1();
         let ft = c0 + ca * t - cb * m / k;
         let d = ca + cb * (T::one() + m);
         if ft == T::zero() {

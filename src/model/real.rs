@@ -14,6 +14,8 @@ pub trait Real: Float + FloatConst + Default + Send + Sync + std::fmt::Debug + '
     fn ksin_cos(self) -> (Self, Self);
     /// atan2 as the kernels compute it (see `ktrig`).
     fn katan2(self, x: Self) -> Self;
+    /// e^x - 1 as the kernels compute it.
+    fn kexp_m1(self) -> Self;
 }
 
 impl Real for f32 {
@@ -33,6 +35,10 @@ impl Real for f32 {
     fn katan2(self, x: Self) -> Self {
         ktrig::atan2(self, x)
     }
+    #[inline(always)]
+    fn kexp_m1(self) -> Self {
+        self.exp_m1()
+    }
 }
 
 impl Real for f64 {
@@ -44,13 +50,19 @@ impl Real for f64 {
     fn f64(self) -> f64 {
         self
     }
+    // the project's own functions, which the AVX-512 lanes run too (`crate::lane_math`):
+    // the same bits on both paths and on every libm
     #[inline(always)]
     fn ksin_cos(self) -> (Self, Self) {
-        self.sin_cos()
+        crate::lane_math::sin_cos(self)
     }
     #[inline(always)]
     fn katan2(self, x: Self) -> Self {
-        self.atan2(x)
+        crate::lane_math::atan2(self, x)
+    }
+    #[inline(always)]
+    fn kexp_m1(self) -> Self {
+        crate::lane_math::exp_m1(self)
     }
 }
 
