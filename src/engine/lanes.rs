@@ -9,7 +9,7 @@
 //! randomisation ([`randomise_launches`]), the restitution law ([`bounce_velocities`]) and
 //! the counter-based generator's hash ([`uniforms`]). `exp_m1`, `sin_cos` and `atan2` are
 //! the project's own (`crate::lane_math`), one generic code that the scalar kernel runs on
-//! one `f64` and these lanes on eight ([`avx512::F64x8`]); libm's `ln` and `ln_1p` are
+//! one `f64` and these lanes on eight (`avx512::F64x8`); libm's `ln` and `ln_1p` are
 //! called one lane at a time. Only on CPUs with AVX-512F ([`available`]) and where
 //! `SAWTOOTH_CPU_LEVEL` does not cap it (`crate::x86_64_v3::level_cap`); elsewhere the cpu
 //! engine runs the scalar kernel.
