@@ -7,13 +7,14 @@ terms, weighted by that part's share of the function's relative error:
   cos   C(z) ~ (cos r - 1 + r^2/2)/r^4,    z = r^2, |r| <= pi/4,        weight r^4, degree 5
   atan  A(z) ~ (atan u - u)/u^3,           z = u^2, |u| <= tan(pi/8),   weight u^2, degree 10
   expm1 P(r) ~ (expm1 r - r - r^2/2)/r^3,           |r| <= ln(2)/2,     weight r^2, degree 9
+  ln    Q(z) ~ (2 atanh s - 2 s)/s^3,      z = s^2, |s| <= (sqrt2-1)/(sqrt2+1), weight s^2, degree 6
 (each interval widened by 1e-4 for the reductions' rounding). The fit is Lawson's
 iteratively reweighted least squares on 400 Chebyshev points, which converges to the
 weighted minimax polynomial on those points. Prints the weighted maximum error and the
 coefficients, lowest first, as f64 bit patterns for the Rust source; with `f32`, as the
 shortest decimals that round to the coefficients' f32 values, for the f32 kernels' `ktrig`
 (src/model/real.rs) and its WGSL twin (shaders/shared/trig.wgsl), which use degrees 2, 2, 3.
-Needs mpmath. Usage: python3 scripts/fit_polynomials.py {sin|cos|atan|expm1} DEGREE [f32]
+Needs mpmath. Usage: python3 scripts/fit_polynomials.py {sin|cos|atan|expm1|ln} DEGREE [f32]
 """
 import struct
 import sys
@@ -55,10 +56,13 @@ def fit(which, deg):
     if which == "atan":
         t8 = mp.tan(pi / 8) * widen
         return lawson(lambda u: (mp.atan(u) - u) / u**3, mp.mpf(0), t8, deg, lambda u: u * u, lambda u: u * u)
+    if which == "ln":
+        smax = (mp.sqrt(2) - 1) / (mp.sqrt(2) + 1) * widen
+        return lawson(lambda s: (2 * mp.atanh(s) - 2 * s) / s**3, mp.mpf(0), smax, deg, lambda s: s * s, lambda s: s * s)
     if which == "expm1":
         h = mp.log(2) / 2 * widen
         return lawson(lambda r: (mp.expm1(r) - r - r * r / 2) / r**3, -h, h, deg, lambda r: r, lambda r: r * r)
-    raise SystemExit(f"fit_polynomials.py: unknown function {which!r} (sin, cos, atan, expm1)")
+    raise SystemExit(f"fit_polynomials.py: unknown function {which!r} (sin, cos, atan, expm1, ln)")
 
 
 def f32(x):
@@ -77,7 +81,7 @@ def shortest_f32(x):
 
 if __name__ == "__main__":
     if len(sys.argv) not in (3, 4) or not sys.argv[2].isdigit() or sys.argv[3:] not in ([], ["f32"]):
-        raise SystemExit("usage: fit_polynomials.py {sin|cos|atan|expm1} DEGREE [f32]")
+        raise SystemExit("usage: fit_polynomials.py {sin|cos|atan|expm1|ln} DEGREE [f32]")
     coeffs, err = fit(sys.argv[1], int(sys.argv[2]))
     print(f"{sys.argv[1]} degree {sys.argv[2]}: weighted max error {mp.nstr(err, 5)} = 2^{mp.nstr(mp.log(err, 2), 4)}")
     if sys.argv[3:] == ["f32"]:

@@ -34,6 +34,8 @@ def main():
         "cos": lambda x, y: mp.cos(x),
         "expm1": lambda x, y: mp.expm1(x),
         "atan2": lambda x, y: mp.atan2(y, x),
+        "ln": lambda x, y: mp.log(x),
+        "ln_1p": lambda x, y: mp.log1p(x),
     }
     worst = {}
     count = {}

@@ -1,4 +1,4 @@
-//! The engine's elementary functions — `exp_m1`, `sin_cos`, `atan2` — written once, over a
+//! The engine's elementary functions — `exp_m1`, `sin_cos`, `atan2`, `ln`, `ln_1p` — written once, over a
 //! lane type: one `f64` (the scalar kernel) or a vector of them (the AVX-512 lanes of
 //! `engine::lanes`). Each lane does the same IEEE operations in the same order as the
 //! scalar code (no fused multiply-add, selects instead of branches), so the lanes give the
@@ -49,6 +49,9 @@ pub trait Lane:
     /// 2^k for a whole number k in [-1022, 1024] (infinity at 1024); anything outside gives
     /// an unspecified number.
     fn pow2i(self) -> Self;
+    /// The biased exponent field (0 to 2047, as a number) and the significand with the
+    /// exponent field set to 1023 (in [1, 2)), read from the bits.
+    fn exponent_field_and_significand(self) -> (Self, Self);
 }
 
 impl Lane for f64 {
@@ -94,7 +97,19 @@ impl Lane for f64 {
         // k + 1023 as the low bits of a number in [2^52, 2^53), shifted into the exponent
         f64::from_bits((self + (1023.0 + TWO_52)).to_bits() << 52)
     }
+    #[inline(always)]
+    fn exponent_field_and_significand(self) -> (Self, Self) {
+        let bits = self.to_bits();
+        // the field as the low bits of a number in [2^52, 2^53), minus 2^52
+        let field = f64::from_bits(TWO_52.to_bits() | ((bits >> 52) & 0x7ff)) - TWO_52;
+        (field, f64::from_bits((bits & MANTISSA_BITS) | ONE_BITS))
+    }
 }
+
+/// The 52 stored significand bits of an f64.
+pub const MANTISSA_BITS: u64 = 0x000f_ffff_ffff_ffff;
+/// 1.0's bits: the exponent field 1023.
+pub const ONE_BITS: u64 = 0x3ff0_0000_0000_0000;
 
 /// 2^52: adding it to a whole number below 2^52 leaves the number in the low mantissa bits.
 const TWO_52: f64 = 4_503_599_627_370_496.0;
@@ -280,6 +295,55 @@ pub fn atan2<T: Lane>(y: T, x: T) -> T {
     T::select(x.eq(x) & y.eq(y), a.copysign(y), x + y)
 }
 
+// ---- ln, ln_1p ----
+
+/// 2^54: subnormals are scaled by it before their exponent is read.
+const TWO_54: f64 = 18_014_398_509_481_984.0;
+/// Q(z) ≈ (2 atanh s - 2s) / s³, z = s², on |s| <= (√2 - 1)/(√2 + 1), weighted by s²; fit
+/// error 2^-58.5.
+const LN_Q: [f64; 7] = [
+    f64::from_bits(0x3fe5_5555_5555_5592),
+    f64::from_bits(0x3fd9_9999_9997_fd4b),
+    f64::from_bits(0x3fd2_4924_941f_7c85),
+    f64::from_bits(0x3fcc_71c5_2037_a6f0),
+    f64::from_bits(0x3fc7_4664_0358_5c48),
+    f64::from_bits(0x3fc3_9a19_6de1_985e),
+    f64::from_bits(0x3fc2_f06e_281c_9782),
+];
+
+/// The natural logarithm: x = 2^e m with m in [√2/2, √2) read from the bits (subnormals
+/// scaled by 2^54 first), f = m - 1, s = f/(2 + f), and
+/// ln(1 + f) = 2 atanh s = f - s (f - s² Q(s²)) (since 2s = f - s f); then e ln 2 added
+/// in LN2_HI and LN2_LO. -inf at ±0, NaN below 0 and for NaN, +inf at +inf.
+#[inline(always)]
+pub fn ln<T: Lane>(x: T) -> T {
+    let (zero, one) = (T::splat(0.0), T::splat(1.0));
+    let subnormal = x.lt(T::splat(f64::MIN_POSITIVE));
+    let (field, m) = T::select(subnormal, x * T::splat(TWO_54), x).exponent_field_and_significand();
+    let e = field - T::splat(1023.0) - T::select(subnormal, T::splat(54.0), zero);
+    // m in [√2/2, √2): f = m - 1 is exact either way
+    let upper = T::splat(std::f64::consts::SQRT_2).lt(m);
+    let (m, e) = (T::select(upper, T::splat(0.5) * m, m), T::select(upper, e + one, e));
+    let f = m - one;
+    let s = f / (T::splat(2.0) + f);
+    let z = s * s;
+    let y = e * T::splat(LN2_HI) + (e * T::splat(LN2_LO) + (f - s * (f - z * poly(z, &LN_Q))));
+    let inf = T::splat(f64::INFINITY);
+    let special = T::select(x.eq(zero), -inf, T::select(x.eq(inf), inf, T::splat(f64::NAN)));
+    T::select(zero.lt(x) & x.lt(inf), y, special)
+}
+
+/// ln(1 + x), accurate for small x: with u = 1 + x rounded, ln(u) · x/(u - 1), which
+/// cancels u's rounding (x itself where u rounds to 1). NaN below -1, -inf at -1.
+#[inline(always)]
+pub fn ln_1p<T: Lane>(x: T) -> T {
+    let (one, inf) = (T::splat(1.0), T::splat(f64::INFINITY));
+    let u = one + x;
+    let d = u - one;
+    let y = T::select(d.eq(T::splat(0.0)), x, ln(u) * (x / d));
+    T::select(u.eq(inf), u, y)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -329,6 +393,14 @@ mod tests {
             worst[3] = worst[3].max(ulps(atan2(y, x), y.atan2(x)));
         }
         assert!(worst.iter().all(|&w| w <= 3.0), "worst ulps from libm: sin, cos, expm1, atan2 = {worst:?}");
+        let mut worst_ln = [0.0f64; 2];
+        for x in arguments(0.0, 10.0, 400_000).into_iter().map(f64::abs).chain([5e-324, 1e-310, 1e300, f64::MAX]) {
+            worst_ln[0] = worst_ln[0].max(ulps(ln(x), x.ln()));
+        }
+        for x in arguments(-0.999_999, 1e3, 400_000).into_iter().filter(|&x| x > -1.0) {
+            worst_ln[1] = worst_ln[1].max(ulps(ln_1p(x), x.ln_1p()));
+        }
+        assert!(worst_ln.iter().all(|&w| w <= 3.0), "worst ulps from libm: ln, ln_1p = {worst_ln:?}");
     }
 
     /// The edges: signed zeros, infinities, NaN, overflow and the reduction's domain.
@@ -405,6 +477,12 @@ mod tests {
         for x in arguments(-40.0, 709.0, n) {
             writeln!(out, "expm1,{:016x},0,{:016x}", x.to_bits(), exp_m1(x).to_bits()).unwrap();
         }
+        for x in arguments(0.0, 10.0, n).into_iter().map(f64::abs) {
+            writeln!(out, "ln,{:016x},0,{:016x}", x.to_bits(), ln(x).to_bits()).unwrap();
+        }
+        for x in arguments(-0.999_999, 1e3, n).into_iter().filter(|&x| x > -1.0) {
+            writeln!(out, "ln_1p,{:016x},0,{:016x}", x.to_bits(), ln_1p(x).to_bits()).unwrap();
+        }
         let ys = arguments(-1e3, 1e3, n);
         for (i, &y) in ys.iter().enumerate() {
             let x = ys[(i * 7919 + 13) % ys.len()];
@@ -412,6 +490,24 @@ mod tests {
         }
         std::fs::write(&path, out).unwrap();
         eprintln!("wrote {path}");
+    }
+
+    /// ln and ln_1p at their edges.
+    #[test]
+    fn logarithms_special_values_follow_ieee() {
+        let bits = |x: f64| x.to_bits();
+        assert_eq!(ln(1.0), 0.0);
+        assert_eq!(ln(0.0), f64::NEG_INFINITY);
+        assert_eq!(ln(-0.0), f64::NEG_INFINITY);
+        assert_eq!(ln(f64::INFINITY), f64::INFINITY);
+        assert!(ln(-1.0).is_nan() && ln(f64::NAN).is_nan() && ln(f64::NEG_INFINITY).is_nan());
+        assert_eq!(ln(5e-324), 5e-324f64.ln());
+        assert_eq!(bits(ln_1p(0.0)), bits(0.0));
+        assert_eq!(bits(ln_1p(-0.0)), bits(-0.0));
+        assert_eq!(ln_1p(1e-300), 1e-300);
+        assert_eq!(ln_1p(-1.0), f64::NEG_INFINITY);
+        assert_eq!(ln_1p(f64::INFINITY), f64::INFINITY);
+        assert!(ln_1p(-2.0).is_nan() && ln_1p(f64::NAN).is_nan());
     }
 
     /// `Lane::pow2i` over its whole range.

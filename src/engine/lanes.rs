@@ -7,10 +7,9 @@
 //! `examples/engine_digest.rs`). A lane whose particle has finished its teeth (or its
 //! Halley steps) idles while the others go on. Beside it, on the same lanes: the launch
 //! randomisation ([`randomise_launches`]), the restitution law ([`bounce_velocities`]) and
-//! the counter-based generator's hash ([`uniforms`]). `exp_m1`, `sin_cos` and `atan2` are
-//! the project's own (`crate::lane_math`), one generic code that the scalar kernel runs on
-//! one `f64` and these lanes on eight (`avx512::F64x8`); libm's `ln` and `ln_1p` are
-//! called one lane at a time. Only on CPUs with AVX-512F ([`available`]) and where
+//! the counter-based generator's hash ([`uniforms`]). `exp_m1`, `sin_cos`, `atan2`, `ln`
+//! and `ln_1p` are the project's own (`crate::lane_math`), one generic code that the scalar
+//! kernel runs on one `f64` and these lanes on eight (`avx512::F64x8`). Only on CPUs with AVX-512F ([`available`]) and where
 //! `SAWTOOTH_CPU_LEVEL` does not cap it (`crate::x86_64_v3::level_cap`); elsewhere the cpu
 //! engine runs the scalar kernel.
 //! Why intrinsics: written as loops over eight-element arrays the compiler left the search
@@ -245,23 +244,6 @@ mod avx512 {
         a
     }
 
-    /// `f` (libm's) in the lanes of `mask`, one lane at a time.
-    #[target_feature(enable = "avx512f")]
-    #[inline]
-    fn each(mask: M, x: V, f: fn(f64) -> f64) -> V {
-        if mask == 0 {
-            return x;
-        }
-        let mut a = store(x);
-        let mut m = mask;
-        while m != 0 {
-            let l = m.trailing_zeros() as usize;
-            a[l] = f(a[l]);
-            m &= m - 1;
-        }
-        load(&a)
-    }
-
     /// Eight f64 lanes as a [`Lane`] for `crate::lane_math`'s functions. Its operations are
     /// AVX-512F instructions: a value exists only inside this module's functions, which all
     /// run where [`super::available`] holds (the SAFETY notes below rest on that), and they
@@ -359,6 +341,25 @@ mod avx512 {
         fn pow2i(self) -> Self {
             F64x8(unsafe { pow2i(self.0) })
         }
+        #[inline(always)]
+        fn exponent_field_and_significand(self) -> (Self, Self) {
+            let (field, significand) = unsafe { exponent_field_and_significand(self.0) };
+            (F64x8(field), F64x8(significand))
+        }
+    }
+    /// [`Lane::exponent_field_and_significand`]: the lanes of f64's, the same bit operations.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn exponent_field_and_significand(x: V) -> (V, V) {
+        let bits = _mm512_castpd_si512(x);
+        let two_52 = _mm512_set1_pd(4_503_599_627_370_496.0);
+        let field = _mm512_and_si512(_mm512_srli_epi64::<52>(bits), _mm512_set1_epi64(0x7ff));
+        let field = _mm512_sub_pd(_mm512_castsi512_pd(_mm512_or_si512(_mm512_castpd_si512(two_52), field)), two_52);
+        let significand = _mm512_or_si512(
+            _mm512_and_si512(bits, _mm512_set1_epi64(lane_math::MANTISSA_BITS as i64)),
+            _mm512_set1_epi64(lane_math::ONE_BITS as i64),
+        );
+        (field, _mm512_castsi512_pd(significand))
     }
     /// Lanes whose sign bit is set (AVX-512F has no `movepi64_mask`, which is AVX-512DQ).
     #[target_feature(enable = "avx512f")]
@@ -446,7 +447,7 @@ mod avx512 {
     /// `Flight::time_at_x`, needed in the lanes of `mask`.
     #[target_feature(enable = "avx512f")]
     #[inline]
-    fn time_at_x<const DRAG: bool>(f: &Fl, mask: M, x: V) -> V {
+    fn time_at_x<const DRAG: bool>(f: &Fl, _mask: M, x: V) -> V {
         let dx = sub(x, f.px);
         let t = div(dx, f.vx);
         let never = eq(f.vx, sp(0.0)) | lt(t, sp(0.0));
@@ -455,7 +456,7 @@ mod avx512 {
             // beyond the drag asymptote x0 + vx/k when q <= 0
             let q = sub(sp(1.0), div(mul(f.k, dx), f.vx));
             let beyond = le(q, sp(0.0));
-            let t = div(neg(each(mask & !never & !beyond, q, f64::ln)), f.k);
+            let t = div(neg(lane_math::ln(F64x8(q)).0), f.k);
             return sel(never, behind, sel(beyond, sp(f64::INFINITY), t));
         }
         sel(never, behind, t)
@@ -464,14 +465,14 @@ mod avx512 {
     /// `Flight::y_at_x`, needed in the lanes of `mask`: whether it gets there, and the height.
     #[target_feature(enable = "avx512f")]
     #[inline]
-    fn y_at_x<const DRAG: bool>(f: &Fl, mask: M, x: V) -> (M, V) {
+    fn y_at_x<const DRAG: bool>(f: &Fl, _mask: M, x: V) -> (M, V) {
         let e = div(sub(x, f.px), f.vx);
         let reaches = ne(f.vx, sp(0.0)) & !lt(e, sp(0.0));
         if DRAG {
             // Eq. 4.55
             let q = sub(sp(1.0), mul(f.k, e));
             let reaches = reaches & !le(q, sp(0.0));
-            let t = div(neg(each(mask & reaches, q, f64::ln)), f.k);
+            let t = div(neg(lane_math::ln(F64x8(q)).0), f.k);
             return (reaches, add(add(f.py, mul(f.vinf, t)), mul(sub(f.vy, f.vinf), e)));
         }
         (reaches, sub(add(f.py, mul(f.vy, e)), mul(mul(f.half_g, e), e)))
@@ -636,7 +637,7 @@ mod avx512 {
         // the extremum t* = ln(1 + x)/k, where x = n·v/(-a) > 0
         let x = sel(ne(ca, zero), div(add(nv, nw), neg(ca)), zero);
         let has_star = mask & gt(x, zero) & lt(abs(x), inf);
-        let t_star = div(each(has_star, x, f64::ln_1p), f.k);
+        let t_star = div(lane_math::ln_1p(F64x8(x)).0, f.k);
         let t_end = min(t_max, stokes_horizon(coef, f.k));
         let active = mask & !gt(t_min, t_end);
         if active == 0 {
@@ -762,17 +763,14 @@ mod avx512 {
         (s.0, c.0)
     }
 
-    /// `lane_math`'s `exp_m1`, `sin_cos` and `atan2(y, x)` of eight lanes (for the tests).
+    /// `lane_math`'s `exp_m1`, sin and cos, `atan2(y, x)`, `ln` and `ln_1p` of eight lanes
+    /// (for the tests).
     #[cfg(test)]
     #[target_feature(enable = "avx512f")]
-    #[allow(clippy::type_complexity)]
-    pub fn math_on_lanes(
-        x: [f64; LANES],
-        y: [f64; LANES],
-    ) -> ([f64; LANES], ([f64; LANES], [f64; LANES]), [f64; LANES]) {
-        let (x, y) = (load(&x), load(&y));
-        let (s, c) = sin_cos(x);
-        (store(lane_math::exp_m1(F64x8(x)).0), (store(s), store(c)), store(lane_math::atan2(F64x8(y), F64x8(x)).0))
+    pub fn math_on_lanes(x: [f64; LANES], y: [f64; LANES]) -> [[f64; LANES]; 6] {
+        let (x, y) = (F64x8(load(&x)), F64x8(load(&y)));
+        let (s, c) = lane_math::sin_cos(x);
+        [lane_math::exp_m1(x), s, c, lane_math::atan2(y, x), lane_math::ln(x), lane_math::ln_1p(x)].map(|v| store(v.0))
     }
 
     /// [`super::randomise_launches`]: `kernel::randomise_launch_drawn` with the launch factors
@@ -1203,7 +1201,7 @@ mod tests {
     /// values, in case a lane operation of [`avx512::F64x8`] ever differs from f64's.
     #[test]
     fn lane_math_on_eight_lanes_is_the_scalar_math_to_the_bit() {
-        use crate::lane_math::{atan2, exp_m1, sin_cos};
+        use crate::lane_math::{atan2, exp_m1, ln, ln_1p, sin_cos};
         if !available() {
             eprintln!("skipped: this CPU lacks AVX-512F, so the engine does not use the lanes");
             return;
@@ -1222,13 +1220,15 @@ mod tests {
             // the y of atan2: another argument of the list, with its special values
             let ys: [f64; 8] = std::array::from_fn(|l| xs[(c * 8 + l) * 7919 % xs.len()]);
             // SAFETY: the CPU has AVX-512F (checked above)
-            let (e, (s, co), at) = unsafe { avx512::math_on_lanes(a, ys) };
+            let [e, s, co, at, lg, lg1p] = unsafe { avx512::math_on_lanes(a, ys) };
             for l in 0..8 {
                 let x = a[l];
                 let (ws, wc) = sin_cos(x);
                 assert_eq!(b(e[l]), b(exp_m1(x)), "exp_m1({x:e})");
                 assert_eq!((b(s[l]), b(co[l])), (b(ws), b(wc)), "sin_cos({x:e})");
                 assert_eq!(b(at[l]), b(atan2(ys[l], x)), "atan2({:e}, {x:e})", ys[l]);
+                assert_eq!(b(lg[l]), b(ln(x)), "ln({x:e})");
+                assert_eq!(b(lg1p[l]), b(ln_1p(x)), "ln_1p({x:e})");
             }
         }
     }

@@ -16,6 +16,10 @@ pub trait Real: Float + FloatConst + Default + Send + Sync + std::fmt::Debug + '
     fn katan2(self, x: Self) -> Self;
     /// e^x - 1 as the kernels compute it.
     fn kexp_m1(self) -> Self;
+    /// ln x as the kernels compute it.
+    fn kln(self) -> Self;
+    /// ln(1 + x) as the kernels compute it.
+    fn kln_1p(self) -> Self;
 }
 
 impl Real for f32 {
@@ -38,6 +42,14 @@ impl Real for f32 {
     #[inline(always)]
     fn kexp_m1(self) -> Self {
         self.exp_m1()
+    }
+    #[inline(always)]
+    fn kln(self) -> Self {
+        self.ln()
+    }
+    #[inline(always)]
+    fn kln_1p(self) -> Self {
+        self.ln_1p()
     }
 }
 
@@ -63,6 +75,14 @@ impl Real for f64 {
     #[inline(always)]
     fn kexp_m1(self) -> Self {
         crate::lane_math::exp_m1(self)
+    }
+    #[inline(always)]
+    fn kln(self) -> Self {
+        crate::lane_math::ln(self)
+    }
+    #[inline(always)]
+    fn kln_1p(self) -> Self {
+        crate::lane_math::ln_1p(self)
     }
 }
 
