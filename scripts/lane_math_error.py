@@ -21,8 +21,8 @@ def f64(bits):
 
 def ulp_error(got, exact):
     """|got - exact| in ulps of exact's binade (subnormal spacing below 2^-1022)."""
-    if exact == 0:
-        return 0.0 if got == 0 else float("inf")
+    if exact == 0 or mp.isinf(exact):
+        return 0.0 if got == float(exact) else float("inf")
     e = max(int(mp.floor(mp.log(abs(exact), 2))), -1022)
     return float(abs(mp.mpf(got) - exact) / mp.mpf(2) ** (e - 52))
 

@@ -11,15 +11,19 @@
 //! - `sin_cos`: x = k π/2 + r with |r| <= π/4 (π/2 in three pieces, the first two of 33
 //!   bits, so k·piece is exact for |k| < 2^20), sin r = r + r³ S(r²),
 //!   cos r = 1 - r²/2 + r⁴ C(r²), and the quadrant k mod 4 picks and signs them.
+//! - `ln`: x = 2^e m from the bits, m in [√2/2, √2), s = (m - 1)/(m + 1),
+//!   ln m = 2 atanh s = f - s (f - s² Q(s²)) with f = m - 1; `ln_1p`: ln(1 + x) rounded,
+//!   times x / ((1 + x) - 1), which cancels the rounding of 1 + x.
 //! - `atan2`: the octant by |y| against |x|, u = min/max or, above tan(π/8),
 //!   (min - max)/(min + max) (one division either way), atan u = u + u³ A(u²), then
 //!   π/4, π/2 ± a, π - a and the sign of y as the octant says.
 //!
-//! P, S, C and A are near-minimax polynomials (weighted least squares by Lawson's
+//! P, S, C, A and Q are near-minimax polynomials (weighted least squares by Lawson's
 //! iteration on a Chebyshev grid, in 50-digit arithmetic) that `scripts/fit_polynomials.py`
 //! computes; the coefficients below are its output rounded to f64. Measured against mpmath
 //! (`scripts/lane_math_error.py`, 125 000 arguments each): at most 1.30 ulp (sin), 1.42
-//! (cos), 1.57 (expm1) and 1.42 (atan2); docs/math.md has the arguments and the commands.
+//! (cos), 1.57 (expm1), 1.42 (atan2), 1.11 (ln) and 2.24 (ln_1p); docs/math.md has the
+//! arguments and the commands.
 
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
