@@ -1,6 +1,6 @@
-//! The engine's elementary functions — `exp_m1`, `sin_cos`, `atan2`, `ln`, `ln_1p` — written once, over a
-//! lane type: one `f64` (the scalar kernel) or a vector of them (the AVX-512 lanes of
-//! `engine::lanes`). Each lane does the same IEEE operations in the same order as the
+//! The engine's elementary functions — `exp_m1`, `sin_cos`, `atan2`, `ln`, `ln_1p` —
+//! written once, over a lane type: one `f64` (the scalar kernel) or a vector of them (the
+//! AVX-512 lanes of `engine::lanes`). Each lane does the same IEEE operations in the same order as the
 //! scalar code (no fused multiply-add, selects instead of branches), so the lanes give the
 //! scalar kernel's bits by construction, on every CPU, whatever the system's libm.
 //!
