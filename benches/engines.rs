@@ -2,8 +2,8 @@
 //! up to 100 bounces, each engine on the same batch. Throughput is in particle-bounces.
 //! And the preparation every engine pays (validity, fill, launch points), one design at a
 //! time, over a GA generation's random valid designs. And libm's `sincos`, `atan2` and
-//! `expm1` one value at a time against their AVX-512 ports (`sawtooth::libm_lanes`, the
-//! same bits), on arguments like the kernel's.
+//! `expm1` against the kernel's own (`sawtooth::lane_math`), one value at a time, on
+//! arguments like the kernel's.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use sawtooth::engine::gpu::{AdapterChoice, GpuEngine};
@@ -52,8 +52,7 @@ fn preparation(c: &mut Criterion) {
 }
 
 fn libm(c: &mut Criterion) {
-    use sawtooth::libm_lanes::{atan2_all, atan2_ported, exp_m1_all, expm1_ported, sin_cos_all, sincos_ported};
-    eprintln!("ports taken: sincos {}, atan2 {}, expm1 {}", sincos_ported(), atan2_ported(), expm1_ported());
+    use sawtooth::lane_math::{atan2, exp_m1, sin_cos};
     let n = 4096;
     // launch angles, velocity components, and -k t of drag flights
     let angles: Vec<f64> = (0..n).map(|i| 7.0 * (i as f64 + 0.5) / n as f64).collect();
@@ -63,11 +62,12 @@ fn libm(c: &mut Criterion) {
     let mut group = c.benchmark_group("libm");
     group.throughput(Throughput::Elements(n as u64));
     group.bench_function("sincos/libm", |b| b.iter(|| angles.iter().map(|a| a.sin_cos()).collect::<Vec<_>>()));
-    group.bench_function("sincos/lanes", |b| b.iter(|| sin_cos_all(&angles)));
+    group.bench_function("sincos/own", |b| b.iter(|| angles.iter().map(|&a| sin_cos(a)).collect::<Vec<_>>()));
     group.bench_function("atan2/libm", |b| b.iter(|| ys.iter().zip(&xs).map(|(y, x)| y.atan2(*x)).collect::<Vec<_>>()));
-    group.bench_function("atan2/lanes", |b| b.iter(|| atan2_all(&ys, &xs)));
+    group
+        .bench_function("atan2/own", |b| b.iter(|| ys.iter().zip(&xs).map(|(&y, &x)| atan2(y, x)).collect::<Vec<_>>()));
     group.bench_function("expm1/libm", |b| b.iter(|| kts.iter().map(|x| x.exp_m1()).collect::<Vec<_>>()));
-    group.bench_function("expm1/lanes", |b| b.iter(|| exp_m1_all(&kts)));
+    group.bench_function("expm1/own", |b| b.iter(|| kts.iter().map(|&x| exp_m1(x)).collect::<Vec<_>>()));
     group.finish();
 }
 

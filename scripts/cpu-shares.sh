@@ -4,9 +4,9 @@
 # libm calls it makes, and the preparation every engine shares; then the bound this puts on
 # any speed-up that keeps the arithmetic (and so every result) as it is: the kernel's own
 # arithmetic can run on SIMD lanes to the same bits (IEEE +, -, *, /, sqrt are the same in
-# every lane), and libm's calls only where a function is ported operation for operation
-# (src/libm_lanes.rs: expm1, sincos, atan2; their lanes count as the kernel's arithmetic
-# here, while what is still called in libm.so, such as ln, counts as libm).
+# every lane), and so can the project's own expm1, sincos and atan2 (src/lane_math.rs, one
+# code for one f64 or eight lanes; they count as the kernel's arithmetic here, while what is
+# still called in libm.so, such as ln, counts as libm).
 # Needs `perf` (Debian: linux-perf) and permission to record (root, or perf_event_paranoid <= 1).
 # Usage: bash scripts/cpu-shares.sh [REPEATS]   (default 100 batches per environment)
 set -euo pipefail

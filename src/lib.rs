@@ -5,6 +5,7 @@
 //! - [`io`]: configuration files, trajectory CSV, the flight plot.
 //! - [`plot`]: the one plotting layer every figure goes through (SVG or PNG).
 //! - [`cli`]: the thin command-line layer.
+//! - [`lane_math`]: the engine's own `exp_m1`, `sin_cos`, `atan2`, one code for scalar and lanes.
 //! - [`x86_64_v3`]: hot loops compiled a second time for AVX2 CPUs, same bits.
 
 pub mod calibrate;
@@ -13,7 +14,7 @@ pub mod diagnose;
 pub mod engine;
 pub mod fit;
 pub mod io;
-pub mod libm_lanes;
+pub mod lane_math;
 pub mod model;
 pub mod optim;
 pub mod plot;

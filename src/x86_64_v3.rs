@@ -12,12 +12,42 @@
 /// The features every x86-64-v3 compilation enables.
 pub const FEATURES: &str = "avx,avx2,fma,bmi1,bmi2,lzcnt,movbe,popcnt,sse3,ssse3,sse4.1,sse4.2";
 
+/// The environment variable that caps the instruction sets the cpu engine takes, to
+/// measure the paths other CPUs run: `baseline` (x86-64 without the second compilation or
+/// the AVX-512 lanes), `x86-64-v3` (no AVX-512 lanes); unset, whatever the CPU has.
+pub const CPU_LEVEL_VAR: &str = "SAWTOOTH_CPU_LEVEL";
+
+/// The instruction-set levels the cpu engine can run at, lowest first.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Level {
+    Baseline,
+    X86_64V3,
+    Avx512,
+}
+
+/// The highest level [`CPU_LEVEL_VAR`] allows (read once; an unknown value is named on
+/// stderr and caps nothing, so a benchmark never silently runs another path than asked).
+pub fn level_cap() -> Level {
+    static CAP: std::sync::OnceLock<Level> = std::sync::OnceLock::new();
+    *CAP.get_or_init(|| match std::env::var(CPU_LEVEL_VAR).as_deref() {
+        Err(_) => Level::Avx512,
+        Ok("baseline") => Level::Baseline,
+        Ok("x86-64-v3") => Level::X86_64V3,
+        Ok("avx512") => Level::Avx512,
+        Ok(other) => {
+            eprintln!("warning: {CPU_LEVEL_VAR}={other:?} is none of baseline, x86-64-v3, avx512; not capped");
+            Level::Avx512
+        }
+    })
+}
+
 /// Whether this CPU has every one of [`FEATURES`] (the SSE and AVX levels not named here
-/// come with AVX2).
+/// come with AVX2) and [`level_cap`] allows them.
 pub fn available() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
-        std::is_x86_feature_detected!("avx2")
+        level_cap() >= Level::X86_64V3
+            && std::is_x86_feature_detected!("avx2")
             && std::is_x86_feature_detected!("fma")
             && std::is_x86_feature_detected!("bmi1")
             && std::is_x86_feature_detected!("bmi2")

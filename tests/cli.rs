@@ -247,3 +247,35 @@ fn malformed_toml_names_the_key() {
     assert_bad_input(&["simulate", "--config", bad.to_str().unwrap()], "bad.toml");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `SAWTOOTH_CPU_LEVEL` caps the cpu engine's paths (to measure what CPUs without AVX-512
+/// or AVX2 run), `bench` names the path taken, and every path gives the same results to
+/// the bit: the lanes and the scalar kernel share one code for their functions
+/// (`lane_math`), and neither compilation fuses a multiply-add.
+#[test]
+fn every_cpu_level_gives_the_same_results_and_bench_names_it() {
+    let run = |level: Option<&str>, args: &[&str]| {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_sawtooth"));
+        if let Some(level) = level {
+            cmd.env("SAWTOOTH_CPU_LEVEL", level);
+        } else {
+            cmd.env_remove("SAWTOOTH_CPU_LEVEL");
+        }
+        let out = cmd.args(args).output().expect("run binary");
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stdout).to_string()
+    };
+    for env in ["lunar", "earth"] {
+        let simulate = ["simulate", "--env", env, "--design", LUNAR_C, "--particles", "200", "--json"];
+        let full = run(None, &simulate);
+        for level in ["x86-64-v3", "baseline"] {
+            assert_eq!(run(Some(level), &simulate), full, "{env}, SAWTOOTH_CPU_LEVEL={level}");
+        }
+    }
+    let bench = ["bench", "--designs", "2", "--particles", "10", "--repeats", "1", "--engines", "cpu"];
+    let device = |level| run(Some(level), &bench).lines().find(|l| l.starts_with("cpu: ")).map(str::to_owned);
+    let baseline = device("baseline").expect("a cpu line");
+    assert!(baseline.ends_with("baseline build)"), "{baseline}");
+    let v3 = device("x86-64-v3").expect("a cpu line");
+    assert!(!v3.contains("AVX-512 lanes"), "{v3}");
+}

@@ -7,17 +7,17 @@
 //! `examples/engine_digest.rs`). A lane whose particle has finished its teeth (or its
 //! Halley steps) idles while the others go on. Beside it, on the same lanes: the launch
 //! randomisation ([`randomise_launches`]), the restitution law ([`bounce_velocities`]) and
-//! the counter-based generator's hash ([`uniforms`]). libm's `expm1`, `sincos` and `atan2`
-//! run as the ports of `crate::libm_lanes` where they are this libm's; `ln` and `ln_1p`,
-//! which have no port, are called one lane at a time. Only on CPUs with AVX-512F
-//! ([`available`]); elsewhere the cpu engine runs the scalar kernel.
+//! the counter-based generator's hash ([`uniforms`]). `exp_m1`, `sin_cos`, `atan2`, `ln`
+//! and `ln_1p` are the project's own (`crate::lane_math`), one generic code that the scalar
+//! kernel runs on one `f64` and these lanes on eight (`avx512::F64x8`). Only on CPUs with AVX-512F ([`available`]) and where
+//! `SAWTOOTH_CPU_LEVEL` does not cap it (`crate::x86_64_v3::level_cap`); elsewhere the cpu
+//! engine runs the scalar kernel.
 //! Why intrinsics: written as loops over eight-element arrays the compiler left the search
 //! scalar, 45 % slower than the one-particle search (BENCHMARKS.md).
 
 use super::kernel::{
     first_hit, Hit, KDesign, KParticle, KPhysics, SURFACE_BASE, SURFACE_CATCH, SURFACE_NONE, SURFACE_RAMP,
 };
-use crate::libm_lanes;
 use crate::model::collision::Restitution;
 
 /// Particles searched together: eight f64 lanes, one AVX-512 register.
@@ -30,11 +30,12 @@ pub fn applies(ph: &KPhysics<f64>) -> bool {
     ph.sled_speed == 0.0 && ph.qd_step == 0.0 && ph.min_hop == 0.0
 }
 
-/// Whether this CPU runs [`first_hits`] (AVX-512F; the caller searches one particle at a
-/// time otherwise).
+/// Whether this CPU runs [`first_hits`] (AVX-512F, not capped by `SAWTOOTH_CPU_LEVEL`; the
+/// caller searches one particle at a time otherwise).
 pub fn available() -> bool {
     #[cfg(target_arch = "x86_64")]
-    return std::arch::is_x86_feature_detected!("avx512f");
+    return crate::x86_64_v3::level_cap() >= crate::x86_64_v3::Level::Avx512
+        && std::arch::is_x86_feature_detected!("avx512f");
     #[allow(unreachable_code)]
     false
 }
@@ -146,9 +147,9 @@ pub fn uniforms(seed_word: u32, particles: &[u32], bounce: u32, draw: u32) -> [f
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
     use super::*;
-    // libm one lane at a time
-    use crate::libm_lanes::avx512::each;
+    use crate::lane_math::{self, Lane};
     use std::arch::x86_64::*;
+    use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
     type V = __m512d;
     type M = __mmask8;
@@ -243,6 +244,145 @@ mod avx512 {
         a
     }
 
+    /// Eight f64 lanes as a [`Lane`] for `crate::lane_math`'s functions. Its operations are
+    /// AVX-512F instructions: a value exists only inside this module's functions, which all
+    /// run where [`super::available`] holds (the SAFETY notes below rest on that), and they
+    /// inline into those functions' `target_feature` code.
+    #[derive(Clone, Copy)]
+    pub struct F64x8(pub V);
+    /// The lanes a comparison of two [`F64x8`] holds in.
+    #[derive(Clone, Copy)]
+    pub struct Mask8(pub M);
+
+    macro_rules! binary {
+        ($($op:ident $method:ident $intrinsic:ident;)*) => {$(
+            impl $op for F64x8 {
+                type Output = F64x8;
+                #[inline(always)]
+                fn $method(self, other: F64x8) -> F64x8 {
+                    // SAFETY: AVX-512F is present wherever an F64x8 exists (see the type)
+                    F64x8(unsafe { $intrinsic(self.0, other.0) })
+                }
+            }
+        )*};
+    }
+    binary! {
+        Add add _mm512_add_pd;
+        Sub sub _mm512_sub_pd;
+        Mul mul _mm512_mul_pd;
+        Div div _mm512_div_pd;
+    }
+    impl Neg for F64x8 {
+        type Output = F64x8;
+        #[inline(always)]
+        fn neg(self) -> F64x8 {
+            // SAFETY: AVX-512F is present wherever an F64x8 exists (see the type)
+            F64x8(unsafe { neg(self.0) })
+        }
+    }
+    impl BitAnd for Mask8 {
+        type Output = Mask8;
+        #[inline(always)]
+        fn bitand(self, other: Mask8) -> Mask8 {
+            Mask8(self.0 & other.0)
+        }
+    }
+    impl BitOr for Mask8 {
+        type Output = Mask8;
+        #[inline(always)]
+        fn bitor(self, other: Mask8) -> Mask8 {
+            Mask8(self.0 | other.0)
+        }
+    }
+    impl Not for Mask8 {
+        type Output = Mask8;
+        #[inline(always)]
+        fn not(self) -> Mask8 {
+            Mask8(!self.0)
+        }
+    }
+    // SAFETY (every block below): AVX-512F is present wherever an F64x8 exists (see the type)
+    impl Lane for F64x8 {
+        type Mask = Mask8;
+        #[inline(always)]
+        fn splat(x: f64) -> Self {
+            F64x8(unsafe { sp(x) })
+        }
+        #[inline(always)]
+        fn abs(self) -> Self {
+            F64x8(unsafe { abs(self.0) })
+        }
+        #[inline(always)]
+        fn lt(self, other: Self) -> Mask8 {
+            Mask8(unsafe { lt(self.0, other.0) })
+        }
+        #[inline(always)]
+        fn le(self, other: Self) -> Mask8 {
+            Mask8(unsafe { le(self.0, other.0) })
+        }
+        #[inline(always)]
+        fn eq(self, other: Self) -> Mask8 {
+            Mask8(unsafe { eq(self.0, other.0) })
+        }
+        #[inline(always)]
+        fn select(m: Mask8, a: Self, b: Self) -> Self {
+            F64x8(unsafe { sel(m.0, a.0, b.0) })
+        }
+        #[inline(always)]
+        fn sign_negative(self) -> Mask8 {
+            // the sign bit as a 64-bit integer's: negative
+            Mask8(unsafe { sign_mask(self.0) })
+        }
+        #[inline(always)]
+        fn copysign(self, sign: Self) -> Self {
+            F64x8(unsafe { copysign(self.0, sign.0) })
+        }
+        #[inline(always)]
+        fn pow2i(self) -> Self {
+            F64x8(unsafe { pow2i(self.0) })
+        }
+        #[inline(always)]
+        fn exponent_field_and_significand(self) -> (Self, Self) {
+            let (field, significand) = unsafe { exponent_field_and_significand(self.0) };
+            (F64x8(field), F64x8(significand))
+        }
+    }
+    /// [`Lane::exponent_field_and_significand`]: the lanes of f64's, the same bit operations.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn exponent_field_and_significand(x: V) -> (V, V) {
+        let bits = _mm512_castpd_si512(x);
+        let two_52 = _mm512_set1_pd(4_503_599_627_370_496.0);
+        let field = _mm512_and_si512(_mm512_srli_epi64::<52>(bits), _mm512_set1_epi64(0x7ff));
+        let field = _mm512_sub_pd(_mm512_castsi512_pd(_mm512_or_si512(_mm512_castpd_si512(two_52), field)), two_52);
+        let significand = _mm512_or_si512(
+            _mm512_and_si512(bits, _mm512_set1_epi64(lane_math::MANTISSA_BITS as i64)),
+            _mm512_set1_epi64(lane_math::ONE_BITS as i64),
+        );
+        (field, _mm512_castsi512_pd(significand))
+    }
+    /// Lanes whose sign bit is set (AVX-512F has no `movepi64_mask`, which is AVX-512DQ).
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn sign_mask(a: V) -> M {
+        _mm512_cmplt_epi64_mask(_mm512_castpd_si512(a), _mm512_setzero_si512())
+    }
+    /// `|a|` with the sign of `sign`.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn copysign(a: V, sign: V) -> V {
+        let bit = _mm512_set1_epi64(i64::MIN);
+        let (a, sign) = (_mm512_castpd_si512(a), _mm512_castpd_si512(sign));
+        _mm512_castsi512_pd(_mm512_or_si512(_mm512_andnot_si512(bit, a), _mm512_and_si512(sign, bit)))
+    }
+    /// [`Lane::pow2i`]: the lanes of `f64::pow2i`, the same integer trick.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn pow2i(k: V) -> V {
+        let biased = _mm512_add_pd(k, _mm512_set1_pd(1023.0 + 4_503_599_627_370_496.0));
+        _mm512_castsi512_pd(_mm512_slli_epi64::<52>(_mm512_castpd_si512(biased)))
+    }
+
     /// Up to two crossing times per lane: how many (as f64), the first and the second.
     #[derive(Clone, Copy)]
     struct Roots {
@@ -274,8 +414,6 @@ mod avx512 {
         /// Stokes k_drag (1/s; 0 in vacuum) and the terminal velocity -g/k of a drag flight.
         k: V,
         vinf: V,
-        /// Whether the lane `expm1` gives this libm's (`libm_lanes::expm1_ported`).
-        lane_expm1: bool,
     }
 
     /// `relax`, (1 - e^{-kt})/k (flight.rs), in the lanes of `mask`.
@@ -285,18 +423,12 @@ mod avx512 {
         div(neg(exp_m1(f, mask, mul(neg(f.k), t))), f.k)
     }
 
-    /// `f64::exp_m1` in the lanes of `mask`: on the lanes where this libm's is the one
-    /// ported (`libm_lanes::expm1_ported`), else one lane at a time.
+    /// `Real::kexp_m1` (`lane_math::exp_m1`) in every lane; the flight and the mask say
+    /// where it is needed, and the other lanes' results are dropped.
     #[target_feature(enable = "avx512f")]
     #[inline]
-    fn exp_m1(f: &Fl, mask: M, x: V) -> V {
-        if f.lane_expm1 {
-            // SAFETY: `first_hits` runs only where AVX-512F is, and FMA comes with it
-            // (`expm1_ported` is false without either)
-            unsafe { libm_lanes::avx512::expm1(mask, x) }
-        } else {
-            each(mask, x, f64::exp_m1)
-        }
+    fn exp_m1(_f: &Fl, _mask: M, x: V) -> V {
+        lane_math::exp_m1(F64x8(x)).0
     }
 
     /// `Flight::pos`, needed in the lanes of `mask` (a drag flight's exponential is taken
@@ -315,7 +447,7 @@ mod avx512 {
     /// `Flight::time_at_x`, needed in the lanes of `mask`.
     #[target_feature(enable = "avx512f")]
     #[inline]
-    fn time_at_x<const DRAG: bool>(f: &Fl, mask: M, x: V) -> V {
+    fn time_at_x<const DRAG: bool>(f: &Fl, _mask: M, x: V) -> V {
         let dx = sub(x, f.px);
         let t = div(dx, f.vx);
         let never = eq(f.vx, sp(0.0)) | lt(t, sp(0.0));
@@ -324,7 +456,7 @@ mod avx512 {
             // beyond the drag asymptote x0 + vx/k when q <= 0
             let q = sub(sp(1.0), div(mul(f.k, dx), f.vx));
             let beyond = le(q, sp(0.0));
-            let t = div(neg(each(mask & !never & !beyond, q, f64::ln)), f.k);
+            let t = div(neg(lane_math::ln(F64x8(q)).0), f.k);
             return sel(never, behind, sel(beyond, sp(f64::INFINITY), t));
         }
         sel(never, behind, t)
@@ -333,14 +465,14 @@ mod avx512 {
     /// `Flight::y_at_x`, needed in the lanes of `mask`: whether it gets there, and the height.
     #[target_feature(enable = "avx512f")]
     #[inline]
-    fn y_at_x<const DRAG: bool>(f: &Fl, mask: M, x: V) -> (M, V) {
+    fn y_at_x<const DRAG: bool>(f: &Fl, _mask: M, x: V) -> (M, V) {
         let e = div(sub(x, f.px), f.vx);
         let reaches = ne(f.vx, sp(0.0)) & !lt(e, sp(0.0));
         if DRAG {
             // Eq. 4.55
             let q = sub(sp(1.0), mul(f.k, e));
             let reaches = reaches & !le(q, sp(0.0));
-            let t = div(neg(each(mask & reaches, q, f64::ln)), f.k);
+            let t = div(neg(lane_math::ln(F64x8(q)).0), f.k);
             return (reaches, add(add(f.py, mul(f.vinf, t)), mul(sub(f.vy, f.vinf), e)));
         }
         (reaches, sub(add(f.py, mul(f.vy, e)), mul(mul(f.half_g, e), e)))
@@ -505,7 +637,7 @@ mod avx512 {
         // the extremum t* = ln(1 + x)/k, where x = n·v/(-a) > 0
         let x = sel(ne(ca, zero), div(add(nv, nw), neg(ca)), zero);
         let has_star = mask & gt(x, zero) & lt(abs(x), inf);
-        let t_star = div(each(has_star, x, f64::ln_1p), f.k);
+        let t_star = div(lane_math::ln_1p(F64x8(x)).0, f.k);
         let t_end = min(t_max, stokes_horizon(coef, f.k));
         let active = mask & !gt(t_min, t_end);
         if active == 0 {
@@ -623,36 +755,22 @@ mod avx512 {
         out
     }
 
-    /// `f(y, x)` (libm's two-argument function) in the lanes of `mask`, one lane at a time.
-    #[target_feature(enable = "avx512f")]
-    #[inline]
-    fn each2(mask: M, y: V, x: V, f: fn(f64, f64) -> f64) -> V {
-        let (mut a, b) = (store(y), store(x));
-        let mut m = mask;
-        while m != 0 {
-            let l = m.trailing_zeros() as usize;
-            a[l] = f(a[l], b[l]);
-            m &= m - 1;
-        }
-        load(&a)
-    }
-
-    /// `f64::sin_cos` in every lane: on the lanes where this libm's `sincos` is the one
-    /// ported (`libm_lanes::sincos_ported`), else one lane at a time.
+    /// `Real::ksin_cos` (`lane_math::sin_cos`) in every lane.
     #[target_feature(enable = "avx512f")]
     #[inline]
     fn sin_cos(x: V) -> (V, V) {
-        if libm_lanes::sincos_ported() {
-            // SAFETY: the caller runs only where AVX-512F is, and FMA comes with it
-            // (`sincos_ported` is false without either)
-            return unsafe { libm_lanes::avx512::sincos(x) };
-        }
-        let a = store(x);
-        let (mut s, mut c) = ([0.0; LANES], [0.0; LANES]);
-        for l in 0..LANES {
-            (s[l], c[l]) = a[l].sin_cos();
-        }
-        (load(&s), load(&c))
+        let (s, c) = lane_math::sin_cos(F64x8(x));
+        (s.0, c.0)
+    }
+
+    /// `lane_math`'s `exp_m1`, sin and cos, `atan2(y, x)`, `ln` and `ln_1p` of eight lanes
+    /// (for the tests).
+    #[cfg(test)]
+    #[target_feature(enable = "avx512f")]
+    pub fn math_on_lanes(x: [f64; LANES], y: [f64; LANES]) -> [[f64; LANES]; 6] {
+        let (x, y) = (F64x8(load(&x)), F64x8(load(&y)));
+        let (s, c) = lane_math::sin_cos(x);
+        [lane_math::exp_m1(x), s, c, lane_math::atan2(y, x), lane_math::ln(x), lane_math::ln_1p(x)].map(|v| store(v.0))
     }
 
     /// [`super::randomise_launches`]: `kernel::randomise_launch_drawn` with the launch factors
@@ -687,13 +805,7 @@ mod avx512 {
         let (tx, ty) = (ny, neg(nx));
         let y = sel(first, vy, add(mul(vx, nx), mul(vy, ny)));
         let x = sel(first, vx, add(mul(vx, tx), mul(vy, ty)));
-        let ang = if libm_lanes::atan2_ported() {
-            // SAFETY: this runs only where AVX-512F is, and FMA comes with it (`atan2_ported`
-            // is false without either)
-            unsafe { libm_lanes::avx512::atan2(y, x) }
-        } else {
-            each2(!0, y, x, f64::atan2)
-        };
+        let ang = lane_math::atan2(F64x8(y), F64x8(x)).0;
         // the first launch's angle kept in [0, 2π), a rebound's inside (0, π)
         let global = mul(sel(lt(ang, sp(0.0)), add(ang, sp(2.0 * std::f64::consts::PI)), ang), fa);
         let eps = 1e-6;
@@ -759,7 +871,7 @@ mod avx512 {
         let (px, py, vx, vy) = (load(&a[0]), load(&a[1]), load(&a[2]), load(&a[3]));
         // the terminal velocity as `Flight` computes it, -g / k
         let vinf = if DRAG { div(neg(sp(ph.g)), k) } else { sp(0.0) };
-        let f = Fl { px, py, vx, vy, half_g: sp(0.5 * ph.g), k, vinf, lane_expm1: DRAG && libm_lanes::expm1_ported() };
+        let f = Fl { px, py, vx, vy, half_g: sp(0.5 * ph.g), k, vinf };
         let (surface, kf) = (load(&a[4]), load(&a[5]));
         let c2_g = -0.5 * ph.g;
         let (zero, inf) = (sp(0.0), sp(f64::INFINITY));
@@ -1080,6 +1192,43 @@ mod tests {
                         "{mode:?}"
                     );
                 }
+            }
+        }
+    }
+
+    /// `lane_math`'s functions on eight lanes give the scalar functions' bits, by
+    /// construction (one generic code); held here over a million arguments and the special
+    /// values, in case a lane operation of [`avx512::F64x8`] ever differs from f64's.
+    #[test]
+    fn lane_math_on_eight_lanes_is_the_scalar_math_to_the_bit() {
+        use crate::lane_math::{atan2, exp_m1, ln, ln_1p, sin_cos};
+        if !available() {
+            eprintln!("skipped: this CPU lacks AVX-512F, so the engine does not use the lanes");
+            return;
+        }
+        let mut xs: Vec<f64> =
+            (0..1_000_000).map(|i| -12.0 + 24.0 * ((i as f64 * 0.618_033_988_749_895) % 1.0)).collect();
+        xs.extend(
+            (0..200_000).map(|i| (if i % 2 == 0 { 1.0 } else { -1.0 }) * 10f64.powf(-310.0 + 620.0 * i as f64 / 2e5)),
+        );
+        xs.extend([0.0, -0.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 709.78, 709.79, -40.0, 524_288.0, 524_289.0]);
+        xs.extend([f64::MIN_POSITIVE, 5e-324, -5e-324, 1.0, -1.0, std::f64::consts::FRAC_PI_2, std::f64::consts::PI]);
+        let b = |x: f64| x.to_bits();
+        for (c, chunk) in xs.chunks(8).enumerate() {
+            let mut a = [chunk[0]; 8];
+            a[..chunk.len()].copy_from_slice(chunk);
+            // the y of atan2: another argument of the list, with its special values
+            let ys: [f64; 8] = std::array::from_fn(|l| xs[(c * 8 + l) * 7919 % xs.len()]);
+            // SAFETY: the CPU has AVX-512F (checked above)
+            let [e, s, co, at, lg, lg1p] = unsafe { avx512::math_on_lanes(a, ys) };
+            for l in 0..8 {
+                let x = a[l];
+                let (ws, wc) = sin_cos(x);
+                assert_eq!(b(e[l]), b(exp_m1(x)), "exp_m1({x:e})");
+                assert_eq!((b(s[l]), b(co[l])), (b(ws), b(wc)), "sin_cos({x:e})");
+                assert_eq!(b(at[l]), b(atan2(ys[l], x)), "atan2({:e}, {x:e})", ys[l]);
+                assert_eq!(b(lg[l]), b(ln(x)), "ln({x:e})");
+                assert_eq!(b(lg1p[l]), b(ln_1p(x)), "ln_1p({x:e})");
             }
         }
     }

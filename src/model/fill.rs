@@ -259,11 +259,11 @@ pub fn build_fill(
     polygon.push(p_fill);
     match mode {
         PhysicsMode::Physical => {
-            // the sines and cosines taken eight at a time (the same bits as `f64::sin_cos`)
+            // the kernel's own sines and cosines (`lane_math`), the same on every libm
             let angles: Vec<f64> = (0..PHYSICAL_ARC_POINTS)
                 .map(|k| a2 + (k as f64 / (PHYSICAL_ARC_POINTS - 1) as f64) * (a4 - a2))
                 .collect();
-            polygon.extend(crate::libm_lanes::sin_cos_all(&angles).into_iter().map(arc_point));
+            polygon.extend(angles.iter().map(|&a| arc_point(crate::lane_math::sin_cos(a))));
         }
         PhysicsMode::Listing => {
             // Listing lines 165-183: linspace(a2, a4 - 0.05, 1000), every 100th point.

@@ -15,7 +15,7 @@
 //! `flight_drag` = [`Flight::drag`], which on the GPU also reads the path switches of
 //! src/engine/gpu/paths.rs,
 //! `time_at_x`, `y_at_x`, `line_crossings`); WGSL `expm1_`/`log1p_` stand in for the
-//! [`Real`] methods `exp_m1`/`ln_1p`, which WGSL lacks. The Rust side adds only the
+//! [`Real`] methods `kexp_m1`/`kln_1p`, which WGSL lacks (and `log` for `kln`). The Rust side adds only the
 //! sled-motion `drift` (cpu-only effect).
 
 use super::real::Real;
@@ -37,7 +37,7 @@ pub struct Flight<T> {
 /// (1 - e^{-kt}) / k, accurate for small kt. WGSL twin: `relax`.
 #[inline(always)]
 fn relax<T: Real>(k: T, t: T) -> T {
-    -(-k * t).exp_m1() / k
+    -(-k * t).kexp_m1() / k
 }
 
 impl<T: Real> Flight<T> {
@@ -98,7 +98,7 @@ impl<T: Real> Flight<T> {
             if q <= T::zero() {
                 return T::infinity();
             }
-            -q.ln() / self.k
+            -q.kln() / self.k
         } else {
             dx / vx
         }
@@ -121,7 +121,7 @@ impl<T: Real> Flight<T> {
             if q <= T::zero() {
                 return None;
             }
-            let t = -q.ln() / self.k;
+            let t = -q.kln() / self.k;
             let vinf = -self.g / self.k;
             Some(self.p0[1] + vinf * t + (self.v0[1] - vinf) * e)
         } else {
@@ -159,7 +159,7 @@ impl<T: Real> Flight<T> {
         // x = n·v/(-a) (b + a = n·v); it exists for x > 0. log1p keeps t* accurate when a
         // flight leaves a surface almost tangentially (x tiny), where ln(-a/b) rounds to 0.
         let x = if ca != T::zero() { (nv + nw) / -ca } else { T::zero() };
-        let t_star = if x > T::zero() && x.is_finite() { Some(x.ln_1p() / k) } else { None };
+        let t_star = if x > T::zero() && x.is_finite() { Some(x.kln_1p() / k) } else { None };
         // Since 0 <= E < 1/k, f lies between two lines; where the bounding line reaches zero
         // f has its final sign, so the search needs no loop to find an upper end.
         let t_end = t_max.min(stokes_horizon(c0, ca, cb, k));
@@ -279,7 +279,7 @@ pub fn bracketed_newton<T: Real>(c0: T, ca: T, cb: T, k: T, mut lo: T, mut hi: T
     }
     for _ in 0..48 {
         // f and its derivatives share e^{-kt}: one expm1 per step
-        let m = (-k * t).exp_m1();
+        let m = (-k * t).kexp_m1();
         let ft = c0 + ca * t - cb * m / k;
         let d = ca + cb * (T::one() + m);
         if ft == T::zero() {
