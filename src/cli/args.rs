@@ -114,7 +114,7 @@ impl ScenarioArgs {
         // a run folder's run.toml holds a complete scenario: start from it (flags still
         // override), so that a run's settings can be simulated or optimised again
         let run = match &self.config {
-            Some(p) => crate::optim::runner::manifest_in(p)?,
+            Some(p) => crate::optim::manifest::manifest_in(p)?,
             None => None,
         };
         let (mut s, file) = if let Some(run) = run {
@@ -310,7 +310,7 @@ impl RequirementArgs {
             return load_requirements(spec).map(Some).context("--requirements");
         }
         let Some(path) = &scenario.config else { return Ok(None) };
-        if let Some(run) = crate::optim::runner::manifest_in(path)? {
+        if let Some(run) = crate::optim::manifest::manifest_in(path)? {
             return Ok(run.requirements);
         }
         match ConfigFile::load(path)?.requirements {

@@ -20,8 +20,9 @@ use crate::io::atomic::write_atomic;
 use crate::io::run_dir::{self, Access, RunDir};
 use crate::optim::front::{read_pareto_csv, FrontPoint};
 use crate::optim::lockstep::Lockstep;
+use crate::optim::manifest::{read_manifest, Manifest};
 use crate::optim::nsga2::load_checkpoint;
-use crate::optim::runner::{is_finished, read_manifest, run, Manifest, RunOptions};
+use crate::optim::runner::{is_finished, run, RunOptions};
 use crate::plot::{self, Drawn as _, Figure, Mark, PALETTE};
 
 /// The plan's file in a campaign folder.
