@@ -20,9 +20,9 @@ use std::path::{Path, PathBuf};
 /// its own rank or below, never above; cycles are refused separately, so two modules of one
 /// rank may not use each other either.
 const LAYERS: &[&[&str]] = &[
-    // leaf helpers every layer may use: vector math, and the switch for the hot loops
-    // compiled a second time for AVX2 CPUs
-    &["libm_lanes", "x86_64_v3"],
+    // leaf helpers every layer may use: vector math, the switch for the hot loops compiled a
+    // second time for AVX2 CPUs, the integer codes the Rust and WGSL kernels share
+    &["libm_lanes", "x86_64_v3", "kernel_codes"],
     &["model"],
     &["engine"],
     // files, tables and figures: serve every layer above the engine
