@@ -9,6 +9,7 @@
 //! - [`x86_64_v3`]: hot loops compiled a second time for AVX2 CPUs, same bits.
 
 pub mod calibrate;
+pub mod campaigns;
 pub mod cli;
 pub mod diagnose;
 pub mod engine;
