@@ -20,4 +20,5 @@ pub mod libm_lanes;
 pub mod model;
 pub mod optim;
 pub mod plot;
+pub mod scenario_request;
 pub mod x86_64_v3;

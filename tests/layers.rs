@@ -22,7 +22,8 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[&[&str]] = &[
     // leaf helpers every layer may use: vector math, the switch for the hot loops compiled a
     // second time for AVX2 CPUs, the integer codes the Rust and WGSL kernels share
-    &["libm_lanes", "x86_64_v3", "kernel_codes"],
+    // (and `schema`, the input bounds of issue 34's parallel branch: it imports nothing)
+    &["libm_lanes", "x86_64_v3", "kernel_codes", "schema"],
     &["model"],
     &["engine"],
     // files, tables and figures: serve every layer above the engine
@@ -30,8 +31,9 @@ const LAYERS: &[&[&str]] = &[
     // engines put to work: calibration, optimisation, the DEM cross-check (issue 33's
     // parallel `dem` branch)
     &["calibrate", "optim", "dem"],
-    // workflows over them: fitting, diagnosis, campaigns of many runs
-    &["fit", "diagnose", "campaigns"],
+    // workflows over them: fitting, diagnosis, campaigns of many runs, and a scenario
+    // resolved from a config (or a run's run.toml) and overrides
+    &["fit", "diagnose", "campaigns", "scenario_request"],
     &["cli"],
 ];
 
@@ -556,6 +558,34 @@ fn top_level_modules_use_only_their_own_layer_or_below() {
     let (refs, modules) = crate_graph(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src"));
     let found = layer_violations(&sibling_edges(&refs, &modules), &modules, LAYERS);
     assert!(found.is_empty(), "{}", found.join("\n"));
+}
+
+/// The `sawtooth::` paths of the Python package's source.
+fn python_paths() -> Vec<Vec<String>> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("python/src/lib.rs");
+    let tokens = tokenize(&std::fs::read_to_string(&path).unwrap());
+    let mut paths = Vec::new();
+    let mut i = 0;
+    while i < tokens.len() {
+        let starts = matches!(&tokens[i].0, Token::Ident(w) if w == "sawtooth")
+            && tokens.get(i + 1).map(|t| &t.0) == Some(&Token::PathSep)
+            && (i == 0 || tokens[i - 1].0 != Token::PathSep);
+        if starts {
+            path_tree(&tokens, &mut i, Vec::new(), &mut paths);
+        } else {
+            i += 1;
+        }
+    }
+    paths
+}
+
+#[test]
+fn python_resolves_scenarios_through_the_library_not_the_cli_flags() {
+    // both front ends build a scenario_request::ScenarioRequest; the clap structs are the CLI's
+    let paths = python_paths();
+    assert!(paths.iter().any(|p| p.starts_with(&strings(&["sawtooth", "scenario_request"]))), "{paths:?}");
+    let into_args: Vec<_> = paths.iter().filter(|p| p.starts_with(&strings(&["sawtooth", "cli", "args"]))).collect();
+    assert!(into_args.is_empty(), "python/src/lib.rs uses the CLI's flag structs: {into_args:?}");
 }
 
 // ---- the checker's own specification, on small synthetic sources and graphs ----
