@@ -1,5 +1,5 @@
 //! Build-time checks of the WGSL kernels (issue 16, after vello_shaders/build.rs):
-//! - writes `shared/constants.wgsl` into OUT_DIR from src/engine/shared.rs, the one
+//! - writes `shared/constants.wgsl` into OUT_DIR from src/kernel_codes.rs, the one
 //!   declaration of the state, surface, randomisation and draw-id codes both sides use;
 //! - composes every kernel exactly as the runtime does (src/engine/gpu/compose.rs) and
 //!   validates it with naga, every validation flag on: a broken shader fails `cargo build`
@@ -8,7 +8,7 @@
 use std::path::Path;
 
 #[allow(dead_code)]
-#[path = "src/engine/shared.rs"]
+#[path = "src/kernel_codes.rs"]
 mod shared;
 
 #[allow(dead_code)]
@@ -20,7 +20,7 @@ mod validate;
 
 fn main() {
     for path in
-        ["build.rs", "shaders", "src/engine/shared.rs", "src/engine/gpu/compose.rs", "src/engine/gpu/validate.rs"]
+        ["build.rs", "shaders", "src/kernel_codes.rs", "src/engine/gpu/compose.rs", "src/engine/gpu/validate.rs"]
     {
         println!("cargo:rerun-if-changed={path}");
     }

@@ -2,20 +2,24 @@
 //!
 //! - [`model`]: the thesis's physics (geometry, fill area, flights, restitution, performance).
 //! - [`engine`]: batch evaluators behind one interface (`listing` port, fast `cpu` reference).
-//! - [`io`]: configuration files, trajectory CSV, the flight plot.
-//! - [`plot`]: the one plotting layer every figure goes through (SVG or PNG).
+//! - [`io`]: configuration files, measured data, trajectory CSV, atomic writes, run folders.
+//! - [`kernel_codes`]: the integer codes the Rust and WGSL kernels share (generated into WGSL).
+//! - [`plot`]: the one plotting layer every figure goes through (SVG or PNG), and the flight plot.
 //! - [`cli`]: the thin command-line layer.
 //! - [`lane_math`]: the engine's own `exp_m1`, `sin_cos`, `atan2`, one code for scalar and lanes.
 //! - [`x86_64_v3`]: hot loops compiled a second time for AVX2 CPUs, same bits.
 
 pub mod calibrate;
+pub mod campaigns;
 pub mod cli;
 pub mod diagnose;
 pub mod engine;
 pub mod fit;
 pub mod io;
+pub mod kernel_codes;
 pub mod lane_math;
 pub mod model;
 pub mod optim;
 pub mod plot;
+pub mod scenario_request;
 pub mod x86_64_v3;

@@ -7,8 +7,8 @@ use std::process::Command;
 mod common;
 use common::{assert_figure, assert_png_beside};
 
+use sawtooth::calibrate::objective::simulated_bins;
 use sawtooth::engine::{make_engine, EngineKind};
-use sawtooth::fit::objective::simulated_bins;
 use sawtooth::io::config::ConfigFile;
 
 fn sawtooth(args: &[&str]) -> (i32, String, String) {

@@ -51,13 +51,13 @@ fn every_shared_file_is_imported_by_some_kernel() {
     assert_eq!(FILES.iter().map(|(p, _)| *p).collect::<Vec<_>>(), COMPOSED_FILES);
 }
 
-/// Every constant generated from src/engine/shared.rs has the Rust value in the composed
+/// Every constant generated from src/kernel_codes.rs has the Rust value in the composed
 /// kernel, read back by naga (not by matching text).
 #[test]
 fn shared_constants_have_the_rust_values_in_the_kernel() {
     let src = compose("particles.wgsl").unwrap();
     let module = validate_wgsl("particles.wgsl", &src).unwrap();
-    for (name, value) in sawtooth::engine::shared::WGSL_U32 {
+    for (name, value) in sawtooth::kernel_codes::WGSL_U32 {
         let (_, c) = module
             .constants
             .iter()

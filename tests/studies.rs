@@ -6,8 +6,8 @@ use std::process::Command;
 
 mod common;
 use common::{assert_figure, assert_png_beside};
-use sawtooth::cli::study::{GridRow, RunRow, SummaryRow};
-use sawtooth::cli::sweep::SweepRow;
+use sawtooth::campaigns::study::{GridRow, RunRow, SummaryRow};
+use sawtooth::campaigns::sweep::SweepRow;
 
 fn run(args: &[&str]) -> (i32, String, String) {
     let o = Command::new(env!("CARGO_BIN_EXE_sawtooth")).args(args).output().unwrap();

@@ -1,6 +1,7 @@
 //! Python bindings of the sawtooth engine (module `sawtooth._sawtooth`, re-exported by the
-//! pure-Python package `sawtooth`). Thin by design: every setting goes through the CLI's own
-//! resolution (`cli::args::ScenarioArgs::resolve`), every design through the library's
+//! pure-Python package `sawtooth`). Thin by design: every setting goes through the library's
+//! scenario resolution (`scenario_request::ScenarioRequest::resolve`, as the CLI's flags do),
+//! every design through the library's
 //! engines, `fit` and `diagnose` through the CLI commands themselves, so the numbers and the
 //! error messages are the CLI's. Errors become `ValueError` with the CLI's message.
 
@@ -13,8 +14,6 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use sawtooth::cli::args::MAX_ALPHA_POINTS;
-use sawtooth::cli::args::{Compat, ScenarioArgs};
 use sawtooth::engine::{cpu_only_effects, evaluate_detailed, make_engine, make_engine_for, Engine, EngineKind};
 use sawtooth::io::config::load_requirements;
 use sawtooth::model::design::{LOWER_BOUND_CLI, UPPER_BOUND_CLI, VARIABLES};
@@ -25,6 +24,7 @@ use sawtooth::optim::nsga2::BatchProblem;
 use sawtooth::optim::sawtooth::{
     nonlinear_constraints, objectives, violation, Logged, SawtoothProblem, CONSTRAINT_TOLERANCE, UNSIMULATED_VIOLATION,
 };
+use sawtooth::scenario_request::{Compat, ScenarioRequest, MAX_ALPHA_POINTS};
 
 fn value_error(e: anyhow::Error) -> PyErr {
     // the CLI prints `error: {e:#}`: the whole context chain on one line
@@ -109,7 +109,7 @@ impl PyScenario {
             Some(s) if s >= 0 => Some(s as u64),
             Some(s) => return Err(PyValueError::new_err(format!("seed must be >= 0, got {s}"))),
         };
-        let args = ScenarioArgs {
+        let request = ScenarioRequest {
             config,
             env,
             alpha: alpha_deg.map(|a| (a, a)),
@@ -127,7 +127,7 @@ impl PyScenario {
             compat,
             effects: effects.unwrap_or_default(),
         };
-        let (inner, design) = args.resolve().map_err(value_error)?;
+        let (inner, design) = request.resolve().map_err(value_error)?;
         Ok(PyScenario { inner, design })
     }
 

@@ -1,9 +1,9 @@
 //! Many (model, point) pairs, every condition each, as one engine call.
 
 use super::condition::Condition;
+use super::objective;
 use super::space::Space;
 use crate::engine::BatchEvaluator;
-use crate::fit::objective;
 use crate::model::Scenario;
 
 /// The simulation side of a calibration.

@@ -1,7 +1,7 @@
 //! A measured condition: the runs and the setup they were measured with.
 
 use super::stats::sample_sd;
-use crate::fit::{collapse_to_weighed, subset, MeasuredSummary, Target};
+use super::target::{collapse_to_weighed, subset, MeasuredSummary, Target};
 use crate::io::measured::MeasuredRuns;
 use crate::model::{Design, Scenario};
 

@@ -3,7 +3,7 @@
 
 use super::condition::Condition;
 use super::solver::{Solver, FIRST_STEP, MIN_STEP};
-use crate::fit::ObjectiveKind;
+use super::target::ObjectiveKind;
 
 /// Fewest particles per simulation a calibration uses at the full budget, and while
 /// screening.

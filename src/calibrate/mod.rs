@@ -9,12 +9,17 @@
 pub mod batch;
 pub mod condition;
 pub mod effort;
+pub mod objective;
+pub mod param;
 pub mod solver;
 pub mod space;
 pub mod stats;
+pub mod target;
 
 pub use batch::Simulator;
 pub use condition::{Condition, KnownMotion, Normalise};
 pub use effort::{particles_from_data, Effort, MIN_PARTICLES};
+pub use param::{parse_assignments, parse_params, Param};
 pub use solver::{Fit, Model, Probe, Solver};
 pub use space::{shared_params, Space};
+pub use target::{collapse_to_weighed, subset, MeasuredSummary, ObjectiveKind, Target};

@@ -25,8 +25,9 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::batch::{Bins, Simulator};
+use super::objective;
 use super::space::Space;
-use crate::fit::{objective, ObjectiveKind, Target};
+use super::target::{ObjectiveKind, Target};
 
 /// One model to fit: its space, what it is fitted to, and extra starting points
 /// (parameter units).
@@ -457,7 +458,7 @@ mod tests {
         let conditions = vec![test3()];
         let engine = Counting { inner: make_engine(EngineKind::Cpu).unwrap(), calls: Mutex::new(Vec::new()) };
         let sim = Simulator { engine: &engine, conditions: &conditions };
-        let space = Space::new(vec![crate::fit::Param::KDrag], &[], &conditions);
+        let space = Space::new(vec![crate::calibrate::Param::KDrag], &[], &conditions);
         let targets: Vec<[Target; 1]> = (0..5).map(|i| [conditions[0].target(&[i, i + 1, i + 2])]).collect();
         let models: Vec<Model> =
             targets.iter().map(|t| Model { space: &space, targets: t, starts: vec![vec![5.0]] }).collect();

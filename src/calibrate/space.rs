@@ -2,7 +2,7 @@
 //! the switched-on effects' own parameters ([`EffectKind`]), searched in a unit box.
 
 use super::condition::Condition;
-use crate::fit::Param;
+use super::param::Param;
 use crate::model::effects::EffectKind;
 use crate::model::Scenario;
 

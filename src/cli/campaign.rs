@@ -11,7 +11,10 @@ use std::process::ExitCode;
 use anyhow::{bail, Context as _};
 use clap::{Args, Subcommand};
 
-use super::multi::{execute, finished_fronts, member_state, read_plan, summarise, MemberState, Plan, CAMPAIGN_KIND};
+use crate::campaigns::plan::{
+    execute, finished_fronts, member_state, read_plan, write_plan, MemberState, Plan, CAMPAIGN_KIND, PLAN_FILE,
+};
+use crate::campaigns::summarise;
 use crate::engine::make_engine_for;
 use crate::io::atomic::write_atomic;
 use crate::io::run_dir::{Access, RunDir};
@@ -81,6 +84,36 @@ pub fn run(c: CampaignCommand, out: &mut dyn Write) -> anyhow::Result<ExitCode> 
         CampaignCommand::Status(a) => status(&a.dir, out),
         CampaignCommand::Slurm(a) => slurm(a, out),
     }
+}
+
+/// What `gpu-sweep` and `study` do with their plan: with `plan_only` write it and stop;
+/// otherwise run it here in one process and summarise from the members' files (the same
+/// code `campaign gather` runs, so both give the same bytes).
+pub fn plan_or_run(root: &Path, plan: &Plan, plan_only: bool, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    let _owned = write_plan(root, plan)?;
+    if plan_only {
+        let n = plan.members.len();
+        writeln!(out, "wrote {} ({n} members); nothing run yet", root.join(PLAN_FILE).display())?;
+        writeln!(
+            out,
+            "  one member:      sawtooth campaign run {} --task I   (I in 0..{})",
+            root.display(),
+            n.saturating_sub(1)
+        )?;
+        writeln!(out, "  all, here:       sawtooth campaign run {}", root.display())?;
+        writeln!(
+            out,
+            "  Slurm job array: sawtooth campaign slurm {} [--partition P --time T] --submit",
+            root.display()
+        )?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    if !execute(root, plan)? {
+        return Ok(ExitCode::from(130));
+    }
+    let fronts = finished_fronts(root, plan)?;
+    summarise(root, plan, &fronts, out)?;
+    Ok(ExitCode::SUCCESS)
 }
 
 fn task_from_env() -> anyhow::Result<Option<usize>> {

@@ -11,10 +11,10 @@ use clap::Args;
 
 use super::args::{EffortArgs, EngineArgs};
 use super::measured_condition::{self, stem};
-use crate::calibrate::{shared_params, Normalise};
+use crate::calibrate::{parse_assignments, parse_params, shared_params, Normalise, ObjectiveKind};
 use crate::engine::make_engine;
 use crate::fit::report::{self, Meta};
-use crate::fit::{parse_assignments, parse_params, FitSettings, ObjectiveKind};
+use crate::fit::FitSettings;
 use crate::io::run_dir::{Access, RunDir};
 
 #[derive(Debug, Args)]

@@ -5,8 +5,7 @@ use std::path::Path;
 
 use anyhow::{bail, Context as _};
 
-use crate::calibrate::{Condition, KnownMotion, Normalise};
-use crate::fit::objective;
+use crate::calibrate::{objective, Condition, KnownMotion, Normalise};
 use crate::io::config::ConfigFile;
 use crate::io::measured;
 

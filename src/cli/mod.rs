@@ -8,7 +8,6 @@ pub mod conformance;
 pub mod diagnose;
 pub mod fit;
 pub mod measured_condition;
-pub mod multi;
 pub mod optimize;
 pub mod simulate;
 pub mod study;

@@ -11,10 +11,11 @@ use clap::{Args, ValueEnum};
 use super::args::{EngineArgs, RequirementArgs, ScenarioArgs};
 use crate::engine::make_engine_for;
 use crate::optim::front::print_picks;
+use crate::optim::manifest::{read_manifest, Algorithm, Manifest};
 use crate::optim::nsga2::{Config, Mode, Selection};
-use crate::optim::runner::{read_manifest, run as run_optimisation, Algorithm, Manifest, RunOptions};
+use crate::optim::runner::{run as run_optimisation, RunOptions};
 
-pub use crate::optim::runner::{MAX_GENERATIONS, MAX_PARTICLES, MAX_POP, MAX_REPLICATES, MIN_POP};
+pub use crate::optim::manifest::{MAX_GENERATIONS, MAX_PARTICLES, MAX_POP, MAX_REPLICATES, MIN_POP};
 
 /// GA settings shared by every command that optimises. The run settings are options so that
 /// `--resume` can tell a flag the user gave (and refuse one that contradicts the run) from a

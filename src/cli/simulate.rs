@@ -84,7 +84,7 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     }
     if let Some(p) = &a.plot {
         let title = format!("{} | {} engine | {:?} mode", describe(&design), engine.name(), scenario.mode);
-        crate::io::plot::write_plot(p, "--plot", &det, scenario.environment.g, k_drag, &title)?;
+        crate::plot::flight::write_plot(p, "--plot", &det, scenario.environment.g, k_drag, &title)?;
     }
     let assessment = requirements.as_ref().map(|r| {
         let e = &det.evaluation;

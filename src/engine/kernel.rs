@@ -26,7 +26,7 @@
 //! `init_particle` runs on the host for both engines. The shared files have their own twins:
 //! shared/flight.wgsl in src/model/flight.rs, shared/rng.wgsl in src/model/rng.rs,
 //! shared/trig.wgsl in src/model/real.rs (`ktrig`), shared/types.wgsl in
-//! src/engine/gpu/layout.rs, and the integer codes come from src/engine/shared.rs.
+//! src/engine/gpu/layout.rs, and the integer codes come from src/kernel_codes.rs.
 //!
 //! Precision strategy: a particle's position is kept relative to the p1 of the tooth it last
 //! touched (`tooth`), and segments are built as `(j - tooth) * pitch + offset`, so every
@@ -41,10 +41,10 @@ use crate::model::rng::{
     PER_PARTICLE,
 };
 
-use super::shared::RUN_CLEARANCE_PITCHES;
+use crate::kernel_codes::RUN_CLEARANCE_PITCHES;
 /// The state, surface and randomisation codes, declared once for both sides (build.rs
-/// generates their WGSL twins from src/engine/shared.rs).
-pub use super::shared::{
+/// generates their WGSL twins from src/kernel_codes.rs).
+pub use crate::kernel_codes::{
     RANDOMISE_EVERY_LAUNCH, RANDOMISE_FIRST_LAUNCH, RANDOMISE_OFF, STATE_FLYING, STATE_LOST, STATE_RESTING,
     SURFACE_BASE, SURFACE_CATCH, SURFACE_NONE, SURFACE_RAMP,
 };

@@ -11,7 +11,6 @@ pub mod gpu;
 pub mod kernel;
 pub mod lanes;
 pub mod listing;
-pub mod shared;
 
 use rayon::prelude::*;
 use serde::Serialize;

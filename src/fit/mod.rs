@@ -3,13 +3,13 @@
 //! `diagnose` uses ([`crate::calibrate`]), with an uncertainty estimate and a held-out score
 //! it did not have.
 //!
-//! - Parameters ([`Param`]): `k_elastic`, `mu_fric` (collision.mu_friction) and `k_drag`
-//!   (environment.k_drag), within listing D.4's bounds ([0.01, 1], [0.01, 1], [0.1, 15]);
+//! - Parameters ([`crate::calibrate::Param`]): `k_elastic`, `mu_fric`
+//!   (collision.mu_friction) and `k_drag` (environment.k_drag), within listing D.4's bounds ([0.01, 1], [0.01, 1], [0.1, 15]);
 //!   the ones not fitted keep the setup's values.
 //! - Measured bins ([`crate::calibrate::Normalise`]): fractions of the loaded mass with a
 //!   "not recovered" bin where every run records its input mass, else D.4's fractions of
 //!   the recovered mass with a lost bin.
-//! - Objectives ([`objective`]): the SSE of Eq. 4.62 over those bins, or a
+//! - Objectives ([`crate::calibrate::objective`]): the SSE of Eq. 4.62 over those bins, or a
 //!   Dirichlet-multinomial negative log-likelihood of the individual runs.
 //! - Solver ([`crate::calibrate::Solver`]): differential evolution at an eighth of the
 //!   particles screens D.4's box, a compass search polishes at the full budget; every
@@ -29,7 +29,6 @@
 //!   with other `--seed`s for that) nor the misfit of a model that cannot reach the data,
 //!   and a parameter pinned at a bound gets a one-sided, possibly degenerate interval.
 
-pub mod objective;
 pub mod report;
 
 use anyhow::bail;
@@ -38,189 +37,15 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::calibrate::objective::{self, Profiled};
+use crate::calibrate::param::known_names;
 use crate::calibrate::solver::MIN_STEP;
 use crate::calibrate::stats::{percentile, sample_sd};
-use crate::calibrate::{Condition, Effort, Model, Simulator, Solver, Space};
+use crate::calibrate::{
+    Condition, Effort, MeasuredSummary, Model, ObjectiveKind, Param, Simulator, Solver, Space, Target,
+};
 use crate::engine::BatchEvaluator;
-use crate::io::measured::MeasuredRuns;
 use crate::model::Scenario;
-
-use objective::Profiled;
-
-/// A fitted scenario parameter.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Param {
-    /// Elastic normal coefficient of restitution, `collision.k_elastic`.
-    KElastic,
-    /// Friction coefficient of the tangential COR, `collision.mu_friction`.
-    MuFric,
-    /// Stokes drag parameter, 1/s, `environment.k_drag`.
-    KDrag,
-}
-
-impl Param {
-    pub const ALL: [Param; 3] = [Param::KElastic, Param::MuFric, Param::KDrag];
-
-    /// The name on the command line and in the outputs.
-    pub fn name(self) -> &'static str {
-        match self {
-            Param::KElastic => "k_elastic",
-            Param::MuFric => "mu_fric",
-            Param::KDrag => "k_drag",
-        }
-    }
-
-    /// Listing D.4's bounds (`lb = [0.01, 0.01, 0.1]`, `ub = [1, 1, 15]`).
-    pub fn bounds(self) -> (f64, f64) {
-        match self {
-            Param::KElastic | Param::MuFric => (0.01, 1.0),
-            Param::KDrag => (0.1, 15.0),
-        }
-    }
-
-    pub fn apply(self, s: &mut Scenario, v: f64) {
-        match self {
-            Param::KElastic => s.collision.k_elastic = v,
-            Param::MuFric => s.collision.mu_friction = v,
-            Param::KDrag => s.environment.k_drag = Some(v),
-        }
-    }
-
-    /// The scenario's value (k_drag 0 in vacuum).
-    pub fn get(self, s: &Scenario) -> f64 {
-        match self {
-            Param::KElastic => s.collision.k_elastic,
-            Param::MuFric => s.collision.mu_friction,
-            Param::KDrag => s.environment.k_drag.unwrap_or(0.0),
-        }
-    }
-}
-
-fn known_names() -> String {
-    Param::ALL.iter().map(|p| p.name()).collect::<Vec<_>>().join(", ")
-}
-
-/// A comma list of parameter names (`k_elastic,mu_fric,k_drag`), each once.
-pub fn parse_params(list: &str) -> anyhow::Result<Vec<Param>> {
-    let mut out = Vec::new();
-    for name in list.split(',').map(str::trim) {
-        if name.is_empty() {
-            bail!("empty parameter name in `{list}` (known: {})", known_names());
-        }
-        let Some(p) = Param::ALL.iter().copied().find(|p| p.name() == name) else {
-            bail!("unknown parameter `{name}` (known: {})", known_names());
-        };
-        if out.contains(&p) {
-            bail!("parameter `{name}` given twice");
-        }
-        out.push(p);
-    }
-    Ok(out)
-}
-
-/// Which objective the optimiser minimises.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ObjectiveKind {
-    /// Eq. 4.62 / listing D.4: Σ (simulated % − measured %)² over the teeth and a lost bin.
-    Sse,
-    /// Dirichlet-multinomial negative log-likelihood of the runs, concentration profiled out.
-    Likelihood,
-}
-
-/// What a set of measured runs offers the objectives.
-#[derive(Clone, Debug)]
-pub struct Target {
-    /// Mean distribution (fraction of the mean masses), padded to the setup's teeth, plus a
-    /// lost bin of 0.
-    pub bins: Vec<f64>,
-    /// Per run: tooth masses in scale units, padded the same way.
-    pub counts: Vec<Vec<f64>>,
-}
-
-impl Target {
-    /// Fractions of the *loaded* mass (every run must record `input_mass`): the weighed teeth
-    /// (Σ masses / Σ input masses), zeros for the teeth not weighed, and a last bin for what
-    /// was not recovered (grains beyond the weighed teeth or lost, and spill), which
-    /// [`collapse_to_weighed`] makes of the simulated bins. Unlike [`Target::new`] (D.4's
-    /// normalisation to the recovered mass, with simulated mass beyond the weighed teeth
-    /// counted as misfit), it stays right when the weighed teeth do not hold every grain.
-    pub fn of_loaded_mass(runs: &MeasuredRuns, teeth: usize, resolution_g: f64) -> Option<Self> {
-        let input: f64 = runs.runs.iter().map(|r| r.input_mass_g).sum::<Option<f64>>()?;
-        // NaN and non-positive totals both mean there is no loaded mass to normalise by
-        if input.is_nan() || input <= 0.0 {
-            return None;
-        }
-        let mut bins = vec![0.0; teeth + 1];
-        for r in &runs.runs {
-            for (b, m) in bins.iter_mut().zip(&r.teeth_g) {
-                *b += m / input;
-            }
-        }
-        bins[teeth] = (1.0 - bins[..runs.teeth].iter().sum::<f64>()).max(0.0);
-        // the likelihood's counts: scale steps per tooth, and the mass not recovered
-        let counts = runs
-            .runs
-            .iter()
-            .map(|r| {
-                let mut c = objective::quantised_counts(&r.teeth_g, teeth, resolution_g);
-                let missing = r.input_mass_g.unwrap_or(0.0) - r.recovered_g();
-                c[teeth] = (missing / resolution_g).round().max(0.0);
-                c
-            })
-            .collect();
-        Some(Target { bins, counts })
-    }
-
-    pub fn new(runs: &MeasuredRuns, teeth: usize, resolution_g: f64) -> Self {
-        Target {
-            bins: objective::measured_bins(&runs.mean_fractions(), teeth),
-            counts: runs.runs.iter().map(|r| objective::quantised_counts(&r.teeth_g, teeth, resolution_g)).collect(),
-        }
-    }
-
-    /// The objective for simulated bins; +inf for a candidate that could not be simulated.
-    pub fn value(&self, kind: ObjectiveKind, bins: Option<&[f64]>, eps: f64) -> f64 {
-        match (kind, bins) {
-            (_, None) => f64::INFINITY,
-            (ObjectiveKind::Sse, Some(b)) => objective::sse_percent2(b, &self.bins),
-            (ObjectiveKind::Likelihood, Some(b)) => objective::profile_nll(&self.counts, b, eps).nll,
-        }
-    }
-
-    pub fn sse(&self, bins: &[f64]) -> f64 {
-        objective::sse_percent2(bins, &self.bins)
-    }
-
-    pub fn likelihood(&self, bins: &[f64], eps: f64) -> Profiled {
-        objective::profile_nll(&self.counts, bins, eps)
-    }
-
-    /// The likelihood with the mean set to the measured mean distribution (a perfect mean
-    /// model): its NLL is the reference a fitted model's NLL is compared with, its
-    /// concentration the one the runs' scatter alone implies. A fit whose profiled α0 is
-    /// far below that explains misfit of the mean as over-dispersion.
-    pub fn measured_mean_likelihood(&self) -> Profiled {
-        objective::profile_nll(&self.counts, &self.bins, 1e-12)
-    }
-}
-
-/// Simulated bins (teeth, then lost) as a rig that weighs only the first `weighed` teeth
-/// sees them: those teeth, zeros for the others, and everything else in the last bin (the
-/// counterpart of [`Target::of_loaded_mass`]).
-pub fn collapse_to_weighed(bins: &[f64], weighed: usize) -> Vec<f64> {
-    let n = bins.len();
-    let mut out = vec![0.0; n];
-    out[..weighed].copy_from_slice(&bins[..weighed]);
-    out[n - 1] = (1.0 - bins[..weighed].iter().sum::<f64>()).max(0.0);
-    out
-}
-
-/// `runs` restricted to the given indices (repeats allowed, for the bootstrap).
-pub fn subset(runs: &MeasuredRuns, indices: &[usize]) -> MeasuredRuns {
-    MeasuredRuns { runs: indices.iter().map(|&i| runs.runs[i].clone()).collect(), ..runs.clone() }
-}
 
 /// What `fit` does.
 #[derive(Clone, Copy, Debug)]
@@ -438,18 +263,6 @@ pub struct Heldout {
     pub evaluations: u64,
 }
 
-/// Per-bin statistics of the runs' fractions as a fit compares them (the setup's teeth,
-/// zeros beyond the weighed ones, then the last bin): [`Condition::summary`].
-#[derive(Clone, Debug, Serialize)]
-pub struct MeasuredSummary {
-    /// The measured mean distribution ([`Target::bins`]).
-    pub mean: Vec<f64>,
-    /// Sample standard deviation of the run fractions (NaN with one run).
-    pub sd: Vec<f64>,
-    pub min: Vec<f64>,
-    pub max: Vec<f64>,
-}
-
 /// Everything `fit` settles on.
 #[derive(Clone, Debug)]
 pub struct FitReport {
@@ -528,27 +341,6 @@ fn report(
     }
 }
 
-/// `NAME=VALUE,...` (e.g. `k_elastic=0.854,mu_fric=0.133,k_drag=5.347`): the parameters
-/// and their values, for [`evaluate_at`].
-pub fn parse_assignments(list: &str) -> anyhow::Result<(Vec<Param>, Vec<f64>)> {
-    let mut names = Vec::new();
-    let mut values = Vec::new();
-    for item in list.split(',').map(str::trim) {
-        let Some((name, value)) = item.split_once('=') else {
-            bail!("expected NAME=VALUE, got `{item}` (known names: {})", known_names());
-        };
-        let v: f64 =
-            value.trim().parse().map_err(|_| anyhow::anyhow!("`{}`: not a number: `{}`", name.trim(), value.trim()))?;
-        if !v.is_finite() {
-            bail!("`{}` must be finite, got {v}", name.trim());
-        }
-        names.push(name.trim().to_string());
-        values.push(v);
-    }
-    let params = parse_params(&names.join(","))?;
-    Ok((params, values))
-}
-
 /// Score given parameter values against all runs, without fitting: the same report as
 /// [`fit`] with no uncertainty and no held-out score, at `particles` per simulation (or
 /// what the data call for) and `seed`.
@@ -582,69 +374,4 @@ pub fn evaluate_at(
         None,
         note.into_iter().collect(),
     ))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn params_parse_and_unknown_names_are_named() {
-        assert_eq!(parse_params("k_elastic,mu_fric,k_drag").unwrap(), Param::ALL.to_vec());
-        assert_eq!(parse_params(" k_drag ").unwrap(), vec![Param::KDrag]);
-        let e = parse_params("k_drag,gravity").unwrap_err().to_string();
-        assert!(e.contains("`gravity`") && e.contains("k_elastic, mu_fric, k_drag"), "{e}");
-        assert!(parse_params("k_drag,k_drag").unwrap_err().to_string().contains("twice"));
-        assert!(parse_params("").unwrap_err().to_string().contains("empty"));
-    }
-
-    #[test]
-    fn params_apply_to_the_scenario() {
-        let mut s = Scenario::preset(crate::model::EnvPreset::Lunar);
-        Param::KDrag.apply(&mut s, 3.0);
-        Param::MuFric.apply(&mut s, 0.2);
-        Param::KElastic.apply(&mut s, 0.5);
-        assert_eq!(s.environment.k_drag, Some(3.0));
-        assert_eq!((s.collision.k_elastic, s.collision.mu_friction), (0.5, 0.2));
-        assert_eq!(Param::ALL.map(|p| p.get(&s)), [0.5, 0.2, 3.0]);
-    }
-
-    #[test]
-    fn assignments_parse() {
-        let (p, v) = parse_assignments("k_elastic=0.854, mu_fric=0.133,k_drag=5.347").unwrap();
-        assert_eq!(p, Param::ALL.to_vec());
-        assert_eq!(v, vec![0.854, 0.133, 5.347]);
-        for (bad, needle) in
-            [("k_drag", "NAME=VALUE"), ("k_drag=x", "not a number"), ("g=1", "`g`"), ("k_drag=inf", "finite")]
-        {
-            let e = parse_assignments(bad).unwrap_err().to_string();
-            // the library names the value; the CLI adds the flag (tests/fit.rs)
-            assert!(!e.contains("--") && e.contains(needle), "{bad}: {e}");
-        }
-    }
-
-    #[test]
-    fn target_pads_and_objectives_agree_on_a_perfect_fit() {
-        let runs = crate::io::measured::parse("run,tooth_1,tooth_2\na,1.0,1.0\nb,1.2,0.8\n", "t.csv").unwrap();
-        let t = Target::new(&runs, 5, 0.1);
-        assert_eq!(t.bins.len(), 6);
-        assert_eq!(t.counts[1], vec![12.0, 8.0, 0.0, 0.0, 0.0, 0.0]);
-        assert_eq!(t.value(ObjectiveKind::Sse, Some(&t.bins.clone()), 1e-3), 0.0);
-        assert!(t.value(ObjectiveKind::Likelihood, Some(&t.bins.clone()), 1e-3).is_finite());
-        assert_eq!(t.value(ObjectiveKind::Sse, None, 1e-3), f64::INFINITY);
-    }
-
-    #[test]
-    fn loaded_mass_counts_hold_what_was_not_recovered() {
-        let runs =
-            crate::io::measured::parse("run,tooth_1,tooth_2,input_mass\na,1.0,0.5,2.0\nb,1.2,0.6,2.0\n", "t.csv")
-                .unwrap();
-        let t = Target::of_loaded_mass(&runs, 3, 0.1).unwrap();
-        // (1.0 + 1.2) / 4, (0.5 + 0.6) / 4, 0, then the 0.7 g of 4 g not recovered
-        for (g, w) in t.bins.iter().zip([0.55, 0.275, 0.0, 0.175]) {
-            assert!((g - w).abs() < 1e-12, "{:?}", t.bins);
-        }
-        assert_eq!(t.counts[0], vec![10.0, 5.0, 0.0, 5.0]);
-        assert_eq!(t.counts[1], vec![12.0, 6.0, 0.0, 2.0]);
-    }
 }

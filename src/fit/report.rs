@@ -9,7 +9,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde_json::{json, Map, Value};
 
-use super::{FitReport, ObjectiveKind};
+use super::FitReport;
+use crate::calibrate::ObjectiveKind;
 use crate::io::atomic::write_atomic;
 use crate::model::outcome::centre_and_dispersion;
 use crate::plot::{self, Drawn as _, Figure, Mark};

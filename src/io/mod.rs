@@ -1,9 +1,8 @@
-//! Files in and out: configuration, trajectories, plots.
+//! Files in and out: configuration, measured data, trajectories, atomic writes, run folders.
 
 pub mod atomic;
 pub mod config;
 pub mod measured;
-pub mod plot;
 pub mod progress;
 pub mod run_dir;
 pub mod table;

@@ -52,8 +52,8 @@ pub fn unit_from_hash(word: u32) -> f64 {
 }
 
 /// The draw ids (which draw of a particle's launch or bounce a number is), declared once for
-/// the Rust and WGSL sides in src/engine/shared.rs (build.rs generates the WGSL twins).
-pub use crate::engine::shared::{
+/// the Rust and WGSL sides in src/kernel_codes.rs (build.rs generates the WGSL twins).
+pub use crate::kernel_codes::{
     DRAW_ANGLE, DRAW_LAUNCH_ANGLE, DRAW_LAUNCH_POINT, DRAW_LAUNCH_SPEED, DRAW_SCATTER, DRAW_SIZE, DRAW_SPEED,
     PER_PARTICLE,
 };

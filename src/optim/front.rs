@@ -7,8 +7,8 @@ use std::path::Path;
 
 use anyhow::Context as _;
 
+use super::manifest::Manifest;
 use super::nsga2::{Nsga2, State};
-use super::runner::Manifest;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::coord::Shift;
 use plotters::prelude::*;

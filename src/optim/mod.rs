@@ -18,6 +18,7 @@ pub use nsga2::{
 };
 pub mod front;
 pub mod lockstep;
+pub mod manifest;
 pub mod observe;
 pub mod runner;
 pub mod sawtooth;

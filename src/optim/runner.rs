@@ -18,110 +18,18 @@ use serde::{Deserialize, Serialize};
 
 use super::front::{final_front, write_outputs, FrontPoint};
 use super::hypervolume::hypervolume_2d;
+use super::manifest::{read_manifest, Manifest};
 use super::nsga2::{load_checkpoint, save_checkpoint, Config, GenerationStats, Mode, Nsga2, State};
 use super::observe::{drive, install_interrupt_handler, Checkpoints, Ending, Flow, Interrupt, Observer};
 use super::sawtooth::{Logged, SawtoothProblem};
-use crate::engine::{BatchEvaluator, EngineKind};
+use crate::engine::BatchEvaluator;
 use crate::io::atomic::write_atomic;
 use crate::io::run_dir::{Access, RunDir};
 use crate::io::table::{csv_header, csv_text};
-use crate::model::requirements::Requirements;
-use crate::model::Scenario;
 
 /// Hypervolume reference point (f_stroke Hz, W_spec J/kg): the 2 Hz limit and a specific
 /// energy well above every published front point.
 pub const HV_REFERENCE: [f64; 2] = [2.0, 20_000.0];
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "kebab-case")]
-pub enum Algorithm {
-    /// NSGA-II (Deb et al. 2002) with Deb's constraint domination; stops at --generations.
-    Nsga2,
-    /// gamultiobj-like: ParetoFraction 0.35, stops when the average relative change of the
-    /// front's spread over --stall-generations falls below --tol (or at --generations).
-    MatlabLike,
-}
-
-/// Everything that determines a run: written to run.toml, read back by --resume.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Manifest {
-    pub version: String,
-    pub engine: EngineKind,
-    pub device: String,
-    pub seed: u64,
-    pub algorithm: Algorithm,
-    pub config: Config,
-    pub final_particles: u32,
-    pub replicates: u32,
-    pub scenario: Scenario,
-    pub termination: Option<String>,
-    /// Slopes every design is evaluated at (`--alpha FROM..TO --alpha-points K`), degrees;
-    /// empty: the scenario's α.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub slopes_deg: Vec<f64>,
-    /// Requirements the designs are constrained by (`optimize --requirements`, issue 13).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub requirements: Option<Requirements>,
-}
-
-/// Smallest population (NSGA-II's tournaments and crowding need a few members), and the
-/// largest population, generation count, particle count and replicate count a run accepts:
-/// beyond these a value is a typo, not a run (a population of a billion needs tens of GB
-/// before the first generation).
-pub const MIN_POP: usize = 4;
-pub const MAX_POP: usize = 100_000;
-pub const MAX_GENERATIONS: u64 = 1_000_000;
-pub const MAX_PARTICLES: u32 = 10_000_000;
-pub const MAX_REPLICATES: u32 = 1000;
-
-impl Manifest {
-    /// The rules a new run's settings are checked by, applied to stored ones: a run.toml
-    /// edited by hand (or damaged) is refused before anything runs, naming its key.
-    pub fn validate(&self) -> Result<(), String> {
-        self.scenario.validate().map_err(|e| format!("scenario: {e}"))?;
-        let c = &self.config;
-        if !(MIN_POP..=MAX_POP).contains(&c.pop) {
-            return Err(format!("`config.pop` must lie in [{MIN_POP}, {MAX_POP}], got {}", c.pop));
-        }
-        if c.max_generations > MAX_GENERATIONS {
-            return Err(format!(
-                "`config.max_generations` must be at most {MAX_GENERATIONS}, got {}",
-                c.max_generations
-            ));
-        }
-        if let Mode::MatlabLike { pareto_fraction, tol, .. } = c.mode {
-            if !(tol > 0.0 && tol.is_finite()) {
-                return Err(format!("`config.mode.tol` must be a positive number, got {tol}"));
-            }
-            if !(pareto_fraction > 0.0 && pareto_fraction <= 1.0) {
-                return Err(format!("`config.mode.pareto_fraction` must lie in (0, 1], got {pareto_fraction}"));
-            }
-        }
-        for (name, v) in [("config.crossover_eta", c.crossover_eta), ("config.mutation_eta", c.mutation_eta)] {
-            if !(v >= 0.0 && v.is_finite()) {
-                return Err(format!("`{name}` must be a finite number >= 0, got {v}"));
-            }
-        }
-        if !(0.0..=1.0).contains(&c.crossover_prob) {
-            return Err(format!("`config.crossover_prob` must lie in [0, 1], got {}", c.crossover_prob));
-        }
-        if !(1..=MAX_PARTICLES).contains(&self.final_particles) {
-            return Err(format!("`final_particles` must lie in [1, {MAX_PARTICLES}], got {}", self.final_particles));
-        }
-        if !(1..=MAX_REPLICATES).contains(&self.replicates) {
-            return Err(format!("`replicates` must lie in [1, {MAX_REPLICATES}], got {}", self.replicates));
-        }
-        for &alpha in &self.slopes_deg {
-            let mut s = self.scenario.clone();
-            s.environment.alpha_deg = alpha;
-            s.validate().map_err(|e| format!("`slopes_deg`: slope {alpha}: {e}"))?;
-        }
-        if let Some(r) = &self.requirements {
-            r.validate()?;
-        }
-        Ok(())
-    }
-}
 
 /// How a run reports and checkpoints.
 #[derive(Debug, Clone)]
@@ -419,28 +327,6 @@ impl Paths {
 
 /// The `io::run_dir` kind of an optimisation run's folder.
 pub const RUN_KIND: &str = "optimize";
-
-/// Read a run's manifest (for --resume).
-pub fn read_manifest(dir: &Path) -> anyhow::Result<Manifest> {
-    let path = dir.join("run.toml");
-    let text = std::fs::read_to_string(&path).with_context(|| format!("no run manifest at {}", path.display()))?;
-    let m: Manifest = toml::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
-    m.validate().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    Ok(m)
-}
-
-/// The run manifest in `path` when the file is one (a run folder's run.toml: it has a
-/// `version` and a `[scenario]`), validated; None for any other file (e.g. a scenario config).
-pub fn manifest_in(path: &Path) -> anyhow::Result<Option<Manifest>> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let Ok(table) = text.parse::<toml::Table>() else { return Ok(None) };
-    if !(table.contains_key("version") && table.get("scenario").is_some_and(toml::Value::is_table)) {
-        return Ok(None);
-    }
-    let m: Manifest = toml::from_str(&text).with_context(|| format!("reading the run manifest {}", path.display()))?;
-    m.validate().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    Ok(Some(m))
-}
 
 /// True when `dir` holds a finished run (its pareto.csv exists).
 /// True when `dir` holds a started run (its checkpoint): a new run there is refused.

@@ -10,9 +10,11 @@
 //! is linked. SVG keeps its text as `<text font-family="sans-serif">`; the embedded font is
 //! still needed there, because plotters measures every label to place the axes.
 //!
-//! The figures themselves live beside their data (`io::plot` for flights, `optim::front` for
-//! the Pareto plot, `fit::report`, `diagnose::render`, `cli::multi` for campaign summaries):
+//! The figures themselves live beside their data (`plot::flight` for flights, `optim::front` for
+//! the Pareto plot, `fit::report`, `diagnose::render`, `campaigns::panels` for campaign summaries):
 //! what a figure shows is part of that module's idea; how any figure is drawn is this one's.
+
+pub mod flight;
 
 use std::ops::Range;
 use std::path::Path;

@@ -6,7 +6,7 @@
 //! lanes of a SIMD group may disagree on, and a SIMD machine executes both sides of such a
 //! branch for every lane. On lavapipe that made a lunar generation pay for the whole Stokes
 //! root search on every flight (0.205 s instead of 0.085 s at pop 1000, BENCHMARKS.md).
-//! Each switch of [`shared::WGSL_PATH_SWITCHES`](super::super::shared) is a WGSL
+//! Each switch of [`kernel_codes::WGSL_PATH_SWITCHES`](crate::kernel_codes) is a WGSL
 //! pipeline-overridable constant; a dispatch's pipeline is built with a switch off exactly
 //! when none of the dispatch's records takes that path, by the kernel's own tests on the same
 //! records, so no particle follows different physics. The f32 rounding may still move: with a
@@ -15,7 +15,7 @@
 //! `path_switches_change_no_result`).
 
 use super::layout::{GpuDesign, GpuParticle};
-use crate::engine::shared::{DRAG_FLIGHTS, IMPACT_SCATTER, LAUNCH_SPREAD, VACUUM_FLIGHTS};
+use crate::kernel_codes::{DRAG_FLIGHTS, IMPACT_SCATTER, LAUNCH_SPREAD, VACUUM_FLIGHTS};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct KernelPaths {
@@ -62,7 +62,7 @@ impl KernelPaths {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::shared::WGSL_PATH_SWITCHES;
+    use crate::kernel_codes::WGSL_PATH_SWITCHES;
 
     #[test]
     fn every_switch_is_set_and_all_means_the_wgsl_defaults() {

@@ -9,8 +9,8 @@ use anyhow::Result;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::trajectories::trajectory_points;
 use crate::engine::{Detailed, FlightRecord};
+use crate::io::trajectories::trajectory_points;
 use crate::model::flight::Flight;
 use crate::model::geometry::{Profile, V2};
 use crate::model::ParticleState;
