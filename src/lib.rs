@@ -4,6 +4,7 @@
 //! - [`engine`]: batch evaluators behind one interface (`listing` port, fast `cpu` reference).
 //! - [`io`]: configuration files, trajectory CSV, the flight plot.
 //! - [`plot`]: the one plotting layer every figure goes through (SVG or PNG).
+//! - [`schema`]: the one declaration of every bounded input (counts, intervals, file sizes).
 //! - [`cli`]: the thin command-line layer.
 //! - [`x86_64_v3`]: hot loops compiled a second time for AVX2 CPUs, same bits.
 
@@ -17,4 +18,5 @@ pub mod libm_lanes;
 pub mod model;
 pub mod optim;
 pub mod plot;
+pub mod schema;
 pub mod x86_64_v3;

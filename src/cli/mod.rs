@@ -10,6 +10,7 @@ pub mod fit;
 pub mod measured_condition;
 pub mod multi;
 pub mod optimize;
+pub mod plan_rules;
 pub mod simulate;
 pub mod study;
 pub mod sweep;

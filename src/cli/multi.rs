@@ -80,12 +80,15 @@ impl Plan {
 /// Read `root/plan.json`.
 pub fn read_plan(root: &Path) -> anyhow::Result<Plan> {
     let path = root.join(PLAN_FILE);
-    let text = std::fs::read_to_string(&path)
-        .with_context(|| format!("{} is not a campaign folder: cannot read {}", root.display(), path.display()))?;
+    if !path.is_file() {
+        bail!("{} is not a campaign folder: it has no {}", root.display(), path.display());
+    }
+    let text = crate::io::bounded::read_text(&path, &crate::schema::PLAN_FILE)?;
     let plan: Plan = serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
     if plan.format != PLAN_FORMAT {
         bail!("{}: plan format {} (this sawtooth reads format {PLAN_FORMAT})", path.display(), plan.format);
     }
+    super::plan_rules::validate_plan(&plan).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     for (i, m) in plan.members.iter().enumerate() {
         let p = Path::new(&m.dir);
         if m.dir.is_empty() || p.is_absolute() || p.components().any(|c| !matches!(c, std::path::Component::Normal(_)))
@@ -96,21 +99,10 @@ pub fn read_plan(root: &Path) -> anyhow::Result<Plan> {
     Ok(plan)
 }
 
-/// A campaign folder written by sawtooth before plans existed: it holds member runs
-/// (`alpha_*`, `run_*`, `grid_*` folders with a run.toml).
-fn legacy_campaign(dir: &Path) -> bool {
-    std::fs::read_dir(dir).is_ok_and(|es| {
-        es.filter_map(|e| e.ok()).any(|e| {
-            let name = e.file_name().to_string_lossy().into_owned();
-            ["alpha_", "run_", "grid_"].iter().any(|p| name.starts_with(p)) && e.path().join("run.toml").exists()
-        })
-    })
-}
-
 /// Own `root` and write `plan` there; a folder holding a different plan is refused (a
 /// campaign's members must all come from one plan).
 pub fn write_plan(root: &Path, plan: &Plan) -> anyhow::Result<RunDir> {
-    let owned = RunDir::acquire(root, CAMPAIGN_KIND, Access::Exclusive, legacy_campaign)?;
+    let owned = RunDir::acquire(root, CAMPAIGN_KIND, Access::Exclusive)?;
     let json = plan.to_json()?;
     let path = root.join(PLAN_FILE);
     match std::fs::read_to_string(&path) {

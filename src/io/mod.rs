@@ -1,6 +1,7 @@
 //! Files in and out: configuration, trajectories, plots.
 
 pub mod atomic;
+pub mod bounded;
 pub mod config;
 pub mod measured;
 pub mod plot;
