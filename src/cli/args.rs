@@ -145,6 +145,9 @@ impl ScenarioArgs {
             })?;
         }
         if let Some((a, b)) = self.alpha {
+            if !(a.is_finite() && b.is_finite()) {
+                bail!("--alpha must be a finite number of degrees, got {a}");
+            }
             if a != b {
                 bail!(
                     "--alpha: a range ({a}..{b}) is for gpu-sweep (one run per angle) and for simulate and optimize (one design over the slopes); give one angle here"

@@ -84,16 +84,21 @@ pub fn read_plan(root: &Path) -> anyhow::Result<Plan> {
         bail!("{} is not a campaign folder: it has no {}", root.display(), path.display());
     }
     let text = crate::io::bounded::read_text(&path, &crate::schema::PLAN_FILE)?;
-    let plan: Plan = serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
+    parse_plan(&text, &path.display().to_string())
+}
+
+/// A plan's text checked by every rule (`plan_rules`); `name` is the file named in messages.
+pub fn parse_plan(text: &str, name: &str) -> anyhow::Result<Plan> {
+    let plan: Plan = serde_json::from_str(text).with_context(|| format!("reading {name}"))?;
     if plan.format != PLAN_FORMAT {
-        bail!("{}: plan format {} (this sawtooth reads format {PLAN_FORMAT})", path.display(), plan.format);
+        bail!("{name}: plan format {} (this sawtooth reads format {PLAN_FORMAT})", plan.format);
     }
-    super::plan_rules::validate_plan(&plan).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    super::plan_rules::validate_plan(&plan).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
     for (i, m) in plan.members.iter().enumerate() {
         let p = Path::new(&m.dir);
         if m.dir.is_empty() || p.is_absolute() || p.components().any(|c| !matches!(c, std::path::Component::Normal(_)))
         {
-            bail!("{}: member {i}: dir `{}` must be a plain folder name inside the campaign", path.display(), m.dir);
+            bail!("{name}: member {i}: dir `{}` must be a plain folder name inside the campaign", m.dir);
         }
     }
     Ok(plan)

@@ -481,7 +481,7 @@ fn launch_points_inlined(
         }
     }
     if out.len() < n {
-        return Err(Invalid::FillTooSmall { found: out.len(), needed: n });
+        return Err(Invalid::FillTooSmall { found: out.len(), needed: n, candidates: i - 1 });
     }
     Ok(out)
 }
@@ -540,7 +540,7 @@ mod tests {
             }
         }
         if out.len() < n {
-            return Err(Invalid::FillTooSmall { found: out.len(), needed: n });
+            return Err(Invalid::FillTooSmall { found: out.len(), needed: n, candidates: i - 1 });
         }
         Ok(out)
     }
