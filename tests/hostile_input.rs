@@ -262,6 +262,9 @@ fn a_users_folder_is_never_written_into_and_a_killed_runs_is_rerun() {
     assert!(w.join("pareto.csv").exists());
 }
 
+/// An edit of a loaded JSON document (a checkpoint, a plan).
+type JsonEdit = Box<dyn Fn(&mut serde_json::Value)>;
+
 /// Finding 4 and 7, and what-to-build 3: checkpoints and plans are validated as input.
 #[test]
 fn edited_checkpoints_and_plans_are_refused_by_field() {
@@ -291,7 +294,7 @@ fn edited_checkpoints_and_plans_are_refused_by_field() {
         a.extend_from_slice(extra);
         sawtooth_in(repo(), &a)
     };
-    let edits: Vec<(&str, Box<dyn Fn(&mut serde_json::Value)>)> = vec![
+    let edits: Vec<(&str, JsonEdit)> = vec![
         ("`population` holds 0", Box::new(|v| v["population"] = serde_json::json!([]))),
         ("`population[0].x` has 5", Box::new(|v| v["population"][0]["x"].as_array_mut().unwrap().truncate(5))),
         ("`population[0].x` has 0", Box::new(|v| v["population"][0]["x"] = serde_json::json!([]))),
@@ -326,7 +329,7 @@ fn edited_checkpoints_and_plans_are_refused_by_field() {
     assert_eq!(o.code, 0, "{}", o.stderr);
     let plan_path = camp.join("plan.json");
     let plan: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&plan_path).unwrap()).unwrap();
-    let edits: Vec<(&str, Box<dyn Fn(&mut serde_json::Value)>)> = vec![
+    let edits: Vec<(&str, JsonEdit)> = vec![
         (
             "`config.pop` must lie in [4, 100000]",
             Box::new(|v| v["members"][0]["manifest"]["config"]["pop"] = 1_000_000_000u64.into()),

@@ -136,7 +136,8 @@ pub fn parse(text: &str, name: &str) -> anyhow::Result<MeasuredRuns> {
     let mut first_line: HashMap<String, u64> = HashMap::new();
     // the first run with and the first without an input mass: a column recorded for some runs
     // only would switch the normalisation silently (issue 34)
-    let (mut with_input, mut without_input): (Option<(u64, String)>, Option<(u64, String)>) = (None, None);
+    let mut with_input: Option<(u64, String)> = None;
+    let mut without_input: Option<(u64, String)> = None;
     for record in records {
         let (line, record) = record?;
         if record.len() != columns.len() {

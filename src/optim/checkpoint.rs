@@ -104,7 +104,8 @@ mod tests {
     #[test]
     fn edited_states_are_refused_naming_the_field() {
         let (state, config, shape) = a_real_state();
-        let cases: Vec<(&str, Box<dyn Fn(&mut State)>)> = vec![
+        type Edit = Box<dyn Fn(&mut State)>;
+        let cases: Vec<(&str, Edit)> = vec![
             ("`population` holds 0", Box::new(|s| s.population.clear())),
             ("`population[3].x` has 0", Box::new(|s| s.population[3].x.clear())),
             ("`population[0].x` has 9", Box::new(|s| s.population[0].x.extend([1.0; 4]))),
