@@ -5,6 +5,7 @@
 //! - [`io`]: configuration files, measured data, trajectory CSV, atomic writes, run folders.
 //! - [`kernel_codes`]: the integer codes the Rust and WGSL kernels share (generated into WGSL).
 //! - [`plot`]: the one plotting layer every figure goes through (SVG or PNG), and the flight plot.
+//! - [`schema`]: the one declaration of every bounded input (counts, intervals, file sizes).
 //! - [`cli`]: the thin command-line layer.
 //! - [`lane_math`]: the engine's own `exp_m1`, `sin_cos`, `atan2`, one code for scalar and lanes.
 //! - [`x86_64_v3`]: hot loops compiled a second time for AVX2 CPUs, same bits.
@@ -22,4 +23,5 @@ pub mod model;
 pub mod optim;
 pub mod plot;
 pub mod scenario_request;
+pub mod schema;
 pub mod x86_64_v3;

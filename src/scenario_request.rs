@@ -52,6 +52,27 @@ pub struct ScenarioRequest {
 /// The steepest conveyor the thesis designs for (Table 2.2 req. 1.6.3), degrees.
 pub const THESIS_MAX_SLOPE_DEG: f64 = 40.0;
 
+/// Switch on the `--effect NAME=PARAMS` flags, each effect once (as `diagnose --effects`
+/// asks), and refuse one that cannot act on `s`: quadratic drag in vacuum would change
+/// nothing (and `diagnose` refuses it there too).
+pub fn set_effects(s: &mut Scenario, specs: &[String]) -> anyhow::Result<()> {
+    let mut seen: Vec<&str> = Vec::new();
+    for spec in specs {
+        let name = spec.split_once('=').map_or(spec.as_str(), |(n, _)| n).trim();
+        if seen.contains(&name) {
+            bail!("--effect {spec}: effect `{name}` given twice; give each effect once");
+        }
+        seen.push(name);
+        s.effects.set_from_cli(spec).map_err(|e| anyhow::anyhow!("--effect {spec}: {e}"))?;
+    }
+    if s.effects.quadratic_drag.is_some() && s.environment.k_drag.is_none() {
+        bail!(
+            "effect quadratic-drag (--effect or [effects.quadratic_drag]): it only changes drag, and this scenario is in vacuum (k_drag 0), so it would do nothing; give a drag rate (--k-drag, [environment] k_drag_per_s) or leave the effect out"
+        );
+    }
+    Ok(())
+}
+
 /// Most slopes `--alpha-points` may ask for: each is one more simulation per design.
 pub const MAX_ALPHA_POINTS: u32 = 41;
 
@@ -61,7 +82,7 @@ impl ScenarioRequest {
         // a run folder's run.toml holds a complete scenario: start from it (flags still
         // override), so that a run's settings can be simulated or optimised again
         let run = match &self.config {
-            Some(p) => crate::optim::manifest::manifest_in(p)?,
+            Some(p) => crate::optim::manifest::manifest_in(p).context("--config")?,
             None => None,
         };
         let (mut s, file) = if let Some(run) = run {
@@ -91,6 +112,9 @@ impl ScenarioRequest {
             })?;
         }
         if let Some((a, b)) = self.alpha {
+            if !(a.is_finite() && b.is_finite()) {
+                bail!("--alpha must be a finite number of degrees, got {a}");
+            }
             if a != b {
                 bail!(
                     "--alpha: a range ({a}..{b}) is for gpu-sweep (one run per angle) and for simulate and optimize (one design over the slopes); give one angle here"
@@ -111,6 +135,10 @@ impl ScenarioRequest {
             s.collision.mu_friction = v;
         }
         if let Some(v) = self.k_drag {
+            // 0 is vacuum, so the rule is >= 0 (the library's `k_drag` > 0 is the drag itself)
+            if !(v >= 0.0 && v.is_finite()) {
+                bail!("--k-drag must be a finite number >= 0 1/s (0 = vacuum), got {v}");
+            }
             s.environment.k_drag = if v == 0.0 { None } else { Some(v) };
         }
         if let Some(v) = self.aor {
@@ -134,9 +162,7 @@ impl ScenarioRequest {
         if self.no_randomise {
             s.sim.randomise = false;
         }
-        for spec in &self.effects {
-            s.effects.set_from_cli(spec).map_err(|e| anyhow::anyhow!("--effect {spec}: {e}"))?;
-        }
+        set_effects(&mut s, &self.effects)?;
         if let Err(e) = s.validate() {
             bail!("invalid setting: {}", in_user_terms(&e));
         }

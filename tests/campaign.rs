@@ -199,7 +199,7 @@ fn bad_campaign_input_is_named() {
         "--plan",
     ]));
     assert_eq!(code, 2);
-    assert!(err.contains("holds files but no"), "{err}");
+    assert!(err.contains("is not a folder of sawtooth's"), "{err}");
     let _ = std::fs::remove_dir_all(&arr);
     let _ = std::fs::remove_dir_all(&plain);
 }

@@ -422,7 +422,7 @@ fn bad_input_is_named_with_exit_2() {
         (vec!["--data", &data, "--setup", s3], "holds files"),
         (vec!["--data", &data, "--data", &data, "--setup", s3], "--setup"),
         (vec!["--data", &data, "--setup", s3, "--effects", "spin"], "unknown effect `spin`"),
-        (vec!["--data", &data, "--setup", s3, "--pop", "3"], "--pop must be >= 5"),
+        (vec!["--data", &data, "--setup", s3, "--pop", "3"], "must lie in [5, 10000]"),
         (vec!["--data", "/nonexistent.csv", "--setup", s3], "--data"),
         // the flag named, before any simulation
         (

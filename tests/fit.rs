@@ -331,11 +331,11 @@ fn bad_input_exits_2_naming_the_field() {
     // flags (each rejected before anything is simulated)
     run(&["--params", "k_elastic,gravity"], &["--params", "`gravity`", "k_elastic, mu_fric, k_drag"]);
     run(&["--params", "k_drag,k_drag"], &["--params", "twice"]);
-    run(&["--pop", "4"], &["--pop", ">= 5"]);
-    run(&["--max-particles", "10"], &["--max-particles", ">= 1000"]);
-    run(&["--pop", "1000000000"], &["--pop", "at most"]);
-    run(&["--holdout", "0", "--max-particles", "100000000"], &["--max-particles", "at most"]);
-    run(&["--particles", "0"], &["--particles", ">= 1"]);
+    run(&["--pop", "4"], &["--pop", "[5, 10000]"]);
+    run(&["--max-particles", "10"], &["--max-particles", "[1000, 10000000]"]);
+    run(&["--pop", "1000000000"], &["--pop", "[5, 10000]"]);
+    run(&["--holdout", "0", "--max-particles", "100000000"], &["--max-particles", "[1000, 10000000]"]);
+    run(&["--particles", "0"], &["--particles", "[1, 10000000]"]);
     run(&["--holdout", "10"], &["--holdout", "number of runs", "10"]);
     run(&["--objective", "mae"], &["--objective"]);
     run(&["--pop=-1"], &["--pop"]);

@@ -61,7 +61,7 @@ fn synth_rejects_bad_input() {
         (["--runs", "0"], "--runs"),
         (["--particles", "0"], "--particles"),
         (["--resolution-g", "0"], "--resolution-g must be a positive number of grams, got 0"),
-        (["--mass-g", "0"], "--mass-g must be a positive number of grams"),
+        (["--mass-g", "0"], "--mass-g must lie in (0, 1000000] g"),
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_sawtooth"))
             .args(["synth", "--setup", setup, "--out", "/tmp/x.csv"])

@@ -95,15 +95,19 @@ impl PyScenario {
             Some("listing") => Some(Compat::Listing),
             Some(c) => return Err(PyValueError::new_err(format!("compat: unknown mode `{c}` (known: listing)"))),
         };
-        let count = |name: &str, v: Option<i64>| -> PyResult<Option<u32>> {
+        // within u32 the scenario's validation applies the schema's bound with the CLI's
+        // message; beyond it, the same rule (sawtooth::schema) under the argument's name
+        let count = |name: &str, v: Option<i64>, bound: &sawtooth::schema::Count| -> PyResult<Option<u32>> {
             match v {
                 None => Ok(None),
-                Some(n) if (0..=u32::MAX as i64).contains(&n) => Ok(Some(n as u32)),
-                Some(n) => {
-                    Err(PyValueError::new_err(format!("{name} must be a whole number in [0, {}], got {n}", u32::MAX)))
-                }
+                Some(n) => u32::try_from(n)
+                    .map(Some)
+                    .map_err(|_| PyValueError::new_err(format!("{name} {}, got {n}", bound.rule()))),
             }
         };
+        if let Some(a) = alpha_deg.filter(|a| !a.is_finite()) {
+            return Err(PyValueError::new_err(format!("alpha_deg must be a finite number of degrees, got {a}")));
+        }
         let seed = match seed {
             None => None,
             Some(s) if s >= 0 => Some(s as u64),
@@ -118,9 +122,9 @@ impl PyScenario {
             k_drag: k_drag_per_s,
             aor: aor_deg,
             material,
-            particles: count("particles", particles)?,
-            teeth: count("teeth", teeth)?,
-            bounces: count("max_bounces", max_bounces)?,
+            particles: count("particles", particles, &sawtooth::schema::SIM_PARTICLES)?,
+            teeth: count("teeth", teeth, &sawtooth::schema::SIM_TEETH)?,
+            bounces: count("max_bounces", max_bounces, &sawtooth::schema::SIM_MAX_BOUNCES)?,
             seed,
             launch_offset: launch_offset_deg,
             no_randomise: !randomise,
@@ -208,7 +212,29 @@ fn engine_for(kind: EngineKind, scenario: &sawtooth::model::Scenario) -> anyhow:
     Ok(e)
 }
 
-fn designs_from(x: &PyReadonlyArray2<f64>) -> PyResult<Vec<[f64; 8]>> {
+/// `x` as float64 rows of 8: a float64 array as it is; a list of rows, an int64 or float32
+/// array converted as `numpy.asarray(x, dtype="float64")` converts them; anything else is a
+/// ValueError naming `x` (it was a bare `TypeError: type mismatch`).
+fn designs_from(x: &Bound<'_, PyAny>) -> PyResult<Vec<[f64; 8]>> {
+    let x: PyReadonlyArray2<f64> = match x.extract() {
+        Ok(a) => a,
+        Err(_) => {
+            let py = x.py();
+            let kwargs = PyDict::new(py);
+            kwargs.set_item("dtype", "float64")?;
+            let a = py
+                .import("numpy")?
+                .call_method("asarray", (x,), Some(&kwargs))
+                .map_err(|e| PyValueError::new_err(format!("x: not an array of numbers of shape (n, 8): {e}")))?;
+            let ndim: usize = a.getattr("ndim")?.extract()?;
+            if ndim != 2 {
+                return Err(PyValueError::new_err(format!(
+                    "x must have shape (n, 8) (one design per row), got an array of {ndim} dimension(s)"
+                )));
+            }
+            a.extract().map_err(|e: PyErr| PyValueError::new_err(format!("x: {e}")))?
+        }
+    };
     let a = x.as_array();
     if a.ncols() != 8 {
         return Err(PyValueError::new_err(format!(
@@ -251,14 +277,14 @@ fn designs_from(x: &PyReadonlyArray2<f64>) -> PyResult<Vec<[f64; 8]>> {
 fn evaluate<'py>(
     py: Python<'py>,
     scenario: &PyScenario,
-    x: PyReadonlyArray2<'py, f64>,
+    x: &Bound<'py, PyAny>,
     engine: &str,
     seed: Option<u64>,
     particles: Option<u32>,
     feasible_only: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let kind = engine_kind(engine)?;
-    let xs = designs_from(&x)?;
+    let xs = designs_from(x)?;
     let scenario = scenario.replace(particles, seed)?.inner;
     let n = xs.len();
     let teeth = scenario.sim.teeth as usize;
@@ -379,14 +405,14 @@ fn geometric_constraints(v: &[f64; 8]) -> [f64; 7] {
 fn evaluate_problem<'py>(
     py: Python<'py>,
     scenario: &PyScenario,
-    x: PyReadonlyArray2<'py, f64>,
+    x: &Bound<'py, PyAny>,
     engine: &str,
     generation: u64,
     requirements: Option<String>,
     slopes_deg: Option<Vec<f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let kind = engine_kind(engine)?;
-    let xs = designs_from(&x)?;
+    let xs = designs_from(x)?;
     let scenario = scenario.inner.clone();
     let requirements = requirements.map(|spec| load_requirements(&spec)).transpose().map_err(value_error)?;
     let slopes = slopes_deg.unwrap_or_default();

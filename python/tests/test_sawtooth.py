@@ -166,6 +166,28 @@ def test_bad_design_arrays_raise(x, needle):
         sawtooth.evaluate(sawtooth.Scenario(), x)
 
 
+def test_design_rows_are_converted_as_numpy_converts_them():
+    # issue 34: a list of rows, an int64 or a float32 array raised `TypeError: type mismatch`
+    s = sawtooth.Scenario(env="earth", particles=50)
+    ref = sawtooth.evaluate(s, np.array([EARTH_C, RIG]))
+    got = sawtooth.evaluate(s, [EARTH_C, RIG])
+    np.testing.assert_array_equal(got["w_spec_j_kg"], ref["w_spec_j_kg"])
+    # float32 and int64 rows are widened to float64 (their values, not the float64 ones)
+    for dtype in (np.float32, np.int64):
+        assert sawtooth.evaluate(s, np.array([EARTH_C, RIG]).astype(dtype))["valid"].shape == (2,)
+    with pytest.raises(ValueError, match=re.escape("shape (n, 8)")):
+        sawtooth.evaluate(s, LUNAR_C)
+    with pytest.raises(ValueError, match="^x: "):
+        sawtooth.evaluate(s, [["a"] * 8])
+
+
+def test_counts_past_u32_name_the_schemas_rule():
+    with pytest.raises(ValueError, match=re.escape("particles must lie in [1, 10000000]")):
+        sawtooth.Scenario(particles=2**40)
+    with pytest.raises(ValueError, match="alpha_deg must be a finite number of degrees"):
+        sawtooth.Scenario(alpha_deg=float("inf"))
+
+
 def test_bad_engine_and_invalid_design_in_simulate():
     with pytest.raises(ValueError, match="unknown engine `warp`"):
         sawtooth.evaluate(sawtooth.Scenario(), np.array([LUNAR_C]), engine="warp")
@@ -225,7 +247,7 @@ def test_fit_at_given_values_matches_the_cli():
             "--at", "k_elastic=0.854,mu_fric=0.133,k_drag=5.347", "--json").stdout
     )
     assert d == ref
-    with pytest.raises(ValueError, match="--pop must be >= 5"):
+    with pytest.raises(ValueError, match=r"--pop must lie in \[5, 10000\]"):
         sawtooth.fit(ROOT / "data/validation/test3.csv", ROOT / "data/validation/test3.toml", pop=2)
 
 

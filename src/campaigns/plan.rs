@@ -5,6 +5,7 @@
 //! task); either way finished members are read back, unfinished ones resumed from their
 //! checkpoints, missing ones started, and the summary is built from the members' files.
 
+use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _};
@@ -18,6 +19,7 @@ use crate::optim::lockstep::Lockstep;
 use crate::optim::manifest::{read_manifest, Manifest};
 use crate::optim::nsga2::load_checkpoint;
 use crate::optim::runner::{is_finished, run, RunOptions};
+use crate::schema::{CHECKPOINT_EVERY, PLAN_MEMBERS};
 
 /// The plan's file in a campaign folder.
 pub const PLAN_FILE: &str = "plan.json";
@@ -75,37 +77,34 @@ impl Plan {
 /// Read `root/plan.json`.
 pub fn read_plan(root: &Path) -> anyhow::Result<Plan> {
     let path = root.join(PLAN_FILE);
-    let text = std::fs::read_to_string(&path)
-        .with_context(|| format!("{} is not a campaign folder: cannot read {}", root.display(), path.display()))?;
-    let plan: Plan = serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
-    if plan.format != PLAN_FORMAT {
-        bail!("{}: plan format {} (this sawtooth reads format {PLAN_FORMAT})", path.display(), plan.format);
+    if !path.is_file() {
+        bail!("{} is not a campaign folder: it has no {}", root.display(), path.display());
     }
+    let text = crate::io::bounded::read_text(&path, &crate::schema::PLAN_FILE)?;
+    parse_plan(&text, &path.display().to_string())
+}
+
+/// A plan's text checked by every rule ([`validate_plan`]); `name` is the file named in messages.
+pub fn parse_plan(text: &str, name: &str) -> anyhow::Result<Plan> {
+    let plan: Plan = serde_json::from_str(text).with_context(|| format!("reading {name}"))?;
+    if plan.format != PLAN_FORMAT {
+        bail!("{name}: plan format {} (this sawtooth reads format {PLAN_FORMAT})", plan.format);
+    }
+    validate_plan(&plan).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
     for (i, m) in plan.members.iter().enumerate() {
         let p = Path::new(&m.dir);
         if m.dir.is_empty() || p.is_absolute() || p.components().any(|c| !matches!(c, std::path::Component::Normal(_)))
         {
-            bail!("{}: member {i}: dir `{}` must be a plain folder name inside the campaign", path.display(), m.dir);
+            bail!("{name}: member {i}: dir `{}` must be a plain folder name inside the campaign", m.dir);
         }
     }
     Ok(plan)
 }
 
-/// A campaign folder written by sawtooth before plans existed: it holds member runs
-/// (`alpha_*`, `run_*`, `grid_*` folders with a run.toml).
-fn legacy_campaign(dir: &Path) -> bool {
-    std::fs::read_dir(dir).is_ok_and(|es| {
-        es.filter_map(|e| e.ok()).any(|e| {
-            let name = e.file_name().to_string_lossy().into_owned();
-            ["alpha_", "run_", "grid_"].iter().any(|p| name.starts_with(p)) && e.path().join("run.toml").exists()
-        })
-    })
-}
-
 /// Own `root` and write `plan` there; a folder holding a different plan is refused (a
 /// campaign's members must all come from one plan).
 pub fn write_plan(root: &Path, plan: &Plan) -> anyhow::Result<RunDir> {
-    let owned = RunDir::acquire(root, CAMPAIGN_KIND, Access::Exclusive, legacy_campaign)?;
+    let owned = RunDir::acquire(root, CAMPAIGN_KIND, Access::Exclusive)?;
     let json = plan.to_json()?;
     let path = root.join(PLAN_FILE);
     match std::fs::read_to_string(&path) {
@@ -248,4 +247,29 @@ pub fn execute(root: &Path, plan: &Plan) -> anyhow::Result<bool> {
         eprintln!("interrupted: rerun the same command to resume every unfinished run");
     }
     Ok(done)
+}
+
+/// Every rule a plan must meet; the first broken one, naming its field. A plan read back is
+/// input like any other (issue 34): a plan.json edited by hand (a member with `"pop":
+/// 1000000000`, `particles: 4294967295`, `max_generations: 1e12`, no members at all) is
+/// refused naming the member and its field before anything is allocated or run, by the same
+/// rules as a new run's settings (`Manifest::validate`, `schema`).
+pub fn validate_plan(plan: &Plan) -> Result<(), String> {
+    PLAN_MEMBERS.check_usize("`members` (their number)", plan.members.len())?;
+    CHECKPOINT_EVERY.check("`checkpoint_every`", plan.checkpoint_every)?;
+    let mut dirs = HashSet::new();
+    for (i, m) in plan.members.iter().enumerate() {
+        let at = |e: String| format!("member {i} ({}): {e}", m.label);
+        m.manifest.validate().map_err(|e| at(format!("`manifest`: {e}")))?;
+        if m.manifest.engine != plan.engine {
+            return Err(at(format!(
+                "`manifest.engine` {:?} differs from the plan's `engine` {:?}",
+                m.manifest.engine, plan.engine
+            )));
+        }
+        if !dirs.insert(m.dir.as_str()) {
+            return Err(at(format!("`dir` `{}` is another member's too; each member has its own folder", m.dir)));
+        }
+    }
+    Ok(())
 }

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Context as _};
+use anyhow::Context as _;
 use clap::Args;
 
 use crate::engine::EngineKind;
@@ -10,8 +10,11 @@ use crate::io::config::{load_requirements, ConfigFile};
 use crate::model::requirements::Requirements;
 use crate::model::scenario::EnvPreset;
 use crate::model::{Design, Scenario};
+use crate::schema;
 
-pub use crate::scenario_request::{in_user_terms, Compat, ScenarioRequest, MAX_ALPHA_POINTS, THESIS_MAX_SLOPE_DEG};
+pub use crate::scenario_request::{
+    in_user_terms, set_effects, Compat, ScenarioRequest, MAX_ALPHA_POINTS, THESIS_MAX_SLOPE_DEG,
+};
 
 /// `[default: …]` of a scenario flag, read from the presets themselves so that the help
 /// cannot drift from them: one value, or the lunar and Earth presets' values.
@@ -48,7 +51,7 @@ pub struct ScenarioArgs {
     pub k_elastic: Option<f64>,
     #[arg(long, help = preset_default("Friction coefficient of the tangential COR (-, Eq. 4.14)", |s| s.collision.mu_friction.to_string()))]
     pub mu_fric: Option<f64>,
-    #[arg(long, help = preset_default("Stokes drag parameter k_drag, 1/s (0 = vacuum)", |s| match s.environment.k_drag {
+    #[arg(long, allow_negative_numbers = true, help = preset_default("Stokes drag parameter k_drag, 1/s (0 = vacuum)", |s| match s.environment.k_drag {
         Some(k) => format!("{k} 1/s"),
         None => "0 (vacuum)".to_string(),
     }))]
@@ -65,7 +68,7 @@ pub struct ScenarioArgs {
     pub bounces: Option<u32>,
     #[arg(long, help = preset_default("Seed of the counter-based random numbers", |s| s.sim.seed.to_string()))]
     pub seed: Option<u64>,
-    #[arg(long, help = preset_default("Launch-angle offset added to α + δ, degrees (listing: 18.434)",
+    #[arg(long, allow_negative_numbers = true, help = preset_default("Launch-angle offset added to α + δ, degrees (listing: 18.434)",
         |s| format!("{} deg", s.sim.launch_offset_deg)))]
     pub launch_offset: Option<f64>,
     /// Switch off the launch randomisation (±10 % on the launch angle and speed, Eq. 4.38).
@@ -140,9 +143,17 @@ impl ScenarioArgs {
 
 #[derive(Debug, Clone, Args)]
 pub struct EngineArgs {
-    /// Evaluation engine.
-    #[arg(long, value_enum, default_value = "cpu")]
-    pub engine: EngineKind,
+    /// Evaluation engine [default: cpu].
+    #[arg(long, value_enum)]
+    pub engine: Option<EngineKind>,
+}
+
+impl EngineArgs {
+    /// The engine asked for, else the default (cpu). `engine` itself says whether the flag
+    /// was given, so that `--resume --engine gpu` on a cpu run is refused, not ignored.
+    pub fn kind(&self) -> EngineKind {
+        self.engine.unwrap_or(EngineKind::Cpu)
+    }
 }
 
 /// Designing to requirements (issue 13): what a design must meet.
@@ -187,6 +198,20 @@ impl RequirementArgs {
     }
 }
 
+/// A clap value parser for a count declared in [`crate::schema`]: the flag's rule is the
+/// schema's, so the flag cannot drift from the file keys that share it. Refused before
+/// anything is read or allocated: clap names the flag, the rule follows.
+pub fn count<T>(c: &'static crate::schema::Count) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static
+where
+    T: TryFrom<u64> + Clone + Send + Sync + 'static,
+{
+    move |text: &str| {
+        let v: u64 = text.trim().parse().map_err(|_| format!("`{text}` is not a whole number; it {}", c.rule()))?;
+        c.check("it", v)?;
+        T::try_from(v).map_err(|_| format!("it {}, got {v}", c.rule()))
+    }
+}
+
 /// `35` or `1..40` (degrees, inclusive range).
 pub fn parse_alpha(v: &str) -> Result<(f64, f64), String> {
     let num = |t: &str| t.trim().parse::<f64>().map_err(|_| format!("`{t}` is not a number of degrees"));
@@ -210,46 +235,34 @@ pub struct EffortArgs {
     /// Particles per simulation at the full budget (the same streams for every candidate);
     /// default: what the data call for (Monte-Carlo variance per tooth at most a quarter of
     /// the measured mean's), up to --max-particles.
-    #[arg(long)]
+    #[arg(long, value_parser = count::<u32>(&schema::FIT_PARTICLES))]
     pub particles: Option<u32>,
     /// The most particles per simulation the data may call for.
-    #[arg(long, default_value_t = 12_000)]
+    #[arg(long, default_value_t = 12_000, value_parser = count::<u32>(&schema::FIT_MAX_PARTICLES))]
     pub max_particles: u32,
     /// Differential-evolution population per model (>= 5), screening at 1/8 of the particles.
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, value_parser = count::<usize>(&schema::FIT_POP))]
     pub pop: usize,
     /// Differential-evolution generations per model.
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, value_parser = count::<usize>(&schema::FIT_GENERATIONS))]
     pub generations: usize,
     /// Compass-search iterations polishing each fit (and each bootstrap refit of `fit`) at
     /// the full budget.
-    #[arg(long, default_value_t = 12)]
+    #[arg(long, default_value_t = 12, value_parser = count::<usize>(&schema::FIT_POLISH))]
     pub polish: usize,
 }
 
 impl EffortArgs {
     /// The flags' own rules, checked before anything is read or simulated.
     pub fn validate(&self) -> anyhow::Result<()> {
-        const POP_MAX: usize = 10_000;
-        const PARTICLES_MAX: u32 = 10_000_000;
-        if self.pop < 5 {
-            bail!("--pop must be >= 5, got {}", self.pop);
+        use crate::schema::{FIT_GENERATIONS, FIT_MAX_PARTICLES, FIT_PARTICLES, FIT_POLISH, FIT_POP};
+        FIT_POP.check_usize("--pop", self.pop).map_err(anyhow::Error::msg)?;
+        FIT_GENERATIONS.check_usize("--generations", self.generations).map_err(anyhow::Error::msg)?;
+        FIT_POLISH.check_usize("--polish", self.polish).map_err(anyhow::Error::msg)?;
+        if let Some(p) = self.particles {
+            FIT_PARTICLES.check_u32("--particles", p).map_err(anyhow::Error::msg)?;
         }
-        if self.pop > POP_MAX {
-            bail!("--pop must be at most {POP_MAX}, got {}", self.pop);
-        }
-        if self.particles == Some(0) {
-            bail!("--particles must be >= 1, got 0");
-        }
-        if let Some(p) = self.particles.filter(|p| *p > PARTICLES_MAX) {
-            bail!("--particles must be at most {PARTICLES_MAX}, got {p}");
-        }
-        if self.max_particles < 1000 {
-            bail!("--max-particles must be >= 1000, got {}", self.max_particles);
-        }
-        if self.max_particles > PARTICLES_MAX {
-            bail!("--max-particles must be at most {PARTICLES_MAX}, got {}", self.max_particles);
-        }
+        FIT_MAX_PARTICLES.check_u32("--max-particles", self.max_particles).map_err(anyhow::Error::msg)?;
         Ok(())
     }
 

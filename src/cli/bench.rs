@@ -28,7 +28,7 @@ pub struct BenchArgs {
     #[arg(long, value_enum, default_value = "lunar")]
     pub env: EnvPreset,
     /// Designs in the batch.
-    #[arg(long, default_value_t = 64, value_parser = clap::builder::TypedValueParser::map(clap::value_parser!(u64).range(1..), |n| n as usize))]
+    #[arg(long, default_value_t = 64, value_parser = super::args::count::<usize>(&crate::schema::BENCH_DESIGNS))]
     pub designs: usize,
     /// Where the batch comes from: the solution-C neighbourhood (±5 %, issue 2's batch) or
     /// random valid designs from the optimisation bounds (a GA generation).
@@ -43,7 +43,7 @@ pub struct BenchArgs {
     pub engines: Vec<EngineKind>,
     /// Timed repetitions per engine (the best is reported; the gpu engine also runs the batch
     /// once untimed first, which compiles its kernels).
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 3, value_parser = super::args::count::<u32>(&crate::schema::BENCH_REPEATS))]
     pub repeats: u32,
     /// Listing compatibility mode instead of the physical mode.
     #[arg(long)]

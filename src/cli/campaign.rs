@@ -135,7 +135,7 @@ fn run_cmd(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     };
     let Some(i) = task else {
         // Every member here, batched per generation; then the summary.
-        let _owned = RunDir::acquire(&a.dir, CAMPAIGN_KIND, Access::Exclusive, |_| false)?;
+        let _owned = RunDir::acquire(&a.dir, CAMPAIGN_KIND, Access::Exclusive)?;
         if !execute(&a.dir, &plan)? {
             return Ok(ExitCode::from(130));
         }
@@ -148,7 +148,7 @@ fn run_cmd(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         bail!("--task {i}: the plan in {} has {n} members (tasks 0..={})", a.dir.display(), n.saturating_sub(1));
     }
     // Shared: the other tasks run beside this one; a one-process run or a gather excludes them.
-    let _root = RunDir::acquire(&a.dir, CAMPAIGN_KIND, Access::Shared, |_| false)?;
+    let _root = RunDir::acquire(&a.dir, CAMPAIGN_KIND, Access::Shared)?;
     let m = &plan.members[i];
     let dir = plan.member_dir(&a.dir, i);
     if member_state(&dir) == MemberState::Finished {
@@ -181,7 +181,7 @@ fn run_cmd(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
 
 fn gather(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let plan = read_plan(dir)?;
-    let _owned = RunDir::acquire(dir, CAMPAIGN_KIND, Access::Exclusive, |_| false)?;
+    let _owned = RunDir::acquire(dir, CAMPAIGN_KIND, Access::Exclusive)?;
     let fronts = finished_fronts(dir, &plan)?;
     summarise(dir, &plan, &fronts, out)?;
     Ok(ExitCode::SUCCESS)

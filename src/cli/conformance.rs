@@ -14,14 +14,14 @@ use crate::model::Scenario;
 #[derive(Debug, Args)]
 pub struct ConformanceArgs {
     /// Random valid designs per scenario (each environment with drag on and off).
-    #[arg(long, default_value_t = 50)]
+    #[arg(long, default_value_t = 50, value_parser = super::args::count::<usize>(&crate::schema::CONFORMANCE_DESIGNS))]
     pub designs: usize,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// One environment only (default: both).
     #[arg(long, value_enum)]
     pub env: Option<EnvPreset>,
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = super::args::count::<u32>(&crate::schema::SIM_PARTICLES))]
     pub particles: u32,
     /// Listing compatibility mode instead of the physical mode.
     #[arg(long)]
@@ -31,6 +31,11 @@ pub struct ConformanceArgs {
 }
 
 pub fn run_cli(a: ConformanceArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    // the flags' scenarios are checked before a device is opened: `--particles 0` is a rule,
+    // not a panic deep in the engine
+    for (name, s) in scenarios(&[Scenario::lunar(), Scenario::earth()], a.particles) {
+        s.validate().map_err(|e| anyhow::anyhow!("{name}: invalid setting: {}", super::args::in_user_terms(&e)))?;
+    }
     let gpu = GpuEngine::new(AdapterChoice::Any)?;
     let envs: Vec<Scenario> = match a.env {
         Some(e) => vec![Scenario::preset(e)],

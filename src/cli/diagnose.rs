@@ -119,8 +119,7 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     }
     let seed = conditions[0].base.sim.seed;
     // the output folder is owned before the work, so a busy or foreign folder costs nothing
-    let _owned = RunDir::acquire(&a.out, "diagnose", Access::Exclusive, |d| d.join("diagnosis.json").exists())
-        .context("--out")?;
+    let _owned = RunDir::acquire(&a.out, "diagnose", Access::Exclusive).context("--out")?;
     let engine = make_engine(a.engine)?;
     let settings =
         Settings { effects, effort: a.effort.effort(seed), rescore_streams: a.rescore_streams, bootstrap: a.bootstrap };

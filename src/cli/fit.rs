@@ -85,15 +85,13 @@ pub fn run(a: FitArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     }
     // the output folder is owned before the work, so a busy or foreign folder costs nothing
     let _owned = match &a.out {
-        Some(dir) => {
-            Some(RunDir::acquire(dir, "fit", Access::Exclusive, |d| d.join("fit.json").exists()).context("--out")?)
-        }
+        Some(dir) => Some(RunDir::acquire(dir, "fit", Access::Exclusive).context("--out")?),
         None => None,
     };
     let params = params.unwrap_or_else(|| shared_params(std::slice::from_ref(&condition)));
     let seed = condition.base.sim.seed;
     let effort = a.effort.effort(seed);
-    let engine = make_engine(a.engine.engine)?;
+    let engine = make_engine(a.engine.kind())?;
     let started = std::time::Instant::now();
     let report = match &at {
         Some(x) => crate::fit::evaluate_at(engine.as_ref(), &condition, &params, x, a.objective, effort)

@@ -8,12 +8,13 @@ use std::process::ExitCode;
 use anyhow::{bail, Context as _};
 use clap::{Args, ValueEnum};
 
-use super::args::{EngineArgs, RequirementArgs, ScenarioArgs};
+use super::args::{count, EngineArgs, RequirementArgs, ScenarioArgs};
 use crate::engine::make_engine_for;
 use crate::optim::front::print_picks;
 use crate::optim::manifest::{read_manifest, Algorithm, Manifest};
 use crate::optim::nsga2::{Config, Mode, Selection};
 use crate::optim::runner::{run as run_optimisation, RunOptions};
+use crate::schema;
 
 pub use crate::optim::manifest::{MAX_GENERATIONS, MAX_PARTICLES, MAX_POP, MAX_REPLICATES, MIN_POP};
 
@@ -23,11 +24,11 @@ pub use crate::optim::manifest::{MAX_GENERATIONS, MAX_PARTICLES, MAX_POP, MAX_RE
 #[derive(Debug, Clone, Args)]
 pub struct GaArgs {
     /// Population size (thesis: 500, high fidelity 1000) [default: 1000].
-    #[arg(long)]
+    #[arg(long, value_parser = count::<usize>(&schema::POP))]
     pub pop: Option<usize>,
     /// Maximum generations (D.5: MaxGenerations 1000) [default: 1000]. With --resume: a larger
     /// value extends the run.
-    #[arg(long)]
+    #[arg(long, value_parser = count::<u64>(&schema::GENERATIONS))]
     pub generations: Option<u64>,
     /// [default: matlab-like]
     #[arg(long, value_enum)]
@@ -38,16 +39,16 @@ pub struct GaArgs {
     pub tol: Option<f64>,
     /// Generations over which the spread change is averaged (MATLAB: MaxStallGenerations 100)
     /// [default: 100].
-    #[arg(long)]
+    #[arg(long, value_parser = count::<u64>(&schema::STALL_GENERATIONS))]
     pub stall_generations: Option<u64>,
     /// Particles per design when re-evaluating the final front [default: 1000].
-    #[arg(long)]
+    #[arg(long, value_parser = count::<u32>(&schema::FINAL_PARTICLES))]
     pub final_particles: Option<u32>,
     /// Independent particle streams for the final re-evaluation (standard errors) [default: 8].
-    #[arg(long)]
+    #[arg(long, value_parser = count::<u32>(&schema::REPLICATES))]
     pub replicates: Option<u32>,
     /// Save a checkpoint every N generations (always on Ctrl-C and at the end).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = count::<u64>(&schema::CHECKPOINT_EVERY))]
     pub checkpoint_every: u64,
     /// Mating selection: `deb` (Deb et al. 2002) or `permutation` (pymoo's NSGA-II
     /// tournaments; ahead of `deb` on the lunar problem, BENCHMARKS.md issue 14) [default: deb].
@@ -247,8 +248,17 @@ fn refuse_other_scenario(a: &OptimizeArgs, m: &Manifest) -> anyhow::Result<()> {
     if given.is_empty() {
         return Ok(());
     }
-    let (scenario, _, slopes) = a.scenario.resolve_over_slopes(a.requirements.alpha_points)?;
-    let requirements = a.requirements.resolve(&a.scenario)?;
+    // flags that adjust a scenario (`--teeth 50`) are laid over the run's own, so that the
+    // difference named is theirs (not every preset value the run had changed, such as `g`)
+    let mut flags = a.scenario.clone();
+    if flags.config.is_none() && flags.env.is_none() && flags.compat.is_none() {
+        flags.config = Some(a.out.join("run.toml"));
+    }
+    let (scenario, _, slopes) = flags.resolve_over_slopes(a.requirements.alpha_points)?;
+    let requirements = match (&a.requirements.requirements, &a.scenario.config) {
+        (None, None) => m.requirements.clone(),
+        _ => a.requirements.resolve(&a.scenario)?,
+    };
     let mut diffs = Vec::new();
     differing_keys("scenario", &serde_json::to_value(&scenario)?, &serde_json::to_value(&m.scenario)?, &mut diffs);
     if slopes != m.slopes_deg {
@@ -289,8 +299,21 @@ fn differing_keys(path: &str, given: &serde_json::Value, stored: &serde_json::Va
 
 pub fn run(a: OptimizeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let (manifest, kind, scenario) = if a.resume {
+        if !a.out.join("run.toml").exists() && a.out.join(".sawtooth-run").exists() {
+            bail!(
+                "--resume: {} holds no run.toml: the run was stopped before it wrote its settings; start it again without --resume",
+                a.out.display()
+            );
+        }
         let mut m = read_manifest(&a.out)?;
         refuse_other_scenario(&a, &m)?;
+        if let Some(k) = a.engine.engine.filter(|&k| k != m.engine) {
+            bail!(
+                "--resume continues the run with its own engine: --engine {} differs from the run's {} (run.toml); drop the flag, or start a new run in another --out",
+                cli_name(k),
+                cli_name(m.engine)
+            );
+        }
         a.ga.apply_to_resumed(&mut m)?;
         let (kind, scenario) = (m.engine, m.scenario.clone());
         (Some(m), kind, scenario)
@@ -302,10 +325,10 @@ pub fn run(a: OptimizeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
             );
         }
         let (scenario, _, slopes_deg) = a.scenario.resolve_over_slopes(a.requirements.alpha_points)?;
-        let mut manifest = a.ga.manifest(scenario.clone(), a.engine.engine)?;
+        let mut manifest = a.ga.manifest(scenario.clone(), a.engine.kind())?;
         manifest.slopes_deg = slopes_deg;
         manifest.requirements = a.requirements.resolve(&a.scenario)?;
-        (Some(manifest), a.engine.engine, scenario)
+        (Some(manifest), a.engine.kind(), scenario)
     };
     let engine = make_engine_for(kind, &scenario).context("--engine")?;
     let outcome = run_optimisation(&a.out, manifest, a.resume, &engine, &a.ga.options(""))?;

@@ -65,12 +65,12 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     if trace && (scenario.effects.sled_motion.is_some() || scenario.effects.quadratic_drag.is_some()) {
         bail!("--trajectories and --plot redraw each flight as one closed-form arc; with the sled-motion or quadratic-drag effects that would be wrong, so they are not offered");
     }
-    if trace && matches!(a.engine.engine, EngineKind::Gpu | EngineKind::Auto) {
+    if trace && matches!(a.engine.kind(), EngineKind::Gpu | EngineKind::Auto) {
         bail!(
             "--trajectories and --plot record every flight, which only the CPU engines do: use --engine cpu or listing"
         );
     }
-    let engine = make_engine_for(a.engine.engine, &scenario).context("--engine")?;
+    let engine = make_engine_for(a.engine.kind(), &scenario).context("--engine")?;
     if !slopes.is_empty() {
         return over_slopes(out, &scenario, &design, engine.as_ref(), &slopes, requirements.as_ref(), a.json);
     }

@@ -50,7 +50,7 @@ pub struct Common {
 
 impl Common {
     fn plan(&self, command: &str, study: Study, members: Vec<Member>) -> Plan {
-        let engine: EngineKind = self.engine.engine;
+        let engine: EngineKind = self.engine.kind();
         Plan::new(command, study, engine, self.ga.checkpoint_every, members)
     }
 }
@@ -60,7 +60,7 @@ pub struct RepeatabilityArgs {
     #[command(flatten)]
     pub common: Common,
     /// Independent runs (thesis: 45).
-    #[arg(long, default_value_t = 45)]
+    #[arg(long, default_value_t = 45, value_parser = super::args::count::<u32>(&crate::schema::STUDY_RUNS))]
     pub runs: u32,
 }
 
@@ -102,7 +102,7 @@ fn repeatability(a: RepeatabilityArgs, out: &mut dyn Write) -> anyhow::Result<Ex
             Ok(Member {
                 label: format!("run {i:>3}"),
                 dir: format!("run_{i:03}"),
-                manifest: c.ga.manifest(s, c.engine.engine)?,
+                manifest: c.ga.manifest(s, c.engine.kind())?,
             })
         })
         .collect::<anyhow::Result<_>>()?;
@@ -129,7 +129,7 @@ fn sensitivity(a: SensitivityArgs, out: &mut dyn Write) -> anyhow::Result<ExitCo
             Ok(Member {
                 label: format!("grid {i:>2}"),
                 dir: format!("grid_{i:02}"),
-                manifest: c.ga.manifest(s, c.engine.engine)?,
+                manifest: c.ga.manifest(s, c.engine.kind())?,
             })
         })
         .collect::<anyhow::Result<_>>()?;

@@ -63,9 +63,9 @@ pub fn run(a: SweepArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         members.push(Member {
             label: format!("alpha {alpha:>5.1}"),
             dir: format!("alpha_{alpha:06.2}"),
-            manifest: a.ga.manifest(s, a.engine.engine)?,
+            manifest: a.ga.manifest(s, a.engine.kind())?,
         });
     }
-    let plan = Plan::new("gpu-sweep", Study::Sweep, a.engine.engine, a.ga.checkpoint_every, members);
+    let plan = Plan::new("gpu-sweep", Study::Sweep, a.engine.kind(), a.ga.checkpoint_every, members);
     plan_or_run(&a.out, &plan, a.plan, out)
 }

@@ -21,13 +21,13 @@ pub struct SynthArgs {
     #[arg(long = "effect", value_name = "NAME=PARAMS", help = super::args::effect_help())]
     pub effects: Vec<String>,
     /// Measured runs to synthesise (rows of the CSV).
-    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 10, value_parser = super::args::count::<u32>(&crate::schema::SYNTH_RUNS))]
     pub runs: u32,
     /// Seed of the particle streams and of the mass and scale noise.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Particles simulated per run (the run's finite grain count).
-    #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 2000, value_parser = super::args::count::<u32>(&crate::schema::SYNTH_PARTICLES))]
     pub particles: u32,
     /// Loaded mass per run, g (run-to-run sd 0.03 g).
     #[arg(long, default_value_t = 2.0)]
@@ -45,18 +45,16 @@ pub fn run(a: SynthArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let file = ConfigFile::load(&a.setup)?;
     let mut scenario = file.scenario()?;
     let design = file.design().with_context(|| format!("{}: the setup has no [design]", a.setup.display()))?;
-    for spec in &a.effects {
-        scenario.effects.set_from_cli(spec).map_err(|e| anyhow::anyhow!("--effect {spec}: {e}"))?;
-    }
-    scenario.validate().map_err(|e| anyhow::anyhow!("invalid setting: {e}"))?;
+    super::args::set_effects(&mut scenario, &a.effects)?;
+    scenario.validate().map_err(|e| {
+        anyhow::anyhow!("--setup {}: invalid setting: {}", a.setup.display(), super::args::in_user_terms(&e))
+    })?;
     // (the setup's own resolution is checked when the file is read)
     if let Some(r) = a.resolution_g.filter(|r| !(*r > 0.0 && r.is_finite())) {
         bail!("--resolution-g must be a positive number of grams, got {r}");
     }
     let resolution = a.resolution_g.or(file.measurement.as_ref().and_then(|m| m.scale_resolution_g)).unwrap_or(0.01);
-    if !(a.mass_g > 0.0 && a.mass_g.is_finite()) {
-        bail!("--mass-g must be a positive number of grams, got {}", a.mass_g);
-    }
+    crate::schema::SYNTH_MASS_G.check("--mass-g", a.mass_g).map_err(anyhow::Error::msg)?;
     let set = SynthSettings {
         runs: a.runs,
         seed: a.seed,

@@ -88,6 +88,9 @@ pub fn parse_effects(list: &str) -> anyhow::Result<Vec<EffectKind>> {
     }
     let mut out = Vec::new();
     for name in list.split(',').map(str::trim) {
+        if name == "all" {
+            bail!("`all` stands alone (it names every effect): give `all`, or a list of effects without it");
+        }
         let Some(e) = EffectKind::from_name(name) else {
             bail!("unknown effect `{name}` (known: all, {})", known_effects());
         };

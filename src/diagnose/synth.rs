@@ -66,7 +66,7 @@ pub fn synthesise(
         && set.mass_g > 0.0
         && set.recovery.0 > 0.0
         && set.recovery.0 <= set.recovery.1
-        && set.recovery.1 <= 1.5)
+        && set.recovery.1 <= crate::schema::RECOVERY.max)
     {
         anyhow::bail!(
             "SynthSettings: resolution_g ({}) and mass_g ({}) must be positive, recovery ({}, {}) must satisfy 0 < lo <= hi <= 1.5",

@@ -223,8 +223,7 @@ impl MeasurementTable {
 
 impl ConfigFile {
     pub fn load(path: &Path) -> anyhow::Result<Self> {
-        let text =
-            std::fs::read_to_string(path).with_context(|| format!("cannot read config file {}", path.display()))?;
+        let text = crate::io::bounded::read_text(path, &crate::schema::CONFIG_FILE)?;
         Self::parse(&text).with_context(|| format!("in config file {}", path.display()))
     }
 
@@ -251,6 +250,9 @@ impl ConfigFile {
             set(&mut s.environment.g, e.g_m_s2);
             set(&mut s.environment.alpha_deg, e.alpha_deg);
             if let Some(k) = e.k_drag_per_s {
+                if !(k >= 0.0 && k.is_finite()) {
+                    bail!("[environment] k_drag_per_s must be a finite number >= 0 1/s (0 = vacuum), got {k}");
+                }
                 s.environment.k_drag = if k == 0.0 { None } else { Some(k) };
             }
         }

@@ -2,7 +2,8 @@
 //!
 //! Format: `#` lines are provenance (kept, in order); then a header `run,tooth_1,..,tooth_n`
 //! with an optional `input_mass` column; then one row per run, masses in grams (one record
-//! per line; blank lines are skipped; an empty `input_mass` cell means "not recorded"). Every rule
+//! per line, ended by LF, CRLF or a lone CR; blank lines are skipped; an empty `input_mass` column
+//! means "not recorded", and it is recorded for every run or for none). Every rule
 //! a file can break is reported with the file name, the line, the column and the rule.
 //!
 //! # Which normalisation reproduces the thesis
@@ -41,7 +42,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use anyhow::{bail, Context as _};
+use anyhow::bail;
 
 /// All runs of one validation test.
 #[derive(Clone, Debug, PartialEq)]
@@ -72,14 +73,16 @@ enum Column {
 
 /// Reads and checks a measured-runs CSV file.
 pub fn load(path: &Path) -> anyhow::Result<MeasuredRuns> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read measured data {}", path.display()))?;
+    let text = crate::io::bounded::read_text(path, &crate::schema::MEASURED_FILE)?;
     parse(&text, &path.display().to_string())
 }
 
 /// Parses a measured-runs CSV text; `name` is the file name used in messages.
 pub fn parse(text: &str, name: &str) -> anyhow::Result<MeasuredRuns> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    // old Mac line endings (a lone CR) end a line too: without this the whole file would be
+    // one line and the message "no header line" would point nowhere
+    let text = &text.replace("\r\n", "\n").replace('\r', "\n");
     let provenance: Vec<String> =
         text.lines().filter_map(|l| l.strip_prefix('#')).map(|l| l.trim().to_string()).collect();
     // One record per physical line (no multi-line quoted fields), so that every message can
@@ -131,6 +134,10 @@ pub fn parse(text: &str, name: &str) -> anyhow::Result<MeasuredRuns> {
 
     let mut runs: Vec<MeasuredRun> = Vec::new();
     let mut first_line: HashMap<String, u64> = HashMap::new();
+    // the first run with and the first without an input mass: a column recorded for some runs
+    // only would switch the normalisation silently (issue 34)
+    let mut with_input: Option<(u64, String)> = None;
+    let mut without_input: Option<(u64, String)> = None;
     for record in records {
         let (line, record) = record?;
         if record.len() != columns.len() {
@@ -143,6 +150,7 @@ pub fn parse(text: &str, name: &str) -> anyhow::Result<MeasuredRuns> {
         let mut id = String::new();
         let mut teeth_g = vec![0.0; teeth];
         let mut input_mass_g = None;
+
         for ((field, column), header_name) in record.iter().zip(&columns).zip(header.iter()) {
             match *column {
                 Column::Run => {
@@ -181,6 +189,26 @@ pub fn parse(text: &str, name: &str) -> anyhow::Result<MeasuredRuns> {
         if !recovered.is_finite() {
             bail!(
                 "{name}:{line}: run `{id}`: tooth masses sum to more than any number holds ({recovered} g); the run cannot be normalised"
+            );
+        }
+        if let Some(input) = input_mass_g {
+            let bound = crate::schema::RECOVERY;
+            if recovered > bound.max * input {
+                bail!(
+                    "{name}:{line}: run `{id}`: the teeth hold {recovered} g, {:.0} % of its input_mass {input} g; recovered over loaded mass must lie in {} ({})",
+                    100.0 * recovered / input,
+                    bound.interval(),
+                    bound.why
+                );
+            }
+            with_input.get_or_insert((line, id.clone()));
+        } else if columns.contains(&Column::InputMass) {
+            without_input.get_or_insert((line, id.clone()));
+        }
+        if let (Some((l1, id1)), Some((l2, id2))) = (&with_input, &without_input) {
+            bail!(
+                "{name}:{}: column `input_mass`: run `{id2}` has none but run `{id1}` (line {l1}) has one; record it for every run or leave the column out (a partly empty column would switch the normalisation)",
+                l1.max(l2)
             );
         }
         first_line.insert(id.clone(), line);
@@ -397,11 +425,33 @@ mod tests {
 
     #[test]
     fn empty_input_mass_is_not_recorded() {
-        let m = parse("run,tooth_1,input_mass\n1,1,\n2,1,2\n", "ok.csv").unwrap();
+        let m = parse("run,tooth_1,input_mass\n1,1,\n2,1,\n", "ok.csv").unwrap();
         assert_eq!(m.runs[0].input_mass_g, None);
+        let m = parse("run,tooth_1,input_mass\n1,1,2\n2,1,2\n", "ok.csv").unwrap();
         assert_eq!(m.recovery(), Some(0.5));
         let one = parse("run,tooth_1,tooth_2\n1,1,1\n", "ok.csv").unwrap();
         assert!(one.std_fractions().iter().all(|s| s.is_nan()));
+    }
+
+    /// Issue 34, finding 7: one empty cell would switch the normalisation silently, and teeth
+    /// holding 170 % of the loaded mass mean the column is not the loaded mass.
+    #[test]
+    fn input_mass_is_recorded_for_every_run_or_none_and_holds_the_teeth() {
+        let e = parse("run,tooth_1,input_mass\n1,1,\n2,1,2\n", "m.csv").unwrap_err().to_string();
+        assert!(e.starts_with("m.csv:3: column `input_mass`: run `1` has none but run `2` (line 3) has one"), "{e}");
+        let e = parse("run,tooth_1,tooth_2,input_mass\n1,1.0,0.7,1.0\n", "m.csv").unwrap_err().to_string();
+        assert!(e.contains("run `1`: the teeth hold 1.7 g, 170 % of its input_mass 1 g"), "{e}");
+        assert!(e.contains("must lie in [0, 1.5]"), "{e}");
+        // a little over the loaded mass is real (Test 3's run 7: 2.05 g of 2.02 g)
+        parse("run,tooth_1,tooth_2,tooth_3,input_mass\n1,0.94,0.59,0.52,2.02\n", "m.csv").unwrap();
+    }
+
+    #[test]
+    fn lone_carriage_returns_end_lines() {
+        let m = parse("# old Mac\rrun,tooth_1,tooth_2\r1,1,2\r2,2,1\r", "cr.csv").unwrap();
+        assert_eq!(m.runs.len(), 2);
+        let e = parse("run,tooth_1\r1,-1\r", "cr.csv").unwrap_err().to_string();
+        assert!(e.starts_with("cr.csv:2:"), "{e}");
     }
 
     #[test]

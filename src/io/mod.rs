@@ -1,6 +1,7 @@
 //! Files in and out: configuration, measured data, trajectories, atomic writes, run folders.
 
 pub mod atomic;
+pub mod bounded;
 pub mod config;
 pub mod measured;
 pub mod progress;

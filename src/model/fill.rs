@@ -7,10 +7,9 @@ use super::rng::{seed_word, uniform01, DRAW_LAUNCH_POINT, PER_PARTICLE};
 use super::scenario::{LaunchPoints, PhysicsMode};
 use super::validity::Invalid;
 
-/// Halton points the listing samples (D.5 line 31-32: haltonset(2,'Skip',1), net(p, 2000)).
-pub const LISTING_HALTON_POINTS: u64 = 2000;
-/// Cap on Halton points the physical mode draws to find n launch points in a small fill.
-pub const MAX_HALTON_POINTS: u64 = 20_000_000;
+/// The Halton caps are declared in `schema` (they bound a loop, and `validity`'s message names
+/// them without depending on this module).
+pub use crate::schema::{LISTING_HALTON_POINTS, MAX_HALTON_POINTS};
 /// Arc points of the physical fill polygon (the listing keeps 10 of 1000, erratum 20).
 const PHYSICAL_ARC_POINTS: usize = 512;
 
@@ -481,7 +480,7 @@ fn launch_points_inlined(
         }
     }
     if out.len() < n {
-        return Err(Invalid::FillTooSmall { found: out.len(), needed: n });
+        return Err(Invalid::FillTooSmall { found: out.len(), needed: n, candidates: i - 1 });
     }
     Ok(out)
 }
@@ -540,7 +539,7 @@ mod tests {
             }
         }
         if out.len() < n {
-            return Err(Invalid::FillTooSmall { found: out.len(), needed: n });
+            return Err(Invalid::FillTooSmall { found: out.len(), needed: n, candidates: i - 1 });
         }
         Ok(out)
     }

@@ -337,38 +337,35 @@ impl Scenario {
         within("collision.k_elastic", self.collision.k_elastic, 0.0, 1.0)?;
         within("collision.mu_friction", self.collision.mu_friction, 0.0, 10.0)?;
         let s = &self.sim;
-        if !(2..=100_000).contains(&s.teeth) {
-            return Err(format!("`sim.teeth` must lie in [2, 100000], got {}", s.teeth));
-        }
-        if !(1..=10_000_000).contains(&s.particles) {
-            return Err(format!("`sim.particles` must lie in [1, 10000000], got {}", s.particles));
-        }
-        if !(1..=100_000).contains(&s.max_bounces) {
-            return Err(format!("`sim.max_bounces` must lie in [1, 100000], got {}", s.max_bounces));
-        }
+        use crate::schema::{SIM_MAX_BOUNCES, SIM_PARTICLES, SIM_TEETH};
+        SIM_TEETH.check_u32("`sim.teeth`", s.teeth)?;
+        SIM_PARTICLES.check_u32("`sim.particles`", s.particles)?;
+        SIM_MAX_BOUNCES.check_u32("`sim.max_bounces`", s.max_bounces)?;
         within("sim.random_band", s.random_band, 0.0, 0.9)?;
         within("sim.rest_threshold", s.rest_threshold, 0.0, 1.0)?;
         within("sim.launch_offset_deg", s.launch_offset_deg, -90.0, 90.0)?;
         let p = &self.performance;
-        for (name, v) in [
-            ("performance.conveyor_length", p.conveyor_length),
-            ("performance.regolith_width", p.regolith_width),
-            ("performance.sled_width", p.sled_width),
-            ("performance.sled_thickness", p.sled_thickness),
-            ("performance.sled_density", p.sled_density),
-            ("performance.wire_force", p.wire_force),
-            ("performance.wire_diameter", p.wire_diameter),
-            ("performance.wire_density", p.wire_density),
-            ("performance.wire_heat_capacity", p.wire_heat_capacity),
-            ("performance.wire_delta_t", p.wire_delta_t),
-            ("performance.contraction_ratio", p.contraction_ratio),
-            ("performance.wire_emissivity", p.wire_emissivity),
-            ("performance.t_low", p.t_low),
-            ("performance.t_high", p.t_high),
-            ("performance.downstroke_speed", p.downstroke_speed),
-            ("performance.f_max", p.f_max),
+        // each value positive and below the bound past which it is a typo (schema::PERFORMANCE)
+        use crate::schema as b;
+        for (bound, v) in [
+            (&b::PERF_CONVEYOR_LENGTH, p.conveyor_length),
+            (&b::PERF_REGOLITH_WIDTH, p.regolith_width),
+            (&b::PERF_SLED_WIDTH, p.sled_width),
+            (&b::PERF_SLED_THICKNESS, p.sled_thickness),
+            (&b::PERF_SLED_DENSITY, p.sled_density),
+            (&b::PERF_WIRE_FORCE, p.wire_force),
+            (&b::PERF_WIRE_DIAMETER, p.wire_diameter),
+            (&b::PERF_WIRE_DENSITY, p.wire_density),
+            (&b::PERF_WIRE_HEAT_CAPACITY, p.wire_heat_capacity),
+            (&b::PERF_WIRE_DELTA_T, p.wire_delta_t),
+            (&b::PERF_CONTRACTION_RATIO, p.contraction_ratio),
+            (&b::PERF_WIRE_EMISSIVITY, p.wire_emissivity),
+            (&b::PERF_T_LOW, p.t_low),
+            (&b::PERF_T_HIGH, p.t_high),
+            (&b::PERF_DOWNSTROKE_SPEED, p.downstroke_speed),
+            (&b::PERF_F_MAX, p.f_max),
         ] {
-            positive(name, v)?;
+            bound.check(&format!("`{}`", bound.lib), v)?;
         }
         finite("performance.wire_bias_stress", p.wire_bias_stress)?;
         if p.t_high <= p.t_low {

@@ -24,8 +24,10 @@ pub enum Invalid {
     CatchCutsRamp { t2_mm: f64 },
     #[error("spill check (5.3.1): {detail}")]
     FillSpills { detail: String },
-    #[error("fill area too small: {found} of {needed} launch points fall inside it (4.2.3)")]
-    FillTooSmall { found: usize, needed: usize },
+    /// `candidates`: the points drawn before giving up; at the cap (`schema::MAX_HALTON_POINTS`,
+    /// the listing's 2000) it is the particle count, not the fill, that is too large.
+    #[error("fill area too small: {found} of {needed} launch points fall inside it among the {candidates} candidate points drawn (4.2.3; at most {} are drawn in the physical mode, {} in the listing's: fewer particles would seat)", crate::schema::MAX_HALTON_POINTS, crate::schema::LISTING_HALTON_POINTS)]
+    FillTooSmall { found: usize, needed: usize, candidates: u64 },
 }
 
 impl Invalid {

@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use anyhow::Context as _;
+use anyhow::{bail, Context as _};
 use serde::{Deserialize, Serialize};
 
 use super::nsga2::{Config, Mode};
@@ -50,26 +50,24 @@ pub struct Manifest {
 /// largest population, generation count, particle count and replicate count a run accepts:
 /// beyond these a value is a typo, not a run (a population of a billion needs tens of GB
 /// before the first generation).
-pub const MIN_POP: usize = 4;
-pub const MAX_POP: usize = 100_000;
-pub const MAX_GENERATIONS: u64 = 1_000_000;
-pub const MAX_PARTICLES: u32 = 10_000_000;
-pub const MAX_REPLICATES: u32 = 1000;
+/// (Declared in `schema`, here under the names the commands use.)
+pub const MIN_POP: usize = crate::schema::POP.min as usize;
+pub const MAX_POP: usize = crate::schema::POP.max as usize;
+pub const MAX_GENERATIONS: u64 = crate::schema::GENERATIONS.max;
+pub const MAX_PARTICLES: u32 = crate::schema::FINAL_PARTICLES.max as u32;
+pub const MAX_REPLICATES: u32 = crate::schema::REPLICATES.max as u32;
 
 impl Manifest {
     /// The rules a new run's settings are checked by, applied to stored ones: a run.toml
     /// edited by hand (or damaged) is refused before anything runs, naming its key.
     pub fn validate(&self) -> Result<(), String> {
         self.scenario.validate().map_err(|e| format!("scenario: {e}"))?;
+        use crate::schema::{FINAL_PARTICLES, GENERATIONS, POP, REPLICATES, STALL_GENERATIONS};
         let c = &self.config;
-        if !(MIN_POP..=MAX_POP).contains(&c.pop) {
-            return Err(format!("`config.pop` must lie in [{MIN_POP}, {MAX_POP}], got {}", c.pop));
-        }
-        if c.max_generations > MAX_GENERATIONS {
-            return Err(format!(
-                "`config.max_generations` must be at most {MAX_GENERATIONS}, got {}",
-                c.max_generations
-            ));
+        POP.check_usize("`config.pop`", c.pop)?;
+        GENERATIONS.check("`config.max_generations`", c.max_generations)?;
+        if let Mode::MatlabLike { stall_generations, .. } = c.mode {
+            STALL_GENERATIONS.check("`config.mode.stall_generations`", stall_generations)?;
         }
         if let Mode::MatlabLike { pareto_fraction, tol, .. } = c.mode {
             if !(tol > 0.0 && tol.is_finite()) {
@@ -87,12 +85,8 @@ impl Manifest {
         if !(0.0..=1.0).contains(&c.crossover_prob) {
             return Err(format!("`config.crossover_prob` must lie in [0, 1], got {}", c.crossover_prob));
         }
-        if !(1..=MAX_PARTICLES).contains(&self.final_particles) {
-            return Err(format!("`final_particles` must lie in [1, {MAX_PARTICLES}], got {}", self.final_particles));
-        }
-        if !(1..=MAX_REPLICATES).contains(&self.replicates) {
-            return Err(format!("`replicates` must lie in [1, {MAX_REPLICATES}], got {}", self.replicates));
-        }
+        FINAL_PARTICLES.check_u32("`final_particles`", self.final_particles)?;
+        REPLICATES.check_u32("`replicates`", self.replicates)?;
         for &alpha in &self.slopes_deg {
             let mut s = self.scenario.clone();
             s.environment.alpha_deg = alpha;
@@ -108,7 +102,10 @@ impl Manifest {
 /// Read a run's manifest (for --resume).
 pub fn read_manifest(dir: &Path) -> anyhow::Result<Manifest> {
     let path = dir.join("run.toml");
-    let text = std::fs::read_to_string(&path).with_context(|| format!("no run manifest at {}", path.display()))?;
+    if !path.exists() {
+        bail!("no run manifest at {}", path.display());
+    }
+    let text = crate::io::bounded::read_text(&path, &crate::schema::MANIFEST_FILE)?;
     let m: Manifest = toml::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
     m.validate().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     Ok(m)
@@ -117,7 +114,7 @@ pub fn read_manifest(dir: &Path) -> anyhow::Result<Manifest> {
 /// The run manifest in `path` when the file is one (a run folder's run.toml: it has a
 /// `version` and a `[scenario]`), validated; None for any other file (e.g. a scenario config).
 pub fn manifest_in(path: &Path) -> anyhow::Result<Option<Manifest>> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let text = crate::io::bounded::read_text(path, &crate::schema::CONFIG_FILE)?;
     let Ok(table) = text.parse::<toml::Table>() else { return Ok(None) };
     if !(table.contains_key("version") && table.get("scenario").is_some_and(toml::Value::is_table)) {
         return Ok(None);

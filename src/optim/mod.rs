@@ -7,6 +7,7 @@
 //! - [`observe`]: the loop that drives a solver and the observers of its side jobs
 //!   (checkpoints, Ctrl-C); [`runner`] adds the run folder's logs and progress.
 
+pub mod checkpoint;
 pub mod hypervolume;
 pub mod nsga2;
 pub mod test_problems;

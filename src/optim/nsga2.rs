@@ -15,7 +15,6 @@
 //! uninterrupted run bit for bit.
 
 use std::cmp::Ordering;
-use std::fs;
 use std::path::Path;
 
 use anyhow::Context as _;
@@ -594,7 +593,7 @@ pub fn save_checkpoint(path: impl AsRef<Path>, state: &State) -> anyhow::Result<
 /// [`Config`]: continue it with the same config and problem to reproduce the original run.
 pub fn load_checkpoint(path: impl AsRef<Path>) -> anyhow::Result<State> {
     let path = path.as_ref();
-    let text = fs::read_to_string(path).with_context(|| format!("reading checkpoint {}", path.display()))?;
+    let text = crate::io::bounded::read_text(path, &crate::schema::CHECKPOINT_FILE)?;
     serde_json::from_str(&text).with_context(|| format!("parsing checkpoint {}", path.display()))
 }
 

@@ -353,7 +353,7 @@ pub fn run(
         bail!("no run to resume: no run manifest at {}", paths.manifest.display());
     }
     // Owned for the whole run: a second process started into `dir` is refused, not interleaved.
-    let _owned = RunDir::acquire(dir, RUN_KIND, Access::Exclusive, |d| d.join("run.toml").exists())?;
+    let _owned = RunDir::acquire(dir, RUN_KIND, Access::Exclusive)?;
     let (mut manifest, state) = if resume {
         let m = match manifest {
             Some(m) => m,
@@ -370,6 +370,9 @@ pub fn run(
         } else {
             let state = load_checkpoint(&paths.checkpoint)
                 .with_context(|| format!("resuming: reading {}", paths.checkpoint.display()))?;
+            // an edited or damaged checkpoint is refused by its field, not believed
+            super::checkpoint::validate_state(&state, &m.config, SawtoothProblem::SHAPE)
+                .map_err(|e| anyhow::anyhow!("resuming: {}: {e}", paths.checkpoint.display()))?;
             truncate_csv(&paths.evaluations, state.generation)?;
             truncate_csv(&paths.generations, state.generation)?;
             eprintln!("{}resuming from the checkpoint at generation {}", opts.label, state.generation);

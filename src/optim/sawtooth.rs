@@ -140,6 +140,10 @@ pub struct SawtoothProblem<'a> {
 }
 
 impl SawtoothProblem<'_> {
+    /// Eight design variables (l_c, l_a, l_b, r, ω, δ, v0, a) and two objectives
+    /// (f_stroke, W_spec): what a checkpoint of a run must fit.
+    pub const SHAPE: super::checkpoint::Shape = super::checkpoint::Shape { dim: 8, objectives: 2 };
+
     pub fn seed_for(&self, generation: u64) -> u64 {
         self.base_seed.wrapping_add(generation.wrapping_mul(0x9E37_79B9_7F4A_7C15))
     }
@@ -147,10 +151,10 @@ impl SawtoothProblem<'_> {
 
 impl BatchProblem for SawtoothProblem<'_> {
     fn dim(&self) -> usize {
-        8
+        Self::SHAPE.dim
     }
     fn n_objectives(&self) -> usize {
-        2
+        Self::SHAPE.objectives
     }
     fn bounds(&self) -> (Vec<f64>, Vec<f64>) {
         (LOWER_BOUND_CLI.to_vec(), UPPER_BOUND_CLI.to_vec())

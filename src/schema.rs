@@ -1,0 +1,664 @@
+//! The one declaration of every bounded input (issue 34): each count that sizes an
+//! allocation or a loop, each bounded real number without a home in `Scenario::validate`,
+//! and each file the project reads, with the names a user meets it by (the CLI flag, the
+//! key in a config file, run.toml, plan.json or checkpoint.json, the Python argument), its
+//! unit and its bounds. The CLI's value parsers, the config reader, plan, manifest and
+//! checkpoint loading and the Python package all check against these constants, so a bound
+//! cannot exist in one path and be missing in another. docs/reliability.md lists them (a
+//! test keeps that list and this one equal).
+//!
+//! This module imports nothing of the crate: every layer may use it.
+
+/// Halton points the listing samples (D.5 line 31-32: haltonset(2,'Skip',1), net(p, 2000)).
+pub const LISTING_HALTON_POINTS: u64 = 2000;
+/// Cap on the Halton points the physical mode draws to find n launch points in a small fill
+/// (4.2.3): the loop's bound, so a particle count the fill cannot seat ends in an error.
+pub const MAX_HALTON_POINTS: u64 = 20_000_000;
+
+/// An integer input: a population, a number of runs, particles, generations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Count {
+    /// The command-line flags that set it.
+    pub flags: &'static [&'static str],
+    /// Its keys in files (`[sim] particles` in a config; `config.pop` in run.toml and in a
+    /// plan member's manifest).
+    pub keys: &'static [&'static str],
+    /// Its name as a Python argument, where the package takes it.
+    pub python: Option<&'static str>,
+    pub min: u64,
+    pub max: u64,
+    /// Why the upper bound is where it is (what the machine could hold, or what is a typo).
+    pub why: &'static str,
+}
+
+impl Count {
+    /// `v` when it lies in `[min, max]`, else the rule naming the field as the user spelled
+    /// it (`spelled`: a flag, a key or an argument).
+    pub fn check(&self, spelled: &str, v: u64) -> Result<u64, String> {
+        if (self.min..=self.max).contains(&v) {
+            Ok(v)
+        } else {
+            Err(format!("{spelled} {}, got {v}", self.rule()))
+        }
+    }
+
+    /// The rule in words: `must lie in [4, 100000] (why)`.
+    pub fn rule(&self) -> String {
+        format!("must lie in [{}, {}] ({})", self.min, self.max, self.why)
+    }
+
+    /// As [`Count::check`] for a `usize`.
+    pub fn check_usize(&self, spelled: &str, v: usize) -> Result<usize, String> {
+        self.check(spelled, v as u64).map(|_| v)
+    }
+
+    /// As [`Count::check`] for a `u32`.
+    pub fn check_u32(&self, spelled: &str, v: u32) -> Result<u32, String> {
+        self.check(spelled, u64::from(v)).map(|_| v)
+    }
+}
+
+/// A real input with an interval; `min_open`/`max_open`: the end itself is excluded.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Real {
+    /// Its name in the library (`performance.f_max`), where it has one.
+    pub lib: &'static str,
+    pub flags: &'static [&'static str],
+    pub keys: &'static [&'static str],
+    pub python: Option<&'static str>,
+    pub unit: &'static str,
+    pub min: f64,
+    pub min_open: bool,
+    pub max: f64,
+    pub max_open: bool,
+    pub why: &'static str,
+}
+
+impl Real {
+    /// The interval in mathematical notation, `(0, 1e6]`.
+    pub fn interval(&self) -> String {
+        format!(
+            "{}{}, {}{}",
+            if self.min_open { '(' } else { '[' },
+            self.min,
+            self.max,
+            if self.max_open { ')' } else { ']' }
+        )
+    }
+
+    pub fn contains(&self, v: f64) -> bool {
+        let above = if self.min_open { v > self.min } else { v >= self.min };
+        let below = if self.max_open { v < self.max } else { v <= self.max };
+        v.is_finite() && above && below
+    }
+
+    /// `v` when finite and inside the interval, else the rule naming the field as spelled.
+    pub fn check(&self, spelled: &str, v: f64) -> Result<f64, String> {
+        if self.contains(v) {
+            Ok(v)
+        } else {
+            let unit = if self.unit.is_empty() { String::new() } else { format!(" {}", self.unit) };
+            Err(format!("{spelled} must lie in {}{unit} ({}), got {v:?}", self.interval(), self.why))
+        }
+    }
+}
+
+/// A file the project reads, bounded in size so that `--config /dev/zero` or a runaway
+/// file is refused by name instead of read until memory runs out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FileLimit {
+    /// What the file is, for the message (`config file`, `measured data`).
+    pub what: &'static str,
+    pub flags: &'static [&'static str],
+    pub max_bytes: u64,
+}
+
+const MIB: u64 = 1 << 20;
+
+// ---- the scenario's counts (`Scenario::validate`) ----------------------------------------
+
+pub const SIM_PARTICLES: Count = Count {
+    flags: &["--particles"],
+    keys: &["[sim] particles", "scenario.sim.particles"],
+    python: Some("particles"),
+    min: 1,
+    max: 10_000_000,
+    why: "the per-design particle buffers of ten million grains already take gigabytes in a batch",
+};
+pub const SIM_TEETH: Count = Count {
+    flags: &["--teeth"],
+    keys: &["[sim] teeth", "scenario.sim.teeth"],
+    python: Some("teeth"),
+    min: 2,
+    max: 100_000,
+    why: "a conveyor of more teeth is longer than any the thesis sizes",
+};
+pub const SIM_MAX_BOUNCES: Count = Count {
+    flags: &["--bounces"],
+    keys: &["[sim] max_bounces", "scenario.sim.max_bounces"],
+    python: Some("max_bounces"),
+    min: 1,
+    max: 100_000,
+    why: "a grain that has not settled after this many bounces never will",
+};
+
+// ---- the optimiser (`optimize`, `gpu-sweep`, `study`, plans, run.toml) --------------------
+
+pub const POP: Count = Count {
+    flags: &["--pop"],
+    keys: &["config.pop"],
+    python: None,
+    min: 4,
+    max: 100_000,
+    why: "one generation is one engine batch of that many designs",
+};
+pub const GENERATIONS: Count = Count {
+    flags: &["--generations"],
+    keys: &["config.max_generations"],
+    python: None,
+    min: 0,
+    max: 1_000_000,
+    why: "the thesis's runs stop within 1000",
+};
+pub const STALL_GENERATIONS: Count = Count {
+    flags: &["--stall-generations"],
+    keys: &["config.mode.stall_generations"],
+    python: None,
+    min: 1,
+    max: 1_000_000,
+    why: "at most the generation bound",
+};
+pub const FINAL_PARTICLES: Count = Count {
+    flags: &["--final-particles"],
+    keys: &["final_particles"],
+    python: None,
+    min: 1,
+    max: SIM_PARTICLES.max,
+    why: "the bound of sim.particles",
+};
+pub const REPLICATES: Count = Count {
+    flags: &["--replicates"],
+    keys: &["replicates"],
+    python: None,
+    min: 1,
+    max: 1000,
+    why: "standard errors do not need more streams",
+};
+pub const CHECKPOINT_EVERY: Count = Count {
+    flags: &["--checkpoint-every"],
+    keys: &["checkpoint_every"],
+    python: None,
+    min: 1,
+    max: GENERATIONS.max,
+    why: "at most the generation bound",
+};
+pub const STUDY_RUNS: Count = Count {
+    flags: &["--runs"],
+    keys: &[],
+    python: None,
+    min: 2,
+    max: 10_000,
+    why: "each run is a member of the plan with its own folder",
+};
+pub const PLAN_MEMBERS: Count = Count {
+    flags: &[],
+    keys: &["members"],
+    python: None,
+    min: 1,
+    max: 100_000,
+    why: "each member is a run with its own folder",
+};
+
+// ---- calibration (`fit`, `diagnose`) -----------------------------------------------------
+
+pub const FIT_POP: Count = Count {
+    flags: &["--pop"],
+    keys: &[],
+    python: None,
+    min: 5,
+    max: 10_000,
+    why: "differential evolution needs five members; more than this is a typo",
+};
+pub const FIT_GENERATIONS: Count = Count {
+    flags: &["--generations"],
+    keys: &[],
+    python: None,
+    min: 0,
+    max: 100_000,
+    why: "the calibration converges within a few hundred",
+};
+pub const FIT_POLISH: Count = Count {
+    flags: &["--polish"],
+    keys: &[],
+    python: None,
+    min: 0,
+    max: 100_000,
+    why: "the compass search converges within a few hundred",
+};
+pub const FIT_PARTICLES: Count = Count {
+    flags: &["--particles"],
+    keys: &[],
+    python: None,
+    min: 1,
+    max: SIM_PARTICLES.max,
+    why: "the bound of sim.particles",
+};
+pub const FIT_MAX_PARTICLES: Count = Count {
+    flags: &["--max-particles"],
+    keys: &[],
+    python: None,
+    min: 1000,
+    max: SIM_PARTICLES.max,
+    why: "the bound of sim.particles",
+};
+
+// ---- `synth`, `bench`, `conformance` -----------------------------------------------------
+
+pub const SYNTH_RUNS: Count = Count {
+    flags: &["--runs"],
+    keys: &[],
+    python: None,
+    min: 1,
+    max: 10_000,
+    why: "each run is one simulation of the setup and one row set of the output",
+};
+pub const SYNTH_PARTICLES: Count = Count {
+    flags: &["--particles"],
+    keys: &[],
+    python: None,
+    min: 1,
+    max: SIM_PARTICLES.max,
+    why: "the bound of sim.particles",
+};
+pub const BENCH_DESIGNS: Count = Count {
+    flags: &["--designs"],
+    keys: &[],
+    python: None,
+    min: 1,
+    max: 100_000,
+    why: "one batch of that many designs; the optimiser's batches are smaller",
+};
+pub const BENCH_REPEATS: Count = Count {
+    flags: &["--repeats"],
+    keys: &[],
+    python: None,
+    min: 1,
+    max: 1000,
+    why: "the best of a thousand repeats is as good as it gets",
+};
+pub const CONFORMANCE_DESIGNS: Count = Count {
+    flags: &["--designs"],
+    keys: &[],
+    python: None,
+    min: 1,
+    max: 10_000,
+    why: "each design is simulated on both engines, particle by particle",
+};
+
+// ---- bounded reals -----------------------------------------------------------------------
+
+pub const SYNTH_MASS_G: Real = Real {
+    lib: "",
+    flags: &["--mass-g"],
+    keys: &[],
+    python: None,
+    unit: "g",
+    min: 0.0,
+    min_open: true,
+    max: 1e6,
+    max_open: false,
+    why: "a tonne of regolith in one test is no laboratory test",
+};
+
+/// The `[performance]` table's values (Eq. 4.45-4.60, D.7-D.8): positive and below a bound
+/// past which a value is a typo that makes `n_wire` overflow or the mass flow infinite.
+pub const PERF_CONVEYOR_LENGTH: Real = Real {
+    lib: "performance.conveyor_length",
+    flags: &[],
+    keys: &["[performance] conveyor_length_m"],
+    python: None,
+    unit: "m",
+    min: 0.0,
+    min_open: true,
+    max: 1000.0,
+    max_open: false,
+    why: "a conveyor beyond a kilometre is a typo, and makes the wire count overflow",
+};
+pub const PERF_REGOLITH_WIDTH: Real = Real {
+    lib: "performance.regolith_width",
+    flags: &[],
+    keys: &["[performance] regolith_width_m"],
+    python: None,
+    unit: "m",
+    min: 0.0,
+    min_open: true,
+    max: 100.0,
+    max_open: false,
+    why: "a bed wider than 100 m is a typo",
+};
+pub const PERF_SLED_WIDTH: Real = Real {
+    lib: "performance.sled_width",
+    flags: &[],
+    keys: &["[performance] sled_width_m"],
+    python: None,
+    unit: "m",
+    min: 0.0,
+    min_open: true,
+    max: 100.0,
+    max_open: false,
+    why: "a sled wider than 100 m is a typo",
+};
+pub const PERF_SLED_THICKNESS: Real = Real {
+    lib: "performance.sled_thickness",
+    flags: &[],
+    keys: &["[performance] sled_thickness_m"],
+    python: None,
+    unit: "m",
+    min: 0.0,
+    min_open: true,
+    max: 1.0,
+    max_open: false,
+    why: "a plate thicker than a metre is a typo",
+};
+pub const PERF_SLED_DENSITY: Real = Real {
+    lib: "performance.sled_density",
+    flags: &[],
+    keys: &["[performance] sled_density_kg_m3"],
+    python: None,
+    unit: "kg/m^3",
+    min: 0.0,
+    min_open: true,
+    max: 100000.0,
+    max_open: false,
+    why: "denser than any solid",
+};
+pub const PERF_WIRE_FORCE: Real = Real {
+    lib: "performance.wire_force",
+    flags: &[],
+    keys: &["scenario.performance.wire_force"],
+    python: None,
+    unit: "N",
+    min: 0.0,
+    min_open: true,
+    max: 1000000.0,
+    max_open: false,
+    why: "beyond any shape-memory wire",
+};
+pub const PERF_WIRE_DIAMETER: Real = Real {
+    lib: "performance.wire_diameter",
+    flags: &[],
+    keys: &["scenario.performance.wire_diameter"],
+    python: None,
+    unit: "m",
+    min: 0.0,
+    min_open: true,
+    max: 0.1,
+    max_open: false,
+    why: "a wire thicker than 10 cm is a typo",
+};
+pub const PERF_WIRE_DENSITY: Real = Real {
+    lib: "performance.wire_density",
+    flags: &[],
+    keys: &["scenario.performance.wire_density"],
+    python: None,
+    unit: "kg/m^3",
+    min: 0.0,
+    min_open: true,
+    max: 100000.0,
+    max_open: false,
+    why: "denser than any solid",
+};
+pub const PERF_WIRE_HEAT_CAPACITY: Real = Real {
+    lib: "performance.wire_heat_capacity",
+    flags: &[],
+    keys: &["scenario.performance.wire_heat_capacity"],
+    python: None,
+    unit: "J/(kg K)",
+    min: 0.0,
+    min_open: true,
+    max: 100000.0,
+    max_open: false,
+    why: "beyond any solid's",
+};
+pub const PERF_WIRE_DELTA_T: Real = Real {
+    lib: "performance.wire_delta_t",
+    flags: &[],
+    keys: &["scenario.performance.wire_delta_t"],
+    python: None,
+    unit: "K",
+    min: 0.0,
+    min_open: true,
+    max: 10000.0,
+    max_open: false,
+    why: "beyond any wire's melting point",
+};
+pub const PERF_CONTRACTION_RATIO: Real = Real {
+    lib: "performance.contraction_ratio",
+    flags: &[],
+    keys: &["[performance] contraction_ratio"],
+    python: None,
+    unit: "",
+    min: 0.0,
+    min_open: true,
+    max: 1.0,
+    max_open: true,
+    why: "a contracting wire's strain lies strictly between 0 and 1",
+};
+pub const PERF_WIRE_EMISSIVITY: Real = Real {
+    lib: "performance.wire_emissivity",
+    flags: &[],
+    keys: &["scenario.performance.wire_emissivity"],
+    python: None,
+    unit: "",
+    min: 0.0,
+    min_open: true,
+    max: 1.0,
+    max_open: false,
+    why: "an emissivity lies in (0, 1]",
+};
+pub const PERF_T_LOW: Real = Real {
+    lib: "performance.t_low",
+    flags: &[],
+    keys: &["scenario.performance.t_low"],
+    python: None,
+    unit: "K",
+    min: 0.0,
+    min_open: true,
+    max: 10000.0,
+    max_open: false,
+    why: "beyond any wire's melting point",
+};
+pub const PERF_T_HIGH: Real = Real {
+    lib: "performance.t_high",
+    flags: &[],
+    keys: &["scenario.performance.t_high"],
+    python: None,
+    unit: "K",
+    min: 0.0,
+    min_open: true,
+    max: 10000.0,
+    max_open: false,
+    why: "beyond any wire's melting point",
+};
+pub const PERF_DOWNSTROKE_SPEED: Real = Real {
+    lib: "performance.downstroke_speed",
+    flags: &[],
+    keys: &["[performance] downstroke_speed_m_s"],
+    python: None,
+    unit: "m/s",
+    min: 0.0,
+    min_open: true,
+    max: 1000.0,
+    max_open: false,
+    why: "faster than sound is a typo",
+};
+pub const PERF_F_MAX: Real = Real {
+    lib: "performance.f_max",
+    flags: &[],
+    keys: &["[performance] f_max_hz"],
+    python: None,
+    unit: "Hz",
+    min: 0.0,
+    min_open: true,
+    max: 10000.0,
+    max_open: false,
+    why: "beyond any wire's cycling rate",
+};
+
+/// Every `[performance]` bound, in the order `Scenario::validate` checks them.
+pub const PERFORMANCE: &[&Real] = &[
+    &PERF_CONVEYOR_LENGTH,
+    &PERF_REGOLITH_WIDTH,
+    &PERF_SLED_WIDTH,
+    &PERF_SLED_THICKNESS,
+    &PERF_SLED_DENSITY,
+    &PERF_WIRE_FORCE,
+    &PERF_WIRE_DIAMETER,
+    &PERF_WIRE_DENSITY,
+    &PERF_WIRE_HEAT_CAPACITY,
+    &PERF_WIRE_DELTA_T,
+    &PERF_CONTRACTION_RATIO,
+    &PERF_WIRE_EMISSIVITY,
+    &PERF_T_LOW,
+    &PERF_T_HIGH,
+    &PERF_DOWNSTROKE_SPEED,
+    &PERF_F_MAX,
+];
+
+/// Recovered over loaded mass of one measured run (`input_mass` against the teeth's sum):
+/// real runs exceed 1 a little (Test 3's run 7 recovers 2.05 g of 2.02 g: grains left from
+/// the previous run, the scale), `synth` draws recoveries up to this bound; beyond it the
+/// column is not the loaded mass.
+pub const RECOVERY: Real = Real {
+    lib: "",
+    flags: &[],
+    keys: &["input_mass (against the teeth's sum)"],
+    python: None,
+    unit: "",
+    min: 0.0,
+    min_open: false,
+    max: 1.5,
+    max_open: false,
+    why: "a run recovers at most half again what was loaded",
+};
+
+// ---- files -------------------------------------------------------------------------------
+
+pub const CONFIG_FILE: FileLimit =
+    FileLimit { what: "config file", flags: &["--config", "--setup", "--requirements"], max_bytes: 4 * MIB };
+pub const MEASURED_FILE: FileLimit = FileLimit { what: "measured data", flags: &["--data"], max_bytes: 64 * MIB };
+pub const MANIFEST_FILE: FileLimit = FileLimit { what: "run manifest (run.toml)", flags: &[], max_bytes: 4 * MIB };
+pub const PLAN_FILE: FileLimit = FileLimit { what: "campaign plan (plan.json)", flags: &[], max_bytes: 256 * MIB };
+/// A checkpoint of the largest population (100 000 members of ~0.5 kB) fits well within.
+pub const CHECKPOINT_FILE: FileLimit = FileLimit { what: "checkpoint", flags: &[], max_bytes: 512 * MIB };
+
+/// Every declared count, for the documentation and its test.
+pub const COUNTS: &[&Count] = &[
+    &SIM_PARTICLES,
+    &SIM_TEETH,
+    &SIM_MAX_BOUNCES,
+    &POP,
+    &GENERATIONS,
+    &STALL_GENERATIONS,
+    &FINAL_PARTICLES,
+    &REPLICATES,
+    &CHECKPOINT_EVERY,
+    &STUDY_RUNS,
+    &PLAN_MEMBERS,
+    &FIT_POP,
+    &FIT_GENERATIONS,
+    &FIT_POLISH,
+    &FIT_PARTICLES,
+    &FIT_MAX_PARTICLES,
+    &SYNTH_RUNS,
+    &SYNTH_PARTICLES,
+    &BENCH_DESIGNS,
+    &BENCH_REPEATS,
+    &CONFORMANCE_DESIGNS,
+];
+
+/// Every declared real interval.
+pub const REALS: &[&Real] = &[
+    &SYNTH_MASS_G,
+    &RECOVERY,
+    &PERF_CONVEYOR_LENGTH,
+    &PERF_REGOLITH_WIDTH,
+    &PERF_SLED_WIDTH,
+    &PERF_SLED_THICKNESS,
+    &PERF_SLED_DENSITY,
+    &PERF_WIRE_FORCE,
+    &PERF_WIRE_DIAMETER,
+    &PERF_WIRE_DENSITY,
+    &PERF_WIRE_HEAT_CAPACITY,
+    &PERF_WIRE_DELTA_T,
+    &PERF_CONTRACTION_RATIO,
+    &PERF_WIRE_EMISSIVITY,
+    &PERF_T_LOW,
+    &PERF_T_HIGH,
+    &PERF_DOWNSTROKE_SPEED,
+    &PERF_F_MAX,
+];
+
+/// Every declared file limit.
+pub const FILES: &[&FileLimit] = &[&CONFIG_FILE, &MEASURED_FILE, &MANIFEST_FILE, &PLAN_FILE, &CHECKPOINT_FILE];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_count_outside_its_bounds_is_refused_naming_the_field_and_the_rule() {
+        assert_eq!(POP.check("--pop", 4), Ok(4));
+        let e = POP.check("--pop", 1_000_000_000).unwrap_err();
+        assert!(e.starts_with("--pop must lie in [4, 100000]"), "{e}");
+        assert!(e.ends_with("got 1000000000"), "{e}");
+        assert!(STUDY_RUNS.check_u32("--runs", u32::MAX).is_err());
+    }
+
+    #[test]
+    fn a_real_outside_its_interval_or_not_finite_is_refused() {
+        assert!(PERF_CONTRACTION_RATIO.check("x", 0.5).is_ok());
+        for bad in [0.0, 1.0, 2.0, f64::NAN, f64::INFINITY] {
+            let e = PERF_CONTRACTION_RATIO.check("`[performance] contraction_ratio`", bad).unwrap_err();
+            assert!(e.contains("must lie in (0, 1)"), "{e}");
+        }
+        assert!(SYNTH_MASS_G.check("--mass-g", 1e308).unwrap_err().contains("(0, 1000000] g"));
+    }
+
+    /// docs/reliability.md lists every declared bound: each name a user meets it by, and
+    /// its interval, so the documentation cannot keep a bound the code has moved.
+    #[test]
+    fn the_documentation_lists_every_bound() {
+        let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/reliability.md")).unwrap();
+        for c in COUNTS {
+            let row = doc.lines().find(|l| {
+                c.flags.iter().chain(c.keys).all(|n| l.contains(&format!("`{n}`")))
+                    && l.contains(&format!("| {} | {} |", c.min, c.max))
+            });
+            assert!(row.is_some(), "docs/reliability.md has no row for {c:?}");
+        }
+        for r in REALS {
+            let row = doc.lines().find(|l| {
+                r.keys.iter().chain(r.flags).all(|n| l.contains(&format!("`{n}`"))) && l.contains(&r.interval())
+            });
+            assert!(row.is_some(), "docs/reliability.md has no row for {r:?}");
+        }
+        for f in FILES {
+            assert!(
+                doc.contains(&format!("| {} |", f.what)) && doc.contains(&format!("{} MiB", f.max_bytes >> 20)),
+                "{f:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn every_bound_is_an_interval_and_every_count_has_a_name() {
+        for c in COUNTS {
+            assert!(c.min <= c.max, "{c:?}");
+            assert!(!(c.flags.is_empty() && c.keys.is_empty()), "{c:?}");
+        }
+        for r in REALS {
+            assert!(r.min < r.max, "{r:?}");
+        }
+    }
+}
