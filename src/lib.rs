@@ -9,6 +9,7 @@
 
 pub mod calibrate;
 pub mod cli;
+pub mod dem;
 pub mod diagnose;
 pub mod engine;
 pub mod fit;
