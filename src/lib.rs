@@ -4,6 +4,7 @@
 //! - [`engine`]: batch evaluators behind one interface (`listing` port, fast `cpu` reference).
 //! - [`io`]: configuration files, trajectory CSV, the flight plot.
 //! - [`plot`]: the one plotting layer every figure goes through (SVG or PNG).
+//! - [`dem`]: a bridge to the LIGGGHTS DEM engine: cases, campaigns, model vs DEM.
 //! - [`cli`]: the thin command-line layer.
 //! - [`x86_64_v3`]: hot loops compiled a second time for AVX2 CPUs, same bits.
 
