@@ -128,7 +128,7 @@ fn designs_and_scenarios_the_mesh_cannot_represent_are_refused_by_name() {
         (vec!["--effect", "impact-scatter=5"], "effect `impact-scatter` is not carried"),
         (vec!["--design", "20,15,5,16,60,0,1,60"], "r <= l_a"),
         (vec!["--particles", "100000", "--grain-diameter-um", "800"], "cannot seat 100000 grains"),
-        (vec!["--grain-diameter-um", "-3"], "--grain-diameter-um"),
+        (vec!["--grain-diameter-um=-3"], "--grain-diameter-um"),
     ] {
         let mut args = vec!["dem", "write", "--config", RIG, "--out", out];
         args.extend(extra.iter());
@@ -161,7 +161,7 @@ fn an_engine_error_is_its_error_line_and_the_case_is_kept() {
     }
     let (_d, dir) = tmp("case");
     let (code, _, err) =
-        sawtooth(&["dem", "write", "--config", RIG, "--particles", "30", "--out", dir.to_str().unwrap()]);
+        sawtooth(&["dem", "write", "--config", RIG, "--particles", "60", "--out", dir.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
     let script =
         read(&dir.join("in.sawtooth")).replace("pair_coeff * *", "pair_coeff * *\nfix broken all no_such_style 1");

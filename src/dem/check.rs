@@ -54,8 +54,14 @@ pub struct CheckReport {
 /// The designs to check: the picks, then `k` front designs evenly spread over the front
 /// sorted by mass flow (skipping designs already picked).
 fn chosen(front: &[FrontPoint], k: usize) -> Vec<(String, FrontPoint)> {
-    let mut out: Vec<(String, FrontPoint)> =
-        picks(front).into_iter().map(|(l, p)| (l.to_string(), p.clone())).collect();
+    // a design picked twice (A is often C) is run once, labelled with both picks
+    let mut out: Vec<(String, FrontPoint)> = Vec::new();
+    for (l, p) in picks(front) {
+        match out.iter_mut().find(|(_, q)| q.design == p.design) {
+            Some((label, _)) => label.push_str(&format!("+{l}")),
+            None => out.push((l.to_string(), p.clone())),
+        }
+    }
     let mut sorted: Vec<&FrontPoint> = front.iter().collect();
     sorted.sort_by(|a, b| a.m_dot_kg_s.total_cmp(&b.m_dot_kg_s));
     for i in 0..k {
@@ -162,4 +168,33 @@ pub fn write_table(out: &mut dyn Write, r: &CheckReport) -> anyhow::Result<()> {
         )?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_design_picked_twice_is_checked_once_under_both_labels() {
+        let p = |v0: f64, m_dot: f64, w: f64| FrontPoint {
+            design: crate::model::Design { v0, ..crate::model::Design::lunar_solution_c() },
+            f_stroke_hz: 0.03,
+            w_spec_j_kg: w,
+            w_spec_se: 0.0,
+            m_dot_kg_s: m_dot,
+            m_dot_se: 0.0,
+            stroke_m: 0.02,
+            n_wire: 20,
+            d_avg_m: 0.3,
+            d_avg_se: 0.0,
+            p_avg_w: 5.0,
+            wire_length_m: 0.4,
+            alpha_deg: 35.0,
+            compliance: None,
+        };
+        // the first is closest to 48 kg/h and cheapest (A and C), the second delivers most (B)
+        let front = [p(1.0, 0.013, 300.0), p(1.8, 0.1, 400.0), p(1.4, 0.05, 350.0)];
+        let labels: Vec<String> = chosen(&front, 1).into_iter().map(|(l, _)| l).collect();
+        assert_eq!(labels, ["A+C", "B", "front-1"]);
+    }
 }

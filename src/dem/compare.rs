@@ -84,7 +84,10 @@ pub fn compare(scenario: &Scenario, design: &Design, runs: &[RunResult]) -> anyh
         runs: runs.len(),
         model_pct,
         dem_lost_pct: spread(
-            &runs.iter().map(|r| 100.0 * (1.0 - r.teeth_g.iter().sum::<f64>() / r.input_mass_g).max(0.0)).collect::<Vec<_>>(),
+            &runs
+                .iter()
+                .map(|r| 100.0 * (1.0 - r.teeth_g.iter().sum::<f64>() / r.input_mass_g).max(0.0))
+                .collect::<Vec<_>>(),
         ),
         model_lost_pct: 100.0 * (sim.lost_fraction + beyond),
         dem_pct,

@@ -48,15 +48,19 @@ fn segment_distance(p: V2, a: V2, b: V2) -> f64 {
     (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
 }
 
-/// Distance from `p` to the polygon's boundary.
-fn boundary_distance(p: V2, poly: &[V2]) -> f64 {
+/// Distance from `p` to the polygon's walls: every edge but the free surface (the edge
+/// from vertex `surface`, if any), which grains may overhang.
+fn wall_distance(p: V2, poly: &[V2], surface: Option<usize>) -> f64 {
     let n = poly.len();
-    (0..n).map(|i| segment_distance(p, poly[i], poly[(i + 1) % n])).fold(f64::INFINITY, f64::min)
+    (0..n)
+        .filter(|i| Some(*i) != surface)
+        .map(|i| segment_distance(p, poly[i], poly[(i + 1) % n]))
+        .fold(f64::INFINITY, f64::min)
 }
 
-/// Lattice sites inside the polygon at least `clearance` from its edges: rows `spacing`
+/// Lattice sites inside the polygon at least `clearance` from its walls: rows `spacing`
 /// apart, alternate rows shifted by half a spacing (a hexagonal-like lattice).
-fn sites(poly: &[V2], spacing: f64, clearance: f64, shift: f64) -> Vec<V2> {
+fn sites(poly: &[V2], surface: Option<usize>, spacing: f64, clearance: f64, shift: f64) -> Vec<V2> {
     let xs = poly.iter().map(|p| p[0]);
     let ys = poly.iter().map(|p| p[1]);
     let (x0, x1) = (xs.clone().fold(f64::INFINITY, f64::min), xs.fold(f64::NEG_INFINITY, f64::max));
@@ -70,7 +74,7 @@ fn sites(poly: &[V2], spacing: f64, clearance: f64, shift: f64) -> Vec<V2> {
         let mut x = x0 + clearance + offset;
         while x <= x1 - clearance {
             let p = [x, y];
-            if in_polygon(p, poly) && boundary_distance(p, poly) >= clearance {
+            if in_polygon(p, poly) && wall_distance(p, poly, surface) >= clearance {
                 out.push(p);
             }
             x += spacing;
@@ -103,9 +107,11 @@ pub fn place(
     let area_spacing = (fill.area / per_layer as f64 / (3f64.sqrt() / 2.0)).sqrt();
     let mut spacing = area_spacing.max(1.02 * d) * 1.3;
     let clearance = 0.51 * d;
+    // the polygon's free surface runs from p_fill to p2 (`model::fill::build_fill`)
+    let surface = fill.polygon.iter().position(|v| *v == fill.p_fill);
     let mut layer_sites = Vec::new();
     while spacing >= 1.02 * d {
-        layer_sites = sites(&fill.polygon, spacing, clearance, 0.0);
+        layer_sites = sites(&fill.polygon, surface, spacing, clearance, 0.0);
         if layer_sites.len() >= per_layer {
             break;
         }
