@@ -111,8 +111,11 @@ pub fn run(c: DemCommand, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     }
 }
 
+/// A setup's stated sled return: delay (s), speed (m/s).
+type KnownReturn = Option<(f64, f64)>;
+
 /// Scenario, design, settings and a stated sled return from the flags and the config.
-fn resolve(a: &CaseArgs) -> anyhow::Result<(Scenario, Design, DemSettings, Option<(f64, f64)>)> {
+fn resolve(a: &CaseArgs) -> anyhow::Result<(Scenario, Design, DemSettings, KnownReturn)> {
     // --particles is the DEM's grain count here; the model keeps the config's particle count
     let mut scenario_args = a.scenario.clone();
     let grains = scenario_args.particles.take();
