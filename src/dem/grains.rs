@@ -137,7 +137,10 @@ pub fn place(
             }
             let z = (l as f64 + 0.5) * depth / layers as f64;
             let (jx, jy) = (rng.random_range(-1.0..=1.0) * jitter, rng.random_range(-1.0..=1.0) * jitter);
-            grains.push(Grain { pos: [s[0] + jx, s[1] + jy, z], diameter_m: d });
+            // a site by the free surface (no clearance there) keeps its centre in the fill
+            let p = [s[0] + jx, s[1] + jy];
+            let p = if in_polygon(p, &fill.polygon) { p } else { *s };
+            grains.push(Grain { pos: [p[0], p[1], z], diameter_m: d });
         }
     }
     let mass = grains.len() as f64 * grain_mass;
