@@ -22,12 +22,12 @@ campaign earth-deep --particles 150
 # monolayer: 40 grains of the deep fill's size lining the catch (about a quarter of the mass)
 d_um=$(python3 -c "import json; c=json.load(open('$out/earth-deep/run-001/case.json')); print(c['placement']['diameter_m']*1e6)")
 campaign earth-monolayer --particles 40 --grain-diameter-um "$d_um"
-# lunar vacuum: the same rig under lunar gravity, no drag
-campaign lunar-deep --particles 150 --env lunar --k-drag 0
 # v0 across the optimiser's range (0.8-2.0 m/s), and a shallower slope
 campaign earth-v0-0.8 --particles 150 --design 20,15,5,5,60,0,0.8,60
 campaign earth-v0-1.4 --particles 150 --design 20,15,5,5,60,0,1.4,60
 campaign earth-alpha-20 --particles 150 --alpha 20
+# lunar vacuum: the same rig under lunar gravity, no drag (last: ~30 min a run here)
+campaign lunar-deep --particles 150 --env lunar --k-drag 0
 python3 - "$out" <<'PY'
 import json, sys, glob, os
 print(f"{'regime':<18}{'tooth err mean/max pp':>24}{'d_avg model':>13}{'d_avg DEM':>18}{'err %':>8}{'lost DEM %':>12}{'s/run DEM':>12}{'s model':>10}")
