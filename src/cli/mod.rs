@@ -99,6 +99,7 @@ pub enum Command {
   sawtooth dem write --config data/validation/test3.toml --particles 150 --out runs/dem-case
   sawtooth dem run --config data/validation/test3.toml --particles 150 --runs 3 --out runs/dem-test3
   sawtooth dem compare runs/dem-test3 --json
+  sawtooth optimize --env lunar --pop 60 --generations 15 --algorithm nsga2 --requirements table-2.2 --out runs/lunar-quick
   sawtooth dem check runs/lunar-quick --seeds 2 --front 1 --out runs/dem-check"
     )]
     Dem(dem::DemCommand),
