@@ -26,6 +26,11 @@ if ! have_vulkan_icd; then
     echo "test.sh: no Vulkan driver found; installing Mesa lavapipe (scripts/lavapipe.sh)"
     bash scripts/lavapipe.sh
 fi
+# The DEM tests (tests/dem.rs, issue 31) run the real engine: Debian's LIGGGHTS package.
+if ! command -v liggghts >/dev/null 2>&1; then
+    echo "test.sh: no liggghts found; installing the Debian package liggghts"
+    apt-get update -qq && apt-get install -y -qq liggghts
+fi
 # lavapipe's WSI probing warns without a runtime dir; the tests draw nothing on screen.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 

@@ -6,6 +6,9 @@
 //! - [`kernel_codes`]: the integer codes the Rust and WGSL kernels share (generated into WGSL).
 //! - [`plot`]: the one plotting layer every figure goes through (SVG or PNG), and the flight plot.
 //! - [`schema`]: the one declaration of every bounded input (counts, intervals, file sizes).
+//! - [`io`]: configuration files, trajectory CSV, the flight plot.
+//! - [`plot`]: the one plotting layer every figure goes through (SVG or PNG).
+//! - [`dem`]: a bridge to the LIGGGHTS DEM engine: cases, campaigns, model vs DEM.
 //! - [`cli`]: the thin command-line layer.
 //! - [`lane_math`]: the engine's own `exp_m1`, `sin_cos`, `atan2`, one code for scalar and lanes.
 //! - [`x86_64_v3`]: hot loops compiled a second time for AVX2 CPUs, same bits.
@@ -13,6 +16,7 @@
 pub mod calibrate;
 pub mod campaigns;
 pub mod cli;
+pub mod dem;
 pub mod diagnose;
 pub mod engine;
 pub mod fit;

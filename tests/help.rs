@@ -26,6 +26,7 @@ fn every_command_ends_with_examples_of_itself() {
         &["campaign"],
         &["synth"],
         &["diagnose"],
+        &["dem"],
     ];
     for c in commands {
         let text = help(c);

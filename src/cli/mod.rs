@@ -5,6 +5,7 @@ pub mod args;
 pub mod bench;
 pub mod campaign;
 pub mod conformance;
+pub mod dem;
 pub mod diagnose;
 pub mod fit;
 pub mod measured_condition;
@@ -90,6 +91,17 @@ pub enum Command {
     #[command(after_help = "Example:
   sawtooth diagnose --data data/validation/test3.csv --setup data/validation/test3.toml --out runs/diag3")]
     Diagnose(diagnose::DiagnoseArgs),
+    /// Hold the model against a real DEM engine (LIGGGHTS): cases, campaigns, comparisons.
+    #[command(
+        subcommand,
+        after_help = "Examples:
+  sawtooth dem write --config data/validation/test3.toml --particles 150 --out runs/dem-case
+  sawtooth dem run --config data/validation/test3.toml --particles 150 --runs 3 --out runs/dem-test3
+  sawtooth dem compare runs/dem-test3 --json
+  sawtooth optimize --env lunar --pop 60 --generations 15 --algorithm nsga2 --requirements table-2.2 --out runs/lunar-quick
+  sawtooth dem check runs/lunar-quick --seeds 2 --front 1 --out runs/dem-check"
+    )]
+    Dem(dem::DemCommand),
 }
 
 /// Exit status: 0 success, 1 a check failed, 2 bad input or an error.
@@ -105,5 +117,6 @@ pub fn run(cli: Cli, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         Command::Campaign(c) => campaign::run(c, out),
         Command::Synth(a) => synth::run(a, out),
         Command::Diagnose(a) => diagnose::run(a, out),
+        Command::Dem(c) => dem::run(c, out),
     }
 }

@@ -32,6 +32,32 @@ pub struct ConfigFile {
     pub measurement: Option<MeasurementTable>,
     /// What the design must meet (Table 2.2); read by `simulate` and `optimize`.
     pub requirements: Option<RequirementsTable>,
+    /// How `sawtooth dem` builds a LIGGGHTS case (docs/dem.md); ignored by the model.
+    pub dem: Option<DemTable>,
+}
+
+/// `[dem]`: the settings of a DEM case that the model has no counterpart for. Every key is
+/// optional; `crate::dem::DemSettings` holds the defaults and the rules.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DemTable {
+    /// Grains in the case (`--particles` overrides).
+    pub particles: Option<u32>,
+    /// Grain diameter; absent: the diameter at which the grains hold the model's fill mass.
+    pub grain_diameter_m: Option<f64>,
+    /// Periodic depth of the slab, in grain diameters.
+    pub depth_grains: Option<f64>,
+    /// Rolling friction coefficient (LIGGGHTS `rolling_friction cdt`).
+    pub rolling_friction: Option<f64>,
+    /// Largest Hertz overlap at the design impact speed, as a fraction of the grain radius:
+    /// sets the softened Young's modulus.
+    pub max_overlap_fraction: Option<f64>,
+    /// Simulated time after the stroke before the run stops even if grains still move.
+    pub max_time_s: Option<f64>,
+    /// RMS grain speed below which the grains count as at rest.
+    pub rest_speed_m_s: Option<f64>,
+    /// Teeth of the mesh; absent: the model's reach plus a margin (at most `sim.teeth`).
+    pub teeth: Option<u32>,
 }
 
 /// The design in the units of Table 5.3.

@@ -1,0 +1,180 @@
+//! A DEM campaign: R runs of one design with seeds s, s+1, …, run in parallel up to a number
+//! of jobs, each in its own folder `run-NNN/` (the case, LIGGGHTS's output, `result.json`).
+//! The plan is kept in `plan.json`; started again into the same folder with the same plan, a
+//! killed campaign skips every run whose `result.json` exists and runs the rest. When all
+//! runs are in, `dem.csv` (measured-data format) and `setup.toml` make the campaign readable
+//! by `fit`, `diagnose` and `dem compare`.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+use anyhow::{bail, Context as _};
+use serde::{Deserialize, Serialize};
+
+use super::case::{Case, DUMP};
+use super::gather::{measured_csv, parse_dump, reduce, setup_toml, RunResult};
+use super::run::{find_liggghts, run_case};
+use super::settings::DemSettings;
+use crate::io::atomic::write_atomic;
+use crate::model::{Design, Scenario};
+
+pub const PLAN: &str = "plan.json";
+pub const RESULT: &str = "result.json";
+pub const CSV: &str = "dem.csv";
+pub const SETUP: &str = "setup.toml";
+
+/// What determines a campaign; a folder holds one plan.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    pub scenario: Scenario,
+    pub design: Design,
+    pub settings: DemSettings,
+    pub runs: u32,
+    pub first_seed: u64,
+    /// A stated sled return (delay s, speed m/s) from the setup's `[measurement]`.
+    pub known_return: Option<(f64, f64)>,
+}
+
+impl Plan {
+    pub fn case(&self, run: u32) -> Result<Case, String> {
+        Case::build(&self.scenario, &self.design, &self.settings, self.first_seed + run as u64, self.known_return)
+    }
+}
+
+pub fn run_dir(dir: &Path, run: u32) -> PathBuf {
+    dir.join(format!("run-{:03}", run + 1))
+}
+
+/// The results present in `dir`, in run order (None where a run has none yet).
+pub fn results(dir: &Path, runs: u32) -> anyhow::Result<Vec<Option<RunResult>>> {
+    (0..runs)
+        .map(|r| {
+            let p = run_dir(dir, r).join(RESULT);
+            if !p.is_file() {
+                return Ok(None);
+            }
+            let text = std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
+            Ok(Some(serde_json::from_str(&text).with_context(|| format!("reading {}", p.display()))?))
+        })
+        .collect()
+}
+
+/// Record `plan` in `dir`, or check that it is the plan already there.
+pub fn record_plan(dir: &Path, plan: &Plan) -> anyhow::Result<()> {
+    let path = dir.join(PLAN);
+    let text = serde_json::to_string_pretty(plan)?;
+    if path.is_file() {
+        let old: Plan = serde_json::from_str(&std::fs::read_to_string(&path)?)
+            .with_context(|| format!("reading {}", path.display()))?;
+        if &old != plan {
+            bail!(
+                "{} holds a DEM campaign of another plan ({}): resuming needs the same config, design, [dem] settings, --runs and --seed; choose another --out",
+                dir.display(),
+                path.display()
+            );
+        }
+        return Ok(());
+    }
+    write_atomic(&path, text.as_bytes())
+}
+
+/// Run the campaign in `dir` (owned by the caller) with up to `jobs` LIGGGHTS processes;
+/// `say` gets progress lines. Runs already done are skipped. Every run is tried; the first
+/// failure is returned after the others finish (their results are kept for a resume).
+pub fn run(dir: &Path, plan: &Plan, jobs: usize, say: &(dyn Fn(String) + Sync)) -> anyhow::Result<Vec<RunResult>> {
+    // cheap checks first: the case builds and the engine is there
+    let first = plan.case(0).map_err(anyhow::Error::msg)?;
+    let binary = find_liggghts()?;
+    record_plan(dir, plan)?;
+    let done = results(dir, plan.runs)?;
+    let todo: Vec<u32> = (0..plan.runs).filter(|r| done[*r as usize].is_none()).collect();
+    if todo.len() < plan.runs as usize {
+        say(format!("resuming: {} of {} runs already done", plan.runs as usize - todo.len(), plan.runs));
+    }
+    say(format!(
+        "{} runs to do, {} at a time: {} grains of {:.0} um, slab {:.2} mm, {} teeth, time step {:.2e} s (moduli softened x{:.2e})",
+        todo.len(),
+        jobs.max(1),
+        first.placement.grains.len(),
+        first.placement.diameter_m * 1e6,
+        first.placement.depth_m * 1e3,
+        first.teeth,
+        first.contact.timestep_s,
+        first.contact.softening
+    ));
+    let next = AtomicUsize::new(0);
+    let failures: Mutex<Vec<String>> = Mutex::new(Vec::new());
+    std::thread::scope(|scope| {
+        for _ in 0..jobs.max(1).min(todo.len().max(1)) {
+            scope.spawn(|| loop {
+                let k = next.fetch_add(1, Ordering::SeqCst);
+                let Some(&r) = todo.get(k) else { break };
+                if let Err(e) = one_run(dir, plan, r, &binary, say) {
+                    say(format!("run {} failed: {e:#}", r + 1));
+                    failures.lock().expect("no panic holds it").push(format!("run {}: {e:#}", r + 1));
+                }
+            });
+        }
+    });
+    let failures = failures.into_inner().expect("no panic holds it");
+    if let Some(f) = failures.first() {
+        bail!("{} of {} runs failed (rerun the same command to resume); first: {f}", failures.len(), todo.len());
+    }
+    let all: Vec<RunResult> = results(dir, plan.runs)?.into_iter().map(|r| r.expect("every run done")).collect();
+    let lost: usize = all.iter().map(|r| r.lost).sum();
+    if lost > 0 {
+        let grains: usize = all.iter().map(|r| r.grains).sum();
+        say(format!(
+            "warning: {lost} of {grains} grains were lost (left the mesh: behind tooth 1, past tooth {}, or out of the box); they count as not recovered",
+            first.teeth
+        ));
+    }
+    let provenance = vec![
+        format!(
+            "DEM campaign (LIGGGHTS, `sawtooth dem run`): {} runs, seeds {}..{}; {} grains of {:.1} um in a {:.3} mm periodic slab; {} teeth of the mesh",
+            plan.runs,
+            plan.first_seed,
+            plan.first_seed + plan.runs as u64 - 1,
+            first.placement.grains.len(),
+            first.placement.diameter_m * 1e6,
+            first.placement.depth_m * 1e3,
+            first.teeth
+        ),
+        "tooth masses in grams of the slab's grains after one stroke; input_mass = every grain placed".to_string(),
+    ];
+    write_atomic(&dir.join(CSV), measured_csv(&provenance, &all)?.as_bytes())?;
+    let description = format!("DEM campaign of {} runs (docs/dem.md)", plan.runs);
+    write_atomic(&dir.join(SETUP), setup_toml(&first, plan.known_return, &description)?.as_bytes())?;
+    Ok(all)
+}
+
+fn one_run(dir: &Path, plan: &Plan, r: u32, binary: &Path, say: &(dyn Fn(String) + Sync)) -> anyhow::Result<()> {
+    let case = plan.case(r).map_err(anyhow::Error::msg)?;
+    let rd = run_dir(dir, r);
+    std::fs::create_dir_all(&rd).with_context(|| format!("creating {}", rd.display()))?;
+    case.write(&rd)?;
+    say(format!("run {} (seed {}) started", r + 1, case.seed));
+    let mut lines = crate::io::progress::Lines::new();
+    let finished = run_case(binary, &rd, &mut |t| {
+        if lines.due(0, 1) {
+            let phase =
+                if t.stroke_time_s < 0.0 { "settling".to_string() } else { format!("t = {:.3} s", t.stroke_time_s) };
+            say(format!("run {}: {phase}, {} grains, rms speed {:.3} m/s", r + 1, t.atoms, t.rms_speed_m_s));
+        }
+    })?;
+    let dump =
+        std::fs::read_to_string(rd.join(DUMP)).with_context(|| format!("reading {}", rd.join(DUMP).display()))?;
+    let result = reduce(&case, &parse_dump(&dump)?, finished.wall_s);
+    write_atomic(&rd.join(RESULT), serde_json::to_string_pretty(&result)?.as_bytes())?;
+    say(format!(
+        "run {} done in {:.1} s: d_avg {:.2} mm, {} of {} grains lost, {} still moving",
+        r + 1,
+        finished.wall_s,
+        result.d_avg_m * 1e3,
+        result.lost,
+        result.grains,
+        result.moving
+    ));
+    Ok(())
+}

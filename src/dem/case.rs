@@ -1,0 +1,290 @@
+//! One LIGGGHTS case: the model's design and scenario made into a mesh, grains, contact
+//! parameters, a sled motion and an input script, written into a folder that LIGGGHTS runs
+//! in (`cd DIR && liggghts -in in.sawtooth`).
+//!
+//! The script: read the grains; Hertz contacts with history and rolling friction (`pair_style
+//! gran model hertz tangential history rolling_friction cdt`), the same model on the mesh
+//! (`fix wall/gran`); gravity straight down (the mesh carries the slope); Stokes drag with
+//! drag (`fix viscous`, γ = m k_drag, Eq. 4.20); settle in chunks until the grains rest; the
+//! stroke (`fix move/mesh linear/variable`); chunks until the grains rest again or
+//! `max_time_s`; the end positions dumped (`write_dump`). Grains that leave the box are
+//! deleted (`thermo_modify lost ignore`) and counted lost when gathered.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde::Serialize;
+
+use super::contact::{contact, Contact};
+use super::grains::{mass_matching_diameter, place, Placement};
+use super::motion::SledMotion;
+use super::settings::{check_representable, DemSettings};
+use super::stl::{extrude, profile_polyline, stl_text, subdivide, MAX_FACET_M};
+use crate::engine::{evaluate_detailed, make_engine, EngineKind};
+use crate::io::atomic::write_atomic;
+use crate::model::geometry::Profile;
+use crate::model::{prepare, Design, ParticleState, Scenario};
+
+pub const SCRIPT: &str = "in.sawtooth";
+pub const MESH: &str = "sled.stl";
+pub const GRAINS: &str = "grains.data";
+pub const MANIFEST: &str = "case.json";
+pub const DUMP: &str = "final.dump";
+
+/// Simulated time per rest check, s.
+const CHUNK_S: f64 = 0.02;
+/// Longest settling before the stroke, s (the grains start a fraction of a diameter apart).
+const MAX_SETTLE_S: f64 = 1.0;
+/// Teeth the mesh keeps beyond the model's farthest resting grain (and at least this many).
+const REACH_MARGIN_TEETH: u32 = 3;
+
+/// Everything the case is made of; `case.json` is this, serialised.
+#[derive(Clone, Debug, Serialize)]
+pub struct Case {
+    pub scenario: Scenario,
+    pub design: Design,
+    pub settings: DemSettings,
+    pub seed: u64,
+    /// Teeth of the mesh.
+    pub teeth: u32,
+    /// The model's fill area, m² (4.2.3).
+    pub fill_area_m2: f64,
+    pub launch_angle_rad: f64,
+    pub placement: Placement,
+    pub contact: Contact,
+    pub motion: SledMotion,
+    /// Stokes drag γ = m k_drag per grain, kg/s; None in vacuum.
+    pub drag_gamma_kg_s: Option<f64>,
+    /// Simulation box [lo, hi] in x, y, z, m.
+    pub bounds: [[f64; 2]; 3],
+    pub facets: usize,
+}
+
+/// The case's files as text.
+pub struct CaseFiles {
+    pub script: String,
+    pub stl: String,
+    pub data: String,
+    pub manifest: String,
+}
+
+impl Case {
+    /// Build the case of `design` under `scenario`; `known_return` is a setup's stated sled
+    /// return (delay s, speed m/s). Errors name the rule (a design the model rejects, a
+    /// scenario the mesh cannot represent, a fill that cannot seat the grains).
+    pub fn build(
+        scenario: &Scenario,
+        design: &Design,
+        settings: &DemSettings,
+        seed: u64,
+        known_return: Option<(f64, f64)>,
+    ) -> Result<Case, String> {
+        settings.validate()?;
+        check_representable(scenario)?;
+        let prep = prepare(scenario, design).map_err(|e| format!("invalid design ({}): {e}", e.rule()))?;
+        let teeth = match settings.teeth {
+            Some(t) => t,
+            None => model_reach(scenario, design)?,
+        };
+        let m = &scenario.material;
+        let d = settings.grain_diameter_m.unwrap_or_else(|| {
+            mass_matching_diameter(
+                prep.fill.area,
+                settings.particles,
+                settings.depth_grains,
+                m.bulk_density,
+                m.particle.density,
+            )
+        });
+        let placement =
+            place(&prep.fill, settings.particles, d, settings.depth_grains, m.particle.density, m.bulk_density, seed)?;
+        let motion = SledMotion::new(scenario, design, prep.launch_angle, known_return);
+        // the fastest contact: a grain leaving at v0 and its randomised excess, falling a
+        // tooth's height onto the next
+        let design_speed = 1.5 * design.v0;
+        let contact = contact(scenario, d, design_speed, settings.rolling_friction, settings.max_overlap_fraction);
+        let drag_gamma_kg_s = scenario.environment.k_drag.map(|k| placement.grain_mass_kg * k);
+        let profile = Profile::new(design, prep.profile.local, scenario.environment.alpha_deg, teeth);
+        let line = subdivide(&profile_polyline(&profile, teeth), MAX_FACET_M);
+        let bounds = bounds(&line, &motion, design, scenario.environment.g, placement.depth_m);
+        Ok(Case {
+            scenario: scenario.clone(),
+            design: *design,
+            settings: settings.clone(),
+            seed,
+            teeth,
+            fill_area_m2: prep.fill.area,
+            launch_angle_rad: prep.launch_angle,
+            placement,
+            contact,
+            motion,
+            drag_gamma_kg_s,
+            bounds,
+            facets: 2 * (line.len() - 1),
+        })
+    }
+
+    /// The model's profile with the mesh's tooth count (the teeth grains are binned by).
+    pub fn profile(&self) -> Profile {
+        let local = crate::model::geometry::check_design(&self.design).expect("checked when the case was built");
+        Profile::new(&self.design, local, self.scenario.environment.alpha_deg, self.teeth)
+    }
+
+    pub fn files(&self) -> anyhow::Result<CaseFiles> {
+        let profile = self.profile();
+        let line = subdivide(&profile_polyline(&profile, self.teeth), MAX_FACET_M);
+        let stl = stl_text("sled", &extrude(&line, self.placement.depth_m));
+        Ok(CaseFiles { script: self.script(), stl, data: self.data(), manifest: serde_json::to_string_pretty(self)? })
+    }
+
+    /// Write the case into `dir` (each file atomically).
+    pub fn write(&self, dir: &Path) -> anyhow::Result<()> {
+        let f = self.files()?;
+        write_atomic(&dir.join(MESH), f.stl.as_bytes())?;
+        write_atomic(&dir.join(GRAINS), f.data.as_bytes())?;
+        write_atomic(&dir.join(MANIFEST), f.manifest.as_bytes())?;
+        write_atomic(&dir.join(SCRIPT), f.script.as_bytes())?;
+        Ok(())
+    }
+
+    /// `read_data` file: granular atoms `id type diameter density x y z`.
+    fn data(&self) -> String {
+        let b = &self.bounds;
+        let mut s = String::new();
+        let _ = writeln!(s, "sawtooth dem grains (seed {})\n", self.seed);
+        let _ = writeln!(s, "{} atoms\n2 atom types\n", self.placement.grains.len());
+        for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+            let _ = writeln!(s, "{:.9e} {:.9e} {axis}lo {axis}hi", b[k][0], b[k][1]);
+        }
+        let _ = writeln!(s, "\nAtoms\n");
+        for (i, g) in self.placement.grains.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "{} 1 {:.9e} {} {:.9e} {:.9e} {:.9e}",
+                i + 1,
+                g.diameter_m,
+                self.contact.density_kg_m3,
+                g.pos[0],
+                g.pos[1],
+                g.pos[2]
+            );
+        }
+        s
+    }
+
+    /// Steps of `seconds` at the case's time step.
+    fn steps(&self, seconds: f64) -> u64 {
+        (seconds / self.contact.timestep_s).ceil().max(1.0) as u64
+    }
+
+    fn script(&self) -> String {
+        let c = &self.contact;
+        let d = self.placement.diameter_m;
+        let dt = c.timestep_s;
+        let pair = |v: f64| format!("{v} {v} {v} {v}");
+        let [vx, vy] = self.motion.velocity_expressions("t");
+        let chunk = self.steps(CHUNK_S);
+        let settle_chunks = (MAX_SETTLE_S / CHUNK_S).ceil() as u64;
+        let rest_chunks = (self.settings.max_time_s / CHUNK_S).ceil() as u64;
+        let stroke = self.steps(self.motion.t_still());
+        let skin = 0.5 * d;
+        // bins no finer than the box can afford (LIGGGHTS bins the whole box)
+        let area = (self.bounds[0][1] - self.bounds[0][0]) * (self.bounds[1][1] - self.bounds[1][0]);
+        let binsize = (d + skin).max((area / 2e5).sqrt());
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "# sawtooth dem case (generated by `sawtooth dem write`; every number is explained in case.json and docs/dem.md)\n\
+             # design l_c,l_a,l_b,r,omega,delta,v0,a = {:?} (mm,mm,mm,mm,deg,deg,m/s,m/s^2); seed {}\n\
+             atom_style granular\natom_modify map array\nboundary f f p\nnewton off\ncommunicate single vel yes\nunits si\n\
+             read_data {GRAINS}\nneighbor {skin:e} bin\nneigh_modify delay 0 binsize {binsize:e}\n",
+            self.design.to_cli_units(),
+            self.seed
+        );
+        let _ = writeln!(
+            s,
+            "# material (Table 4.1) with the softened moduli (factor {:.3e}), collision k_elastic and mu_friction, [dem] rolling_friction\n\
+             fix m1 all property/global youngsModulus peratomtype {:e} {:e}\n\
+             fix m2 all property/global poissonsRatio peratomtype {} {}\n\
+             fix m3 all property/global coefficientRestitution peratomtypepair 2 {}\n\
+             fix m4 all property/global coefficientFriction peratomtypepair 2 {}\n\
+             fix m5 all property/global coefficientRollingFriction peratomtypepair 2 {}\n\
+             pair_style gran model hertz tangential history rolling_friction cdt\npair_coeff * *\n\
+             timestep {dt:e}\nfix gravity all gravity {} vector 0.0 -1.0 0.0\n\
+             fix sled all mesh/surface file {MESH} type 2\n\
+             fix walls all wall/gran model hertz tangential history rolling_friction cdt mesh n_meshes 1 meshes sled",
+            c.softening,
+            c.grain_youngs_pa,
+            c.wall_youngs_pa,
+            c.grain_poisson,
+            c.wall_poisson,
+            pair(c.restitution),
+            pair(c.sliding_friction),
+            pair(c.rolling_friction),
+            self.scenario.environment.g,
+        );
+        if let Some(gamma) = self.drag_gamma_kg_s {
+            let _ = writeln!(
+                s,
+                "# Stokes drag, gamma = m k_drag (Eq. 4.20, k_drag {} 1/s)\nfix drag all viscous {gamma:e}",
+                self.scenario.environment.k_drag.unwrap_or(0.0)
+            );
+        }
+        let _ = writeln!(
+            s,
+            "# the stroke starts at step s0 (set after settling); t is the stroke time\n\
+             variable s0 equal 1e15\nvariable t equal (step-v_s0)*{dt:e}\n\
+             variable vx equal {vx}\nvariable vy equal {vy}\nvariable vz equal 0\n\
+             fix stroke all move/mesh mesh sled linear/variable v_vx v_vy v_vz\n\
+             fix integrate all nve/sphere\n\
+             compute ke all ke\nvariable m equal mass(all)\nvariable vrms equal sqrt(2*c_ke/(v_m+1e-30))\n\
+             thermo_style custom step atoms ke v_vrms v_t\nthermo {chunk}\nthermo_modify lost ignore norm no\n\
+             # settle\nvariable settle loop {settle_chunks}\nlabel settling\nrun {chunk}\n\
+             if \"${{vrms}} < {rest:e}\" then \"jump SELF settled\"\nnext settle\njump SELF settling\nlabel settled\n\
+             variable now equal step\nvariable s0 equal ${{now}}\nprint \"sawtooth: stroke starts at step ${{s0}}\"\n\
+             # the stroke (and the return)\nrun {stroke}\n\
+             # until the grains rest\nvariable rest loop {rest_chunks}\nlabel resting\nrun {chunk}\n\
+             if \"${{vrms}} < {rest:e}\" then \"jump SELF rested\"\nnext rest\njump SELF resting\nlabel rested\n\
+             print \"sawtooth: stroke time at the end ${{t}} s\"\n\
+             write_dump all custom {DUMP} id type diameter mass x y z vx vy vz",
+            rest = self.settings.rest_speed_m_s,
+        );
+        s
+    }
+}
+
+/// Teeth the mesh needs: the model's farthest resting grain plus a margin, at most
+/// `sim.teeth` (a longer mesh costs LIGGGHTS bins and facets for nothing; a DEM grain that
+/// goes past the end is counted lost and warned about, and `[dem] teeth` lengthens it).
+fn model_reach(s: &Scenario, d: &Design) -> Result<u32, String> {
+    let engine = make_engine(EngineKind::Cpu).map_err(|e| e.to_string())?;
+    let det =
+        evaluate_detailed(engine.as_ref(), s, d, false).map_err(|e| format!("invalid design ({}): {e}", e.rule()))?;
+    let far = det
+        .particles
+        .iter()
+        .filter(|p| p.state != ParticleState::Lost)
+        .map(|p| crate::model::outcome::end_tooth(&det.prepared.profile, p.end))
+        .max()
+        .unwrap_or(1);
+    Ok((far + REACH_MARGIN_TEETH).max(2 + REACH_MARGIN_TEETH).min(s.sim.teeth))
+}
+
+/// The box: the mesh over its whole motion, room behind tooth 0 and below the profile for
+/// grains to fall out of, and above for the highest launch (speed 1.5 v0).
+fn bounds(line: &[[f64; 2]], motion: &SledMotion, d: &Design, g: f64, depth: f64) -> [[f64; 2]; 3] {
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for p in line {
+        x0 = x0.min(p[0]);
+        x1 = x1.max(p[0]);
+        y0 = y0.min(p[1]);
+        y1 = y1.max(p[1]);
+    }
+    let far = motion.displacement(motion.t_launch());
+    let home = motion.displacement(f64::INFINITY);
+    let (dx0, dx1) = (far[0].min(home[0]).min(0.0), far[0].max(home[0]).max(0.0));
+    let (dy0, dy1) = (far[1].min(home[1]).min(0.0), far[1].max(home[1]).max(0.0));
+    let margin = 2.0 * d.l_c;
+    let apex = (1.5 * d.v0).powi(2) / (2.0 * g);
+    [[x0 + dx0 - margin, x1 + dx1 + margin], [y0 + dy0 - margin, y1.max(d.l_b + apex) + dy1 + margin], [0.0, depth]]
+}

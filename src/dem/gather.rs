@@ -1,0 +1,267 @@
+//! The engine's end positions read back: each grain assigned to a tooth by the model's own
+//! boundaries (Eq. 4.56, `Profile::tooth_of_x`, in the frame of the mesh where the stroke
+//! left it), tooth masses in grams, and the campaign written as measured data
+//! (`io::measured`'s CSV) with a setup TOML that `fit`, `diagnose` and `dem compare` read as
+//! they read a rig's.
+//!
+//! A grain is lost when LIGGGHTS deleted it (it left the box), when it ends behind tooth 0's
+//! start (no surface there), or past the mesh's last tooth.
+
+use std::fmt::Write as _;
+
+use anyhow::{bail, Context as _};
+use serde::{Deserialize, Serialize};
+
+use super::case::Case;
+
+/// One grain of the dump.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DumpGrain {
+    pub id: u64,
+    pub mass_kg: f64,
+    pub pos: [f64; 3],
+    pub vel: [f64; 3],
+}
+
+/// Read `write_dump ... custom id type diameter mass x y z vx vy vz`.
+pub fn parse_dump(text: &str) -> anyhow::Result<Vec<DumpGrain>> {
+    let mut lines = text.lines();
+    let header = lines.by_ref().find(|l| l.starts_with("ITEM: ATOMS")).context("dump has no `ITEM: ATOMS` section")?;
+    let cols: Vec<&str> = header.split_whitespace().skip(2).collect();
+    let at = |name: &str| cols.iter().position(|c| *c == name).with_context(|| format!("dump lacks column `{name}`"));
+    let idx = [at("id")?, at("mass")?, at("x")?, at("y")?, at("z")?, at("vx")?, at("vy")?, at("vz")?];
+    let mut out = Vec::new();
+    for (n, line) in lines.enumerate() {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let f: Vec<&str> = line.split_whitespace().collect();
+        let num = |i: usize| -> anyhow::Result<f64> {
+            f.get(i).and_then(|s| s.parse().ok()).with_context(|| format!("dump atom line {}: bad field {i}", n + 1))
+        };
+        out.push(DumpGrain {
+            id: num(idx[0])? as u64,
+            mass_kg: num(idx[1])?,
+            pos: [num(idx[2])?, num(idx[3])?, num(idx[4])?],
+            vel: [num(idx[5])?, num(idx[6])?, num(idx[7])?],
+        });
+    }
+    Ok(out)
+}
+
+/// One DEM run reduced to what the rig measured, and a little more.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunResult {
+    pub seed: u64,
+    /// Grams per tooth, tooth 1 first (the mesh's teeth).
+    pub teeth_g: Vec<f64>,
+    /// Grams loaded (every grain placed).
+    pub input_mass_g: f64,
+    pub grains: usize,
+    pub lost: usize,
+    /// Grains left the box (a subset of `lost`).
+    pub left_box: usize,
+    /// Grains still faster than the rest speed at the end.
+    pub moving: usize,
+    /// The model's d_avg rule on the DEM's grains: global x of the resting tooth's p4 (0 for
+    /// tooth 1 and for lost grains), mass-weighted over every grain, m.
+    pub d_avg_m: f64,
+    /// Wall-clock seconds LIGGGHTS ran.
+    pub wall_s: f64,
+}
+
+/// Reduce the dump of `case` to a [`RunResult`].
+pub fn reduce(case: &Case, grains: &[DumpGrain], wall_s: f64) -> RunResult {
+    let profile = case.profile();
+    let shift = case.motion.displacement(f64::INFINITY);
+    let placed = case.placement.grains.len();
+    let grain_mass_g = case.placement.grain_mass_kg * 1e3;
+    let mut teeth_g = vec![0.0; case.teeth as usize];
+    let (mut lost, mut moving, mut credited) = (0usize, 0usize, 0.0);
+    let mut mass_total = 0.0;
+    for g in grains {
+        let m = g.mass_kg * 1e3;
+        mass_total += m;
+        let speed = (g.vel[0].powi(2) + g.vel[1].powi(2) + g.vel[2].powi(2)).sqrt();
+        if speed > case.settings.rest_speed_m_s {
+            moving += 1;
+        }
+        let x = g.pos[0] - shift[0];
+        let tooth = profile.tooth_of_x(x);
+        if x < 0.0 || tooth > case.teeth as i64 {
+            lost += 1;
+            continue;
+        }
+        let j = tooth.max(1);
+        teeth_g[(j - 1) as usize] += m;
+        credited += m * profile.credited_distance(j);
+    }
+    let left_box = placed.saturating_sub(grains.len());
+    let input_mass_g = mass_total + left_box as f64 * grain_mass_g;
+    RunResult {
+        seed: case.seed,
+        teeth_g,
+        input_mass_g,
+        grains: placed,
+        lost: lost + left_box,
+        left_box,
+        moving,
+        d_avg_m: if input_mass_g > 0.0 { credited / input_mass_g } else { 0.0 },
+        wall_s,
+    }
+}
+
+/// The campaign's tooth masses as a measured-data CSV (`io::measured`): `#` provenance,
+/// `run,tooth_1..tooth_n,input_mass`, grams.
+pub fn measured_csv(provenance: &[String], runs: &[RunResult]) -> anyhow::Result<String> {
+    let Some(first) = runs.first() else { bail!("no runs to write") };
+    let teeth = first.teeth_g.len();
+    let mut s = String::new();
+    for p in provenance {
+        let _ = writeln!(s, "# {p}");
+    }
+    let cols: Vec<String> = (1..=teeth).map(|j| format!("tooth_{j}")).collect();
+    let _ = writeln!(s, "run,{},input_mass", cols.join(","));
+    for (i, r) in runs.iter().enumerate() {
+        if r.teeth_g.len() != teeth {
+            bail!("run {} has {} teeth, the first has {teeth}", i + 1, r.teeth_g.len());
+        }
+        let masses: Vec<String> = r.teeth_g.iter().map(|m| format!("{m:.9e}")).collect();
+        let _ = writeln!(s, "seed{},{},{:.9e}", r.seed, masses.join(","), r.input_mass_g);
+    }
+    Ok(s)
+}
+
+/// A setup TOML for the campaign: the scenario and design as config keys (so that `fit`
+/// and `diagnose` rebuild the same scenario), `[measurement]` with one grain's mass as the
+/// scale's resolution and the stated sled return, and `[dem]` so that the case can be
+/// built again (`dem compare`, `dem run --config`).
+pub fn setup_toml(case: &Case, known_return: Option<(f64, f64)>, description: &str) -> anyhow::Result<String> {
+    let s = &case.scenario;
+    let d = &case.design;
+    let e = &s.environment;
+    let p = &s.performance;
+    let mut t = String::new();
+    let _ = writeln!(
+        t,
+        "# DEM campaign setup written by `sawtooth dem run` (docs/dem.md): the scenario of the runs as config keys."
+    );
+    let _ = writeln!(t, "mode = \"physical\"\n");
+    let _ = writeln!(
+        t,
+        "[design]\nl_c_mm = {}\nl_a_mm = {}\nl_b_mm = {}\nr_mm = {}\nomega_deg = {}\ndelta_deg = {}\nv0_m_s = {}\na_m_s2 = {}\n",
+        d.l_c * 1e3,
+        d.l_a * 1e3,
+        d.l_b * 1e3,
+        d.r * 1e3,
+        d.omega_deg,
+        d.delta_deg,
+        d.v0,
+        d.a
+    );
+    let _ = writeln!(
+        t,
+        "[environment]\ng_m_s2 = {}\nalpha_deg = {}\nk_drag_per_s = {}\n",
+        e.g,
+        e.alpha_deg,
+        e.k_drag.unwrap_or(0.0)
+    );
+    let m = &s.material;
+    let _ = writeln!(
+        t,
+        "[material]\nname = \"{}\"\naor_deg = {}\nbulk_density_kg_m3 = {}\n",
+        m.name, m.aor_deg, m.bulk_density
+    );
+    let _ =
+        writeln!(t, "[collision]\nk_elastic = {}\nmu_friction = {}\n", s.collision.k_elastic, s.collision.mu_friction);
+    let sim = &s.sim;
+    let _ = writeln!(
+        t,
+        "[sim]\nteeth = {}\nparticles = {}\nmax_bounces = {}\nrandomise = {}\nrandom_band = {}\nseed = {}\nrest_threshold_m = {}\nlaunch_offset_deg = {}\nlaunch_points = \"{}\"\n",
+        sim.teeth.max(case.teeth),
+        sim.particles,
+        sim.max_bounces,
+        sim.randomise,
+        sim.random_band,
+        sim.seed,
+        sim.rest_threshold,
+        sim.launch_offset_deg,
+        match sim.launch_points {
+            crate::model::scenario::LaunchPoints::Halton => "halton",
+            crate::model::scenario::LaunchPoints::Random => "random",
+        }
+    );
+    let _ = writeln!(
+        t,
+        "[performance]\nconveyor_length_m = {}\nregolith_width_m = {}\nsled_width_m = {}\ndownstroke_speed_m_s = {}\nf_max_hz = {}\nsled_thickness_m = {}\nsled_density_kg_m3 = {}\ncontraction_ratio = {}\n",
+        p.conveyor_length, p.regolith_width, p.sled_width, p.downstroke_speed, p.f_max, p.sled_thickness, p.sled_density, p.contraction_ratio
+    );
+    if s.effects.any() {
+        let mut wrapper = toml::map::Map::new();
+        wrapper.insert("effects".into(), toml::Value::try_from(s.effects)?);
+        let _ = writeln!(t, "{}", toml::to_string(&toml::Value::Table(wrapper))?);
+    }
+    let c = &case.settings;
+    let _ = writeln!(
+        t,
+        "[dem]\nparticles = {}\ngrain_diameter_m = {:e}\ndepth_grains = {}\nrolling_friction = {}\nmax_overlap_fraction = {}\nmax_time_s = {}\nrest_speed_m_s = {}\nteeth = {}\n",
+        c.particles,
+        case.placement.diameter_m,
+        c.depth_grains,
+        c.rolling_friction,
+        c.max_overlap_fraction,
+        c.max_time_s,
+        c.rest_speed_m_s,
+        case.teeth
+    );
+    let _ = writeln!(
+        t,
+        "[measurement]\nscale_resolution_g = {:e}\nparticle_mass_g = {:e}",
+        case.placement.grain_mass_kg * 1e3,
+        case.placement.grains.len() as f64 * case.placement.grain_mass_kg * 1e3
+    );
+    if let Some((delay, speed)) = known_return {
+        let _ = writeln!(t, "motion_delay_s = {delay}\nmotion_return_speed_m_s = {speed}");
+    }
+    let _ = writeln!(t, "description = {}", toml::Value::String(description.to_string()));
+    Ok(t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_dump_is_read_by_its_column_names() {
+        let text = "ITEM: TIMESTEP\n10\nITEM: NUMBER OF ATOMS\n2\nITEM: BOX BOUNDS ff ff pp\n0 1\n0 1\n0 1\n\
+                    ITEM: ATOMS id type diameter mass x y z vx vy vz \n\
+                    1 1 0.0005 1.8e-07 0.01 0.002 0.001 0 -1e-3 0\n2 1 0.0005 1.8e-07 0.05 0.02 0.001 0.5 0 0\n";
+        let g = parse_dump(text).unwrap();
+        assert_eq!(g.len(), 2);
+        assert_eq!(g[1].id, 2);
+        assert_eq!(g[1].pos, [0.05, 0.02, 0.001]);
+        assert_eq!(g[0].mass_kg, 1.8e-7);
+        assert!(parse_dump("ITEM: ATOMS id x\n1 0\n").unwrap_err().to_string().contains("mass"));
+    }
+
+    #[test]
+    fn the_csv_is_measured_data() {
+        let r = |seed, t: Vec<f64>| RunResult {
+            seed,
+            input_mass_g: t.iter().sum::<f64>() + 0.1,
+            teeth_g: t,
+            grains: 10,
+            lost: 1,
+            left_box: 1,
+            moving: 0,
+            d_avg_m: 0.01,
+            wall_s: 1.0,
+        };
+        let csv = measured_csv(&["DEM".into()], &[r(1, vec![0.5, 0.3, 0.1]), r(2, vec![0.4, 0.4, 0.1])]).unwrap();
+        let m = crate::io::measured::parse(&csv, "dem.csv").unwrap();
+        assert_eq!(m.teeth, 3);
+        assert_eq!(m.runs[1].id, "seed2");
+        assert!((m.runs[0].input_mass_g.unwrap() - 1.0).abs() < 1e-9);
+        assert_eq!(m.provenance, vec!["DEM".to_string()]);
+    }
+}
