@@ -29,7 +29,9 @@ fi
 # The DEM tests (tests/dem.rs, issue 31) run the real engine: Debian's LIGGGHTS package.
 if ! command -v liggghts >/dev/null 2>&1; then
     echo "test.sh: no liggghts found; installing the Debian package liggghts"
-    apt-get update -qq && apt-get install -y -qq liggghts
+    SUDO=""
+    if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+    $SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq liggghts >/dev/null
 fi
 # lavapipe's WSI probing warns without a runtime dir; the tests draw nothing on screen.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
