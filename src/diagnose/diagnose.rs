@@ -610,10 +610,10 @@ const MOTION_STARTS: usize = 3;
 /// item 4). A moving sled changes the landing points so much that the baseline, fitted
 /// without it, has already bent k_elastic, μ and k_drag towards it; from the baseline's
 /// optimum the motion looks useless, and the screen never leaves the no-motion corner. So
-/// every point of a grid over the unstated delay and return speed is polished jointly with
-/// the shared parameters (`base`: the candidate's start from the baseline), all grid
-/// points in lockstep at the screen's particle count, and the best few seed the fit. Costs
-/// nothing when every setup states its motion.
+/// at every point of a grid over the unstated delay and return speed, held fixed, the
+/// shared parameters are polished from the baseline's (`base`: the candidate's start from
+/// the baseline) at the screen's particle count, and the best few points seed the fit,
+/// where the motion is free again. Costs nothing when every setup states its motion.
 fn motion_starts(
     solver: &Solver,
     sim: &Simulator,
@@ -633,40 +633,56 @@ fn motion_starts(
     if motion.is_empty() {
         return Ok(Vec::new());
     }
-    let mut grid: Vec<Vec<f64>> = vec![base.clone()];
-    for (pos, i) in &motion {
+    // every combination of the grid's values for the unstated parameters
+    let mut grid: Vec<Vec<f64>> = vec![Vec::new()];
+    for (_, i) in &motion {
         let values: &[f64] = if *i == 0 { &MOTION_GRID.0 } else { &MOTION_GRID.1 };
-        grid = grid
-            .iter()
-            .flat_map(|x| {
-                values.iter().map(move |v| {
-                    let mut y = x.clone();
-                    y[*pos] = *v;
-                    y
-                })
-            })
-            .collect();
+        grid = grid.iter().flat_map(|g| values.iter().map(move |v| [g.clone(), vec![*v]].concat())).collect();
     }
     log(format!("diagnose: sled-motion: the setups leave the motion out; screening {} grid points", grid.len()));
-    let models: Vec<Model> = grid.into_iter().map(|x| Model { space, targets, starts: vec![x] }).collect();
     let screen = Solver {
         particles: solver.screen_particles,
         polish_iterations: MOTION_SCREEN_ITERATIONS,
         first_step: MOTION_SCREEN_STEP,
         ..*solver
     };
-    let mut fits = screen.polish(sim, &models, &mut |_| {})?;
-    fits.sort_by(|a, b| a.value.total_cmp(&b.value));
+    let shared = &base[..space.shared.len()];
+    let mut found: Vec<(f64, Vec<f64>)> = Vec::with_capacity(grid.len());
+    for g in &grid {
+        // the grid point's motion held fixed (as if every setup stated it): only the shared
+        // parameters move, so the polish cannot slide back to the no-motion corner before
+        // k_elastic, μ and k_drag have followed the motion
+        let conditions: Vec<Condition> = sim
+            .conditions
+            .iter()
+            .map(|c| {
+                let mut c = c.clone();
+                for ((_, i), v) in motion.iter().zip(g) {
+                    match i {
+                        0 => c.motion.delay_s = c.motion.delay_s.or(Some(*v)),
+                        _ => c.motion.return_speed_m_s = c.motion.return_speed_m_s.or(Some(*v)),
+                    }
+                }
+                c
+            })
+            .collect();
+        let fixed = Space::new(space.shared.clone(), &space.effects, &conditions);
+        let fixed_sim = Simulator { engine: sim.engine, conditions: &conditions };
+        let model = Model { space: &fixed, targets, starts: vec![shared.to_vec()] };
+        let fit = screen.polish(&fixed_sim, &[model], &mut |_| {})?.remove(0);
+        found.push((fit.value, [fit.x, g.clone()].concat()));
+    }
+    found.sort_by(|a, b| a.0.total_cmp(&b.0));
     let names = space.names();
-    let shown: Vec<String> = fits
+    let shown: Vec<String> = found
         .iter()
-        .map(|f| {
-            let m: Vec<String> = names.iter().zip(&f.x).map(|(n, v)| format!("{n} {v:.3}")).collect();
-            format!("{} (SSE {:.1})", m.join(", "), f.value)
+        .map(|(v, x)| {
+            let m: Vec<String> = names.iter().zip(x).map(|(n, v)| format!("{n} {v:.3}")).collect();
+            format!("{} (SSE {v:.1})", m.join(", "))
         })
         .collect();
     log(format!("diagnose: sled-motion: grid points polished, best first: {}", shown.join("; ")));
-    Ok(fits.into_iter().take(MOTION_STARTS).map(|f| f.x).collect())
+    Ok(found.into_iter().take(MOTION_STARTS).map(|(_, x)| x).collect())
 }
 
 /// The i-th point of the van der Corput sequence in `base`.

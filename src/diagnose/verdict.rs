@@ -22,7 +22,11 @@
 //!   - `explained`: the best effect leaves a gap within the factor of its floor;
 //!   - `partly-explained`: the best effect removes at least half of the baseline's excess
 //!     over its floor, but what it leaves is still well above its floor;
-//!   - `unexplained`: no best effect and the baseline well above its floor, or the best
+//!   - `undecided`: no best effect, the baseline well above its floor, but some candidate
+//!     would leave a gap within the factor of its floor (it does not beat the baseline
+//!     beyond the uncertainty by a material share: the data cannot tell);
+//!   - `unexplained`: no best effect and even the candidate closest to the data leaves a
+//!     gap well above its floor, or the best
 //!     removes less than half of that excess and leaves a gap well above its floor. Then
 //!     the candidate is demoted: it is reported as closing a part (`partial`), not as the
 //!     cause (`best` null).
@@ -52,6 +56,7 @@ pub enum VerdictKind {
     Explained,
     PartlyExplained,
     Unexplained,
+    Undecided,
 }
 
 impl VerdictKind {
@@ -61,6 +66,7 @@ impl VerdictKind {
             VerdictKind::Explained => "explained",
             VerdictKind::PartlyExplained => "partly-explained",
             VerdictKind::Unexplained => "unexplained",
+            VerdictKind::Undecided => "undecided",
         }
     }
 }
@@ -151,7 +157,8 @@ pub struct PersistentCondition {
 pub struct Verdict {
     pub kind: VerdictKind,
     pub baseline: Judged,
-    /// The model whose remaining gap is judged: the best effect, else the top-ranked one.
+    /// The model whose remaining gap is judged: the best effect, else the candidate with the
+    /// smallest judged gap.
     pub remaining: Judged,
     /// Candidates that close part of an unexplained gap (the demoted best among them).
     pub partial: Vec<Partial>,
@@ -316,11 +323,15 @@ pub fn verdict(
     particles: u32,
 ) -> Verdict {
     let base = judge(conds, baseline, particles);
-    let judged_model = best
-        .and_then(|e| ranking.iter().find(|m| m.single() == Some(e)))
-        .or_else(|| ranking.first())
-        .unwrap_or(baseline);
-    let remaining = judge(conds, judged_model, particles);
+    // the best effect, else the candidate that comes closest to the data once judged
+    let remaining = match best.and_then(|e| ranking.iter().find(|m| m.single() == Some(e))) {
+        Some(m) => judge(conds, m, particles),
+        None => ranking
+            .iter()
+            .map(|m| judge(conds, m, particles))
+            .min_by(|a, b| a.gap.total_cmp(&b.gap))
+            .unwrap_or_else(|| base.clone()),
+    };
     let excess = (base.gap - base.floor).max(0.0);
     let share = |j: &Judged| if excess > 0.0 { (base.gap - j.gap) / excess } else { 0.0 };
     let mut demoted = None;
@@ -335,8 +346,9 @@ pub fn verdict(
                 VerdictKind::Unexplained
             }
         }
-        None if base.well_above() => VerdictKind::Unexplained,
-        None => VerdictKind::NoGap,
+        None if !base.well_above() => VerdictKind::NoGap,
+        None if remaining.well_above() => VerdictKind::Unexplained,
+        None => VerdictKind::Undecided,
     };
     // candidates that close a part of what stays unexplained: beyond the uncertainty
     let partial: Vec<Partial> = if kind == VerdictKind::Unexplained {
@@ -390,6 +402,13 @@ fn describe(
              candidate removes it",
             remaining.model,
             floor_words(base),
+            floor_words(remaining)
+        ),
+        VerdictKind::Undecided => format!(
+            "undecided: the baseline's {} is well above the noise, and `{}` would leave {} — within {FLOOR_FACTOR}× \
+             of its floor — but no candidate beats the baseline beyond the uncertainty by a material share",
+            floor_words(base),
+            remaining.model,
             floor_words(remaining)
         ),
         VerdictKind::Unexplained => format!(
