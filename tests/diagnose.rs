@@ -80,8 +80,10 @@ fn diagnose(pairs: &[(&Path, &str)], out: &Path) -> Value {
     assert!(svg_texts(&ranking).iter().any(|t| t.starts_with("1. ")), "ranked rows");
     assert!(svg_texts(&ranking).iter().any(|t| t.contains("best = ")), "footer");
     let keys: Vec<&String> = v.as_object().unwrap().keys().collect();
-    assert_eq!(keys.len(), 7, "{keys:?}");
-    for k in ["gap", "ranking", "best", "indistinguishable", "combined", "baseline", "where"] {
+    assert_eq!(keys.len(), 9, "{keys:?}");
+    for k in
+        ["gap", "ranking", "best", "verdict", "verdict_detail", "indistinguishable", "combined", "baseline", "where"]
+    {
         assert!(v.get(k).is_some(), "missing {k}");
     }
     v

@@ -149,6 +149,7 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
             )?;
         }
         writeln!(out, "best: {}", d.best.map_or("none (the data cannot tell)", |e| e.name()))?;
+        writeln!(out, "verdict: {}: {}", d.verdict.kind.name(), d.verdict.text)?;
         if !d.indistinguishable.is_empty() {
             writeln!(
                 out,

@@ -1,5 +1,6 @@
 //! The sim-to-real gap (issue 5): the diagnosis itself (`diagnose`: where the gap lies, which
-//! unmodelled effect causes it, how far it shrinks), its report and figures (`render`), and
+//! unmodelled effect causes it, how far it shrinks), its verdict against the data's noise
+//! floor (`verdict`: explained, or "none of these"), its report and figures (`render`), and
 //! synthetic measurement campaigns from the extended model (`synth`), the data that checks a
 //! diagnosis whose true effect is known.
 
@@ -7,3 +8,4 @@
 pub mod diagnose;
 pub mod render;
 pub mod synth;
+pub mod verdict;

@@ -1,0 +1,215 @@
+//! `sawtooth diagnose` beyond its own family (issue 32): data whose shape no candidate can
+//! produce comes out `unexplained` ("none of these") with the residual no candidate removes;
+//! a sled motion that no setup states is found from the data; a subtle effect (an impact
+//! scatter of 11°, which halves the baseline's gap) is named or narrowed to at most three.
+//!
+//! Three conditions per campaign on the practice campaigns' rig (`data/campaign_rig`), made
+//! by `synth` (10 runs each) and diagnosed with every candidate at a CI-sized budget.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::Value;
+
+/// The default solver budget with fewer particles, so the suite stays CI-sized.
+const CI_BUDGET: [&str; 2] = ["--max-particles", "6000"];
+const RIG: [&str; 3] = ["slow", "fast", "shallow"];
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_sawtooth"))
+}
+
+fn rig_setup(name: &str) -> String {
+    format!("{}/data/campaign_rig/{name}.toml", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn tmp(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("sawtooth-beyond-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn synth(setup: &str, effect: Option<&str>, seed: u64, out: &Path) {
+    let mut c = bin();
+    c.args(["synth", "--setup", setup, "--runs", "10", "--seed", &seed.to_string(), "--resolution-g", "0.01"]);
+    if let Some(e) = effect {
+        c.args(["--effect", e]);
+    }
+    let o = c.args(["--out", out.to_str().unwrap()]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// Diagnose (data, setup) pairs with every candidate; diagnosis.json.
+fn diagnose(pairs: &[(PathBuf, String)], out: &Path) -> Value {
+    let mut c = bin();
+    c.arg("diagnose");
+    for (data, setup) in pairs {
+        c.arg("--data").arg(data).args(["--setup", setup]);
+    }
+    let o = c.args(CI_BUDGET).args(["--json", "--out"]).arg(out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        report.contains(&format!("## Verdict: {}", v["verdict"].as_str().unwrap())),
+        "report.md states the verdict"
+    );
+    v
+}
+
+fn summary(v: &Value) -> String {
+    let r: Vec<String> = v["ranking"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| {
+            format!(
+                "{} {:.1} ({:.0} %) {}",
+                m["effect"],
+                m["gap"],
+                100.0 * m["reduction"].as_f64().unwrap(),
+                m["params"]
+            )
+        })
+        .collect();
+    format!(
+        "baseline {:.1}; {}; best {}; indistinguishable {}; verdict {}: {}",
+        v["baseline"]["gap"],
+        r.join("; "),
+        v["best"],
+        v["indistinguishable"],
+        v["verdict"],
+        v["verdict_detail"]["text"]
+    )
+}
+
+/// A run's masses with `share` of its loaded mass moved from its modal tooth to tooth 1
+/// (grains that never launch) and `tail` to the tooth after the mode (a fast tail): a
+/// shape the thesis's model and its candidate effects do not make.
+fn reshape(csv: &str, share: f64, tail: f64) -> String {
+    let mut out = String::new();
+    let mut header = true;
+    for line in csv.lines() {
+        if line.starts_with('#') || header {
+            header &= line.starts_with('#');
+            out.push_str(line);
+            out.push('\n');
+            continue;
+        }
+        let cells: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+        let (run, teeth, input) = (cells[0], &cells[1..cells.len() - 1], cells[cells.len() - 1]);
+        let mut m = teeth.to_vec();
+        let k = (0..m.len()).max_by(|a, b| m[*a].total_cmp(&m[*b])).unwrap();
+        let to_first = (share * input * 100.0).round() / 100.0;
+        let to_next = if k + 1 < m.len() { (tail * input * 100.0).round() / 100.0 } else { 0.0 };
+        m[k] -= to_first + to_next;
+        m[0] += to_first;
+        if to_next > 0.0 {
+            m[k + 1] += to_next;
+        }
+        let cells: Vec<String> = m.iter().map(|x| format!("{x:.2}")).collect();
+        out.push_str(&format!("{run},{},{input:.2}\n", cells.join(",")));
+    }
+    out
+}
+
+#[test]
+fn reshape_moves_the_stated_shares_and_keeps_the_mass() {
+    let csv = "# c\nrun,tooth_1,tooth_2,tooth_3,input_mass\n1,0.00,0.50,1.50,2.00\n";
+    let r = reshape(csv, 0.1, 0.05);
+    assert_eq!(r, "# c\nrun,tooth_1,tooth_2,tooth_3,input_mass\n1,0.20,0.50,1.30,2.00\n");
+    let csv = "run,tooth_1,tooth_2,input_mass\n1,0.20,1.70,2.00\n";
+    assert_eq!(
+        reshape(csv, 0.1, 0.05),
+        "run,tooth_1,tooth_2,input_mass\n1,0.40,1.50,2.00\n",
+        "no tooth after the mode"
+    );
+}
+
+/// 12 % of every run's mass stays in tooth 1 and 8 % goes one tooth further than the rest:
+/// no candidate makes that shape. The verdict says "none of these", the baseline's gap is
+/// well above its floor, no effect is named the cause, and the tooth-1 excess is the
+/// residual that every model leaves, in every condition.
+#[test]
+fn data_whose_shape_no_candidate_makes_is_unexplained() {
+    let d = tmp("oof");
+    let mut pairs = Vec::new();
+    for (i, n) in RIG.iter().enumerate() {
+        let plain = d.join(format!("{n}-plain.csv"));
+        synth(&rig_setup(n), None, 400 + i as u64, &plain);
+        let data = d.join(format!("{n}.csv"));
+        std::fs::write(&data, reshape(&std::fs::read_to_string(&plain).unwrap(), 0.12, 0.08)).unwrap();
+        pairs.push((data, rig_setup(n)));
+    }
+    let v = diagnose(&pairs, &d.join("out"));
+    let s = summary(&v);
+    eprintln!("out of family: {s}");
+    assert_eq!(v["verdict"], "unexplained", "{s}");
+    assert!(v["best"].is_null(), "{s}");
+    let detail = &v["verdict_detail"];
+    assert!(detail["remaining"]["gap_over_floor"].as_f64().unwrap() > detail["floor_factor"].as_f64().unwrap(), "{s}");
+    assert!(detail["text"].as_str().unwrap().starts_with("none of these"), "{s}");
+    for c in detail["not_removed"].as_array().unwrap() {
+        // tooth 1 (the grains that stayed) is missed by every model beyond the noise, on
+        // one side or the other (a fit may overshoot it to serve the other teeth)
+        let t1 = &c["bins"][0];
+        assert_eq!(t1["bin"], "tooth 1", "{c}");
+        assert!(t1["residual"].as_f64().unwrap().abs() > 1.0 && t1["flag"] == true, "{c}");
+        assert!(c["sse"].as_f64().unwrap() > c["floor"].as_f64().unwrap(), "{c}");
+    }
+    std::fs::remove_dir_all(&d).ok();
+}
+
+/// Every condition's sled returns at once at 0.3 m/s and no setup says so: the sled-motion
+/// candidate searches the delay and the return speed, and is named with about them.
+/// Not met yet (issue 32, item 4; docs/diagnosis-report.md): the motion screen's compass
+/// polish from the baseline's k_elastic lands in another basin, and the candidate keeps the
+/// no-motion corner.
+#[test]
+#[ignore = "issue 32 item 4 is not met yet: the motion screen does not find an unstated motion (docs/diagnosis-report.md)"]
+fn sled_motion_that_no_setup_states_is_found() {
+    let d = tmp("unstated");
+    let mut pairs = Vec::new();
+    for (i, n) in RIG.iter().enumerate() {
+        let text = std::fs::read_to_string(rig_setup(n)).unwrap();
+        assert!(text.contains("motion_delay_s"), "the rig's setups state the motion; this test removes it");
+        let unstated: String = text.lines().filter(|l| !l.starts_with("motion_")).map(|l| format!("{l}\n")).collect();
+        let setup = d.join(format!("{n}.toml"));
+        std::fs::write(&setup, unstated).unwrap();
+        let setup = setup.to_str().unwrap().to_string();
+        let data = d.join(format!("{n}.csv"));
+        synth(&setup, Some("sled-motion=0,0.3"), 200 + i as u64, &data);
+        pairs.push((data, setup));
+    }
+    let v = diagnose(&pairs, &d.join("out"));
+    let s = summary(&v);
+    eprintln!("unstated motion: {s}");
+    assert_eq!(v["best"], "sled-motion", "{s}");
+    let m = v["ranking"].as_array().unwrap().iter().find(|m| m["effect"] == "sled-motion").unwrap();
+    let (delay, speed) = (m["params"]["delay_s"].as_f64().unwrap(), m["params"]["return_speed_m_s"].as_f64().unwrap());
+    assert!(delay < 0.03 && (0.15..=0.6).contains(&speed), "fitted motion {delay} s, {speed} m/s: {s}");
+    assert_ne!(v["verdict"], "unexplained", "{s}");
+    std::fs::remove_dir_all(&d).ok();
+}
+
+/// An impact scatter of 11° at every impact: the true model halves the baseline's gap and
+/// the noise floor is far below it. It is named, or narrowed to at most three candidates
+/// with it among them (the practice campaigns' grading).
+#[test]
+fn a_subtle_impact_scatter_is_resolved() {
+    let d = tmp("subtle");
+    let mut pairs = Vec::new();
+    for (i, n) in RIG.iter().enumerate() {
+        let data = d.join(format!("{n}.csv"));
+        synth(&rig_setup(n), Some("impact-scatter=11"), 300 + i as u64, &data);
+        pairs.push((data, rig_setup(n)));
+    }
+    let v = diagnose(&pairs, &d.join("out"));
+    let s = summary(&v);
+    eprintln!("impact scatter 11°: {s}");
+    let together: Vec<&str> = v["indistinguishable"].as_array().unwrap().iter().map(|e| e.as_str().unwrap()).collect();
+    let named = v["best"] == "impact-scatter"
+        || (!v["best"].is_null() && together.contains(&"impact-scatter") && together.len() <= 3);
+    assert!(named, "{s}");
+    std::fs::remove_dir_all(&d).ok();
+}
