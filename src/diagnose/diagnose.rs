@@ -69,9 +69,7 @@ use serde_json::{json, Map, Value};
 pub use crate::calibrate::space::shared_params;
 use crate::calibrate::stats::{percentile, sample_sd};
 pub use crate::calibrate::{Condition, KnownMotion};
-use crate::calibrate::{
-    Effort, Fit, MeasuredSummary, Model, ObjectiveKind, Param, Simulator, Solver, Space, Target,
-};
+use crate::calibrate::{Effort, Fit, MeasuredSummary, Model, ObjectiveKind, Param, Simulator, Solver, Space, Target};
 use crate::engine::{evaluate_detailed, particle_engine, BatchEvaluator, EngineKind};
 use crate::model::effects::known_effects;
 pub use crate::model::effects::EffectKind;
