@@ -37,10 +37,6 @@ const LAYERS: &[&[&str]] = &[
     &["cli"],
 ];
 
-/// Modules whose inner loops are tolerated while they exist, each with the reason. The
-/// glibc ports are being replaced wholesale by the project's own vector math (issue 33,
-/// item 1); an entry whose module is gone fails the test, so the list cannot go stale.
-
 /// One `crate::`/`super::` path: where it is written and the absolute module path it names.
 #[derive(Clone, Debug, PartialEq)]
 struct Reference {
