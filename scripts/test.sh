@@ -51,7 +51,7 @@ cargo clippy --release --locked --workspace --all-targets -- -D warnings || {
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
 status=0
-cargo test --release --locked --all-targets 2>&1 | tee "$log" || status=$?
+cargo test --release --locked --all-targets --no-fail-fast 2>&1 | tee "$log" || status=$?
 # One closing line over every test binary (cargo's own last line belongs to whichever
 # target ran last, possibly one without tests).
 awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^failed/) f += $i } }

@@ -21,13 +21,15 @@
 //!   - `no-gap`: no best effect, and the baseline is within the factor of its floor;
 //!   - `explained`: the best effect leaves a gap within the factor of its floor;
 //!   - `partly-explained`: the best effect removes at least half of the baseline's excess
-//!     over its floor, but what it leaves is still well above its floor;
+//!     over its floor (or a third of its gap, `CAUSE_GAP_SHARE`), but what it leaves is still
+//!     well above its floor;
 //!   - `undecided`: no best effect, the baseline well above its floor, but some candidate
 //!     would leave a gap within the factor of its floor (it does not beat the baseline
 //!     beyond the uncertainty by a material share: the data cannot tell);
 //!   - `unexplained`: no best effect and even the candidate closest to the data leaves a
 //!     gap well above its floor, or the best
-//!     removes less than half of that excess and leaves a gap well above its floor. Then
+//!     removes less than half of that excess (and less than a third of the gap) and leaves a
+//!     gap well above its floor. Then
 //!     the candidate is demoted: it is reported as closing a part (`partial`), not as the
 //!     cause (`best` null).
 //! - **What no candidate removes.** Per condition and bin, the residual (simulated −
@@ -48,6 +50,14 @@ pub const FLOOR_FACTOR: f64 = 3.0;
 /// The share of the baseline's excess over its floor that the best effect must remove to
 /// stay the cause when what it leaves is still well above its own floor.
 pub const CAUSE_SHARE: f64 = 0.5;
+
+/// The share of the baseline's (raw) gap that the best effect may remove and still stay the
+/// cause when it removes less than [`CAUSE_SHARE`] of the excess: the floor counts only the
+/// measured means' and the Monte-Carlo noise, not what a refit on finite streams leaves, so
+/// on a CI-sized in-family campaign even the true model may stay "well above" it (150 µm
+/// quadratic drag: the truth closes 38 % of the gap). A third is the share `tests/diagnose.rs`
+/// asks of a named effect; an out-of-family gap's best closes far less (12 %).
+pub const CAUSE_GAP_SHARE: f64 = 1.0 / 3.0;
 
 /// The four verdicts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -334,12 +344,15 @@ pub fn verdict(
     };
     let excess = (base.gap - base.floor).max(0.0);
     let share = |j: &Judged| if excess > 0.0 { (base.gap - j.gap) / excess } else { 0.0 };
+    // the share of the baseline's raw (ranking) gap an effect removes, as the ranking reports it
+    let raw_reduction =
+        |e: EffectKind| ranking.iter().find(|m| m.single() == Some(e)).map_or(0.0, |m| 1.0 - m.gap / baseline.gap);
     let mut demoted = None;
     let kind = match best {
         Some(e) => {
             if !remaining.well_above() {
                 VerdictKind::Explained
-            } else if share(&remaining) >= CAUSE_SHARE {
+            } else if share(&remaining) >= CAUSE_SHARE || raw_reduction(e) >= CAUSE_GAP_SHARE {
                 VerdictKind::PartlyExplained
             } else {
                 demoted = Some(e);
