@@ -66,6 +66,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::{json, Map, Value};
 
+use super::model_result::model_name;
+pub use super::model_result::{num, DepthLayer, ModelResult, Z_FLAG};
 pub use crate::calibrate::space::shared_params;
 use crate::calibrate::stats::{percentile, sample_sd};
 pub use crate::calibrate::{Condition, KnownMotion};
@@ -86,9 +88,6 @@ pub const RANKING_RULE: &str = "score = gap + 2 x (extra parameters) x bootstrap
 
 /// The smallest share of the baseline's gap that `best` must remove.
 pub const MIN_REDUCTION: f64 = 0.25;
-
-/// |z| above which a residual is flagged.
-pub const Z_FLAG: f64 = 2.0;
 
 /// `all` or a comma list of effect names, each once.
 pub fn parse_effects(list: &str) -> anyhow::Result<Vec<EffectKind>> {
@@ -121,71 +120,11 @@ pub struct Settings {
     pub bootstrap: usize,
 }
 
-/// One model's result.
-#[derive(Clone, Debug)]
-pub struct ModelResult {
-    /// The effects switched on: none for the baseline, one for a candidate, two for the
-    /// combination of the two best.
-    pub effects: Vec<EffectKind>,
-    pub names: Vec<&'static str>,
-    /// The fit on all runs (its SSE is on the particle streams it was fitted with).
-    pub full: Fit,
-    /// `[stream][condition]` bins at the fitted parameters with fresh particle streams.
-    pub fresh: Vec<Vec<Vec<f64>>>,
-    /// The gap: the joint SSE (%², all runs) of the fitted model on fresh streams, averaged
-    /// over the streams. Fresh streams remove the fit's adaptation to its own Monte-Carlo
-    /// noise, which flatters a model with more parameters.
-    pub gap: f64,
-    pub gap_by_condition: Vec<f64>,
-    /// Bootstrap replicates of the gap (runs resampled within conditions, one fresh stream
-    /// drawn; paired across models).
-    pub replicates: Vec<f64>,
-    pub interval: [f64; 2],
-    /// Bootstrap standard error of the gap.
-    pub se: f64,
-    /// Paired bootstrap interval of (baseline − this model)'s gap.
-    pub improvement_interval: [f64; 2],
-    /// Extra parameters over the baseline.
-    pub extra_params: usize,
-    /// The ranking score (see the module's doc).
-    pub score: f64,
-    pub evaluations: u64,
-}
-
-/// A model's name: `baseline`, an effect's name, or the effects' names joined by `+`.
-fn model_name(effects: &[EffectKind]) -> String {
-    if effects.is_empty() {
-        "baseline".into()
-    } else {
-        effects.iter().map(|e| e.name()).collect::<Vec<_>>().join("+")
-    }
-}
-
 /// Paired bootstrap interval of `a`'s gap minus `b`'s (the replicates share their
 /// resamples, `bootstrap_gaps`): above 0 when `b` improves on `a`.
 fn paired_interval(a: &ModelResult, b: &ModelResult) -> [f64; 2] {
     let d: Vec<f64> = a.replicates.iter().zip(&b.replicates).map(|(x, y)| x - y).collect();
     interval(&d)
-}
-
-impl ModelResult {
-    pub fn name(&self) -> String {
-        model_name(&self.effects)
-    }
-    /// The candidate effect, when this is a one-effect model.
-    pub fn single(&self) -> Option<EffectKind> {
-        match self.effects[..] {
-            [e] => Some(e),
-            _ => None,
-        }
-    }
-    pub fn params_object(&self) -> Value {
-        let mut m = Map::new();
-        for (n, v) in self.names.iter().zip(&self.full.x) {
-            m.insert((*n).to_string(), num(*v));
-        }
-        Value::Object(m)
-    }
 }
 
 /// A per-tooth (or per-metric) residual with its uncertainty.
@@ -247,20 +186,6 @@ pub struct WhereCondition {
     /// Where the grains of each third of the fill (by launch depth) end up.
     pub launch_depth: Vec<DepthLayer>,
     pub measured_summary: MeasuredSummary,
-}
-
-/// The simulated grains launched from one layer of the fill (equal particle counts, by depth
-/// below the fill's free surface) and where they come to rest.
-#[derive(Clone, Debug)]
-pub struct DepthLayer {
-    pub label: &'static str,
-    /// Depths of the layer's launch points below the fill surface, min and max, mm.
-    pub depth_mm: [f64; 2],
-    pub particles: usize,
-    /// Per shown tooth, % of the layer's particles resting there.
-    pub teeth_percent: Vec<f64>,
-    /// % of the layer's particles resting beyond the shown teeth or lost.
-    pub further_or_lost_percent: f64,
 }
 
 /// Split the particles into top, middle and bottom thirds of the fill by launch depth and
@@ -348,15 +273,6 @@ impl Diagnosis {
     /// The effect the "how far" section uses: `best`, else the top-ranked one.
     pub fn gap_model(&self) -> Option<&ModelResult> {
         self.ranking.first()
-    }
-}
-
-/// JSON numbers cannot be NaN/inf: those become null.
-pub fn num(v: f64) -> Value {
-    if v.is_finite() {
-        json!(v)
-    } else {
-        Value::Null
     }
 }
 

@@ -6,6 +6,7 @@
 
 #[allow(clippy::module_inception)]
 pub mod diagnose;
+pub mod model_result;
 pub mod render;
 pub mod synth;
 pub mod verdict;

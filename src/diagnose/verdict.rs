@@ -40,7 +40,7 @@
 
 use serde_json::{json, Value};
 
-use super::diagnose::{num, DepthLayer, ModelResult, Z_FLAG};
+use super::model_result::{num, DepthLayer, ModelResult, Z_FLAG};
 use crate::calibrate::{Condition, Normalise};
 use crate::model::effects::EffectKind;
 

@@ -1,0 +1,95 @@
+//! What one fitted model of a diagnosis leaves ([`ModelResult`]), where the grains of each
+//! layer of the fill come to rest ([`DepthLayer`]), and the JSON number rule: the vocabulary
+//! that the diagnosis (`diagnose`) builds and its verdict (`verdict`) judges, in a module of
+//! its own so that neither of the two imports the other.
+
+use serde_json::{json, Map, Value};
+
+use crate::calibrate::Fit;
+use crate::model::effects::EffectKind;
+
+/// |z| above which a residual is flagged.
+pub const Z_FLAG: f64 = 2.0;
+
+/// One model's result.
+#[derive(Clone, Debug)]
+pub struct ModelResult {
+    /// The effects switched on: none for the baseline, one for a candidate, two for the
+    /// combination of the two best.
+    pub effects: Vec<EffectKind>,
+    pub names: Vec<&'static str>,
+    /// The fit on all runs (its SSE is on the particle streams it was fitted with).
+    pub full: Fit,
+    /// `[stream][condition]` bins at the fitted parameters with fresh particle streams.
+    pub fresh: Vec<Vec<Vec<f64>>>,
+    /// The gap: the joint SSE (%², all runs) of the fitted model on fresh streams, averaged
+    /// over the streams. Fresh streams remove the fit's adaptation to its own Monte-Carlo
+    /// noise, which flatters a model with more parameters.
+    pub gap: f64,
+    pub gap_by_condition: Vec<f64>,
+    /// Bootstrap replicates of the gap (runs resampled within conditions, one fresh stream
+    /// drawn; paired across models).
+    pub replicates: Vec<f64>,
+    pub interval: [f64; 2],
+    /// Bootstrap standard error of the gap.
+    pub se: f64,
+    /// Paired bootstrap interval of (baseline − this model)'s gap.
+    pub improvement_interval: [f64; 2],
+    /// Extra parameters over the baseline.
+    pub extra_params: usize,
+    /// The ranking score (see the module's doc).
+    pub score: f64,
+    pub evaluations: u64,
+}
+
+/// A model's name: `baseline`, an effect's name, or the effects' names joined by `+`.
+pub(super) fn model_name(effects: &[EffectKind]) -> String {
+    if effects.is_empty() {
+        "baseline".into()
+    } else {
+        effects.iter().map(|e| e.name()).collect::<Vec<_>>().join("+")
+    }
+}
+
+impl ModelResult {
+    pub fn name(&self) -> String {
+        model_name(&self.effects)
+    }
+    /// The candidate effect, when this is a one-effect model.
+    pub fn single(&self) -> Option<EffectKind> {
+        match self.effects[..] {
+            [e] => Some(e),
+            _ => None,
+        }
+    }
+    pub fn params_object(&self) -> Value {
+        let mut m = Map::new();
+        for (n, v) in self.names.iter().zip(&self.full.x) {
+            m.insert((*n).to_string(), num(*v));
+        }
+        Value::Object(m)
+    }
+}
+
+/// The simulated grains launched from one layer of the fill (equal particle counts, by depth
+/// below the fill's free surface) and where they come to rest.
+#[derive(Clone, Debug)]
+pub struct DepthLayer {
+    pub label: &'static str,
+    /// Depths of the layer's launch points below the fill surface, min and max, mm.
+    pub depth_mm: [f64; 2],
+    pub particles: usize,
+    /// Per shown tooth, % of the layer's particles resting there.
+    pub teeth_percent: Vec<f64>,
+    /// % of the layer's particles resting beyond the shown teeth or lost.
+    pub further_or_lost_percent: f64,
+}
+
+/// JSON numbers cannot be NaN/inf: those become null.
+pub fn num(v: f64) -> Value {
+    if v.is_finite() {
+        json!(v)
+    } else {
+        Value::Null
+    }
+}
