@@ -74,7 +74,7 @@ pub fn set_effects(s: &mut Scenario, specs: &[String]) -> anyhow::Result<()> {
 }
 
 /// Most slopes `--alpha-points` may ask for: each is one more simulation per design.
-pub const MAX_ALPHA_POINTS: u32 = 41;
+pub const MAX_ALPHA_POINTS: u32 = crate::schema::ALPHA_POINTS.max as u32;
 
 impl ScenarioRequest {
     /// Config file (if any), then flags; validated.
@@ -181,9 +181,7 @@ impl ScenarioRequest {
             return Ok((s, d, Vec::new()));
         };
         let k = points.unwrap_or(5);
-        if !(2..=MAX_ALPHA_POINTS).contains(&k) {
-            bail!("--alpha-points must be between 2 and {MAX_ALPHA_POINTS}, got {k}");
-        }
+        crate::schema::ALPHA_POINTS.check_u32("--alpha-points", k).map_err(anyhow::Error::msg)?;
         let mut single = self.clone();
         single.alpha = Some((from, from));
         let (scenario, design) = single.resolve()?;

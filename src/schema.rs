@@ -252,6 +252,66 @@ pub const FIT_MAX_PARTICLES: Count = Count {
     why: "the bound of sim.particles",
 };
 
+pub const FIT_BOOTSTRAP: Count = Count {
+    flags: &["--bootstrap"],
+    keys: &[],
+    python: None,
+    min: 0,
+    max: 10_000,
+    why: "each replicate is a whole refit of the model; 0 switches the bootstrap off",
+};
+pub const DIAGNOSE_BOOTSTRAP: Count = Count {
+    flags: &["--bootstrap"],
+    keys: &[],
+    python: None,
+    min: 2,
+    max: 100_000,
+    why: "each replicate resamples the runs' gaps without simulating; two make an interval",
+};
+pub const RESCORE_STREAMS: Count = Count {
+    flags: &["--rescore-streams"],
+    keys: &[],
+    python: None,
+    min: 1,
+    max: 1000,
+    why: "each stream re-simulates every candidate once more; standard errors need no more",
+};
+pub const ALPHA_POINTS: Count = Count {
+    flags: &["--alpha-points"],
+    keys: &[],
+    python: None,
+    min: 2,
+    max: 41,
+    why: "one point per degree over the thesis's 0-40 degree slope range",
+};
+
+// ---- `dem` ---------------------------------------------------------------------------------
+
+pub const DEM_RUNS: Count = Count {
+    flags: &["--runs", "--seeds"],
+    keys: &[],
+    python: None,
+    min: 1,
+    max: 10_000,
+    why: "each run is a LIGGGHTS simulation of minutes with its own folder",
+};
+pub const DEM_PARTICLES: Count = Count {
+    flags: &["--particles"],
+    keys: &["[dem] particles"],
+    python: None,
+    min: 1,
+    max: 200_000,
+    why: "a serial LIGGGHTS stroke of more grains takes days",
+};
+pub const DEM_TEETH: Count = Count {
+    flags: &[],
+    keys: &["[dem] teeth"],
+    python: None,
+    min: 2,
+    max: 1000,
+    why: "the mesh holds a facet row per tooth; a longer slab is a typo",
+};
+
 // ---- `synth`, `bench`, `conformance` -----------------------------------------------------
 
 pub const SYNTH_RUNS: Count = Count {
@@ -293,6 +353,253 @@ pub const CONFORMANCE_DESIGNS: Count = Count {
     min: 1,
     max: 10_000,
     why: "each design is simulated on both engines, particle by particle",
+};
+
+// ---- the scenario's reals (`Scenario::validate`: every path, CLI, config, run.toml, plan
+// member and Python, builds a Scenario and validates it) -----------------------------------
+
+pub const ENV_G: Real = Real {
+    lib: "environment.g",
+    flags: &[],
+    keys: &["[environment] g_m_s2"],
+    python: None,
+    unit: "m/s^2",
+    min: 0.0,
+    min_open: true,
+    max: 100.0,
+    max_open: false,
+    why: "ten times the Earth's gravity is no planetary surface",
+};
+pub const ENV_ALPHA: Real = Real {
+    lib: "environment.alpha_deg",
+    flags: &["--alpha"],
+    keys: &["[environment] alpha_deg"],
+    python: Some("alpha_deg"),
+    unit: "degrees",
+    min: 0.0,
+    min_open: false,
+    max: 80.0,
+    max_open: false,
+    why: "a steeper conveyor is a wall; the thesis sizes 0-40 degrees",
+};
+pub const ENV_K_DRAG: Real = Real {
+    lib: "environment.k_drag",
+    flags: &["--k-drag"],
+    keys: &["[environment] k_drag_per_s"],
+    python: Some("k_drag_per_s"),
+    unit: "1/s",
+    min: 0.0,
+    min_open: true,
+    max: 10000.0,
+    max_open: false,
+    why: "Stokes drag of 10^4 1/s stops a grain within microns; 0 in a file or flag means vacuum",
+};
+pub const MATERIAL_AOR: Real = Real {
+    lib: "material.aor_deg",
+    flags: &["--aor"],
+    keys: &["[material] aor_deg"],
+    python: Some("aor_deg"),
+    unit: "degrees",
+    min: 0.0,
+    min_open: false,
+    max: 89.0,
+    max_open: false,
+    why: "an angle of repose is below vertical",
+};
+pub const MATERIAL_BULK_DENSITY: Real = Real {
+    lib: "material.bulk_density",
+    flags: &[],
+    keys: &["[material] bulk_density_kg_m3"],
+    python: None,
+    unit: "kg/m^3",
+    min: 0.0,
+    min_open: true,
+    max: 25000.0,
+    max_open: false,
+    why: "denser than osmium is a typo",
+};
+pub const SOLID_YOUNGS_MODULUS: Real = Real {
+    lib: "material.particle.youngs_modulus",
+    flags: &[],
+    keys: &["material.particle.youngs_modulus", "material.conveyor.youngs_modulus"],
+    python: None,
+    unit: "Pa",
+    min: 0.0,
+    min_open: true,
+    max: 1e13,
+    max_open: false,
+    why: "stiffer than diamond is a typo",
+};
+pub const SOLID_POISSON_RATIO: Real = Real {
+    lib: "material.particle.poisson_ratio",
+    flags: &[],
+    keys: &["material.particle.poisson_ratio", "material.conveyor.poisson_ratio"],
+    python: None,
+    unit: "",
+    min: -1.0,
+    min_open: false,
+    max: 0.5,
+    max_open: false,
+    why: "the thermodynamic bounds of an isotropic solid",
+};
+pub const SOLID_STRENGTH: Real = Real {
+    lib: "material.particle.strength",
+    flags: &[],
+    keys: &["material.particle.strength", "material.conveyor.strength"],
+    python: None,
+    unit: "Pa",
+    min: 0.0,
+    min_open: true,
+    max: 1e12,
+    max_open: false,
+    why: "stronger than any solid is a typo",
+};
+pub const SOLID_DENSITY: Real = Real {
+    lib: "material.particle.density",
+    flags: &[],
+    keys: &["material.particle.density", "material.conveyor.density"],
+    python: None,
+    unit: "kg/m^3",
+    min: 0.0,
+    min_open: true,
+    max: 25000.0,
+    max_open: false,
+    why: "denser than osmium is a typo",
+};
+pub const COLLISION_K_ELASTIC: Real = Real {
+    lib: "collision.k_elastic",
+    flags: &["--k-elastic"],
+    keys: &["[collision] k_elastic"],
+    python: Some("k_elastic"),
+    unit: "",
+    min: 0.0,
+    min_open: false,
+    max: 1.0,
+    max_open: false,
+    why: "a bounce keeps at most all of its normal speed (Eq. 4.31)",
+};
+pub const COLLISION_MU_FRICTION: Real = Real {
+    lib: "collision.mu_friction",
+    flags: &["--mu-fric"],
+    keys: &["[collision] mu_friction"],
+    python: Some("mu_fric"),
+    unit: "",
+    min: 0.0,
+    min_open: false,
+    max: 10.0,
+    max_open: false,
+    why: "a friction coefficient beyond 10 is a typo (Eq. 4.32)",
+};
+pub const SIM_RANDOM_BAND: Real = Real {
+    lib: "sim.random_band",
+    flags: &[],
+    keys: &["[sim] random_band"],
+    python: None,
+    unit: "",
+    min: 0.0,
+    min_open: false,
+    max: 0.9,
+    max_open: false,
+    why: "the randomised share of a bounce keeps a tenth deterministic",
+};
+pub const SIM_REST_THRESHOLD: Real = Real {
+    lib: "sim.rest_threshold",
+    flags: &[],
+    keys: &["[sim] rest_threshold_m"],
+    python: None,
+    unit: "m",
+    min: 0.0,
+    min_open: false,
+    max: 1.0,
+    max_open: false,
+    why: "a grain hopping less than a metre per bounce is at rest for any threshold up to this",
+};
+pub const SIM_LAUNCH_OFFSET: Real = Real {
+    lib: "sim.launch_offset_deg",
+    flags: &["--launch-offset"],
+    keys: &["[sim] launch_offset_deg"],
+    python: Some("launch_offset_deg"),
+    unit: "degrees",
+    min: -90.0,
+    min_open: false,
+    max: 90.0,
+    max_open: false,
+    why: "a launch within the half-plane above the tooth face",
+};
+pub const MOTION_DELAY: Real = Real {
+    lib: "",
+    flags: &[],
+    keys: &["[measurement] motion_delay_s"],
+    python: None,
+    unit: "s",
+    min: 0.0,
+    min_open: false,
+    max: 100.0,
+    max_open: false,
+    why: "the bound of the sled-motion effect's delay",
+};
+pub const MOTION_RETURN_SPEED: Real = Real {
+    lib: "",
+    flags: &[],
+    keys: &["[measurement] motion_return_speed_m_s"],
+    python: None,
+    unit: "m/s",
+    min: 1e-6,
+    min_open: false,
+    max: 10.0,
+    max_open: false,
+    why: "the bound of the sled-motion effect's return speed",
+};
+
+// ---- the optimiser's settings (`optimize` flags and run.toml's `config`) ---------------------
+
+pub const OPT_TOL: Real = Real {
+    lib: "",
+    flags: &["--tol"],
+    keys: &["config.mode.tol"],
+    python: None,
+    unit: "",
+    min: 0.0,
+    min_open: true,
+    max: 1.0,
+    max_open: false,
+    why: "a relative change of the front's spread: at 1 every generation already counts as a stall",
+};
+pub const PARETO_FRACTION: Real = Real {
+    lib: "",
+    flags: &[],
+    keys: &["config.mode.pareto_fraction"],
+    python: None,
+    unit: "",
+    min: 0.0,
+    min_open: true,
+    max: 1.0,
+    max_open: false,
+    why: "a share of the population",
+};
+pub const CROSSOVER_PROB: Real = Real {
+    lib: "",
+    flags: &[],
+    keys: &["config.crossover_prob"],
+    python: None,
+    unit: "",
+    min: 0.0,
+    min_open: false,
+    max: 1.0,
+    max_open: false,
+    why: "a probability",
+};
+pub const DISTRIBUTION_INDEX: Real = Real {
+    lib: "",
+    flags: &[],
+    keys: &["config.crossover_eta", "config.mutation_eta"],
+    python: None,
+    unit: "",
+    min: 0.0,
+    min_open: false,
+    max: 1000000.0,
+    max_open: false,
+    why: "an SBX or polynomial-mutation index beyond 10^6 makes every child its parent",
 };
 
 // ---- bounded reals -----------------------------------------------------------------------
@@ -575,6 +882,13 @@ pub const COUNTS: &[&Count] = &[
     &BENCH_DESIGNS,
     &BENCH_REPEATS,
     &CONFORMANCE_DESIGNS,
+    &FIT_BOOTSTRAP,
+    &DIAGNOSE_BOOTSTRAP,
+    &RESCORE_STREAMS,
+    &ALPHA_POINTS,
+    &DEM_RUNS,
+    &DEM_PARTICLES,
+    &DEM_TEETH,
 ];
 
 /// Every declared real interval.
@@ -597,6 +911,26 @@ pub const REALS: &[&Real] = &[
     &PERF_T_HIGH,
     &PERF_DOWNSTROKE_SPEED,
     &PERF_F_MAX,
+    &ENV_G,
+    &ENV_ALPHA,
+    &ENV_K_DRAG,
+    &MATERIAL_AOR,
+    &MATERIAL_BULK_DENSITY,
+    &SOLID_YOUNGS_MODULUS,
+    &SOLID_POISSON_RATIO,
+    &SOLID_STRENGTH,
+    &SOLID_DENSITY,
+    &COLLISION_K_ELASTIC,
+    &COLLISION_MU_FRICTION,
+    &SIM_RANDOM_BAND,
+    &SIM_REST_THRESHOLD,
+    &SIM_LAUNCH_OFFSET,
+    &MOTION_DELAY,
+    &MOTION_RETURN_SPEED,
+    &OPT_TOL,
+    &PARETO_FRACTION,
+    &CROSSOVER_PROB,
+    &DISTRIBUTION_INDEX,
 ];
 
 /// Every declared file limit.

@@ -139,6 +139,62 @@ fn counts_past_their_bounds_are_refused_by_name_before_anything_is_allocated() {
     }
 }
 
+/// The bounds declared in `sawtooth::schema` after the first round (calibration replicates,
+/// slope points, the DEM's counts, the scenario's reals): each refused under the name the
+/// user typed, with the schema's rule, and a negative number reaches the rule instead of
+/// being taken for a flag.
+#[test]
+fn every_declared_bound_is_the_one_the_user_meets() {
+    let d = |extra: &[&'static str]| with(&["diagnose"], &with(&TEST3, &with(extra, &["--out", "/nonexistent/d"])));
+    refused(&d(&["--bootstrap", "1"]), &["--bootstrap", "[2, 100000]"]);
+    refused(&d(&["--rescore-streams", "0"]), &["--rescore-streams", "[1, 1000]"]);
+    refused(&with(&["fit"], &with(&TEST3, &["--bootstrap", "4294967295"])), &["--bootstrap", "[0, 10000]"]);
+    refused(
+        &[
+            "simulate",
+            "--env",
+            "lunar",
+            "--design",
+            "47.376,45.884,34.375,36.916,62.853,17.552,1.299,58.595",
+            "--alpha",
+            "0..40",
+            "--alpha-points",
+            "42",
+        ],
+        &["--alpha-points", "[2, 41]"],
+    );
+    refused(&["dem", "run", "--runs", "0", "--out", "/nonexistent/r"], &["--runs", "[1, 10000]"]);
+    refused(&["optimize", "--tol", "-1", "--out", "/nonexistent/o"], &["--tol must lie in (0, 1]"]);
+    refused(
+        &["simulate", "--env", "lunar", "--k-elastic", "-0.5"],
+        &["`[collision] k_elastic` (--k-elastic)", "[0, 1]"],
+    );
+    refused(&["simulate", "--env", "lunar", "--aor", "-3"], &["--aor", "[0, 89] degrees"]);
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("heavy.toml");
+    std::fs::write(&config, "[environment]\ng_m_s2 = 1e308\n").unwrap();
+    refused(&["simulate", "--config", config.to_str().unwrap()], &["g_m_s2", "(0, 100] m/s^2"]);
+    // the listing seats at most 2000 launch points (D.5 line 31-32): no design seats 5000,
+    // which ends in a rule naming the fill, not in a panic after a million draws
+    refused(
+        &[
+            "bench",
+            "--env",
+            "earth",
+            "--compat-listing",
+            "--particles",
+            "5000",
+            "--sample",
+            "random",
+            "--designs",
+            "2",
+            "--engines",
+            "cpu",
+        ],
+        &["--designs 2", "fill area too small"],
+    );
+}
+
 /// Finding 7: values that printed nonsense with exit 0.
 #[test]
 fn values_that_made_nonsense_are_refused_naming_the_rule() {

@@ -129,7 +129,7 @@ fn requirements_come_from_files_and_bad_ones_are_named() {
     let bad = [
         (vec!["--requirements", "table-9"], "neither a preset"),
         (vec!["--alpha-points", "3"], "--alpha-points needs a slope range"),
-        (vec!["--alpha", "1..40", "--alpha-points", "1"], "--alpha-points must be between 2"),
+        (vec!["--alpha", "1..40", "--alpha-points", "1"], "--alpha-points must lie in [2, 41]"),
         (vec!["--alpha", "1..95"], "environment.alpha_deg"),
     ];
     for (flags, message) in bad {

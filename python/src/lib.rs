@@ -105,8 +105,9 @@ impl PyScenario {
                     .map_err(|_| PyValueError::new_err(format!("{name} {}, got {n}", bound.rule()))),
             }
         };
-        if let Some(a) = alpha_deg.filter(|a| !a.is_finite()) {
-            return Err(PyValueError::new_err(format!("alpha_deg must be a finite number of degrees, got {a}")));
+        // the scenario's validation names `environment.alpha_deg`; the argument's own name here
+        if let Some(a) = alpha_deg {
+            sawtooth::schema::ENV_ALPHA.check("alpha_deg", a).map_err(PyValueError::new_err)?;
         }
         let seed = match seed {
             None => None,

@@ -107,14 +107,19 @@ pub fn write_plan(root: &Path, plan: &Plan) -> anyhow::Result<RunDir> {
     let owned = RunDir::acquire(root, CAMPAIGN_KIND, Access::Exclusive)?;
     let json = plan.to_json()?;
     let path = root.join(PLAN_FILE);
-    match std::fs::read_to_string(&path) {
-        Ok(old) if old == json => {}
-        Ok(_) => bail!(
-            "{} holds a different plan ({}): a campaign's settings are fixed when it is planned; choose another --out",
-            root.display(),
-            path.display()
-        ),
-        Err(_) => write_atomic(&path, json.as_bytes())?,
+    // the folder is ours (its marker), so a plan.json in it is one we wrote; still read it
+    // through the size bound, as a hand-edited or corrupted one may be anything
+    if path.exists() {
+        let old = crate::io::bounded::read_text(&path, &crate::schema::PLAN_FILE)?;
+        if old != json {
+            bail!(
+                "{} holds a different plan ({}): a campaign's settings are fixed when it is planned; choose another --out",
+                root.display(),
+                path.display()
+            );
+        }
+    } else {
+        write_atomic(&path, json.as_bytes())?;
     }
     Ok(owned)
 }

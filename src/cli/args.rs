@@ -43,20 +43,20 @@ pub struct ScenarioArgs {
     pub config: Option<PathBuf>,
     #[arg(long, value_enum, help = "Environment preset (listing D.5) [default: the --config file's, else lunar]")]
     pub env: Option<EnvPreset>,
-    #[arg(long, value_parser = parse_alpha, help = preset_default(
+    #[arg(long, value_parser = parse_alpha, allow_negative_numbers = true, help = preset_default(
         "Conveyor angle α, degrees; `gpu-sweep`, `simulate` and `optimize` take a range `FROM..TO` (the latter two with --alpha-points)",
         |s| format!("{} deg", s.environment.alpha_deg)))]
     pub alpha: Option<(f64, f64)>,
-    #[arg(long, help = preset_default("Elastic normal coefficient of restitution (-)", |s| s.collision.k_elastic.to_string()))]
+    #[arg(long, allow_negative_numbers = true, help = preset_default("Elastic normal coefficient of restitution (-)", |s| s.collision.k_elastic.to_string()))]
     pub k_elastic: Option<f64>,
-    #[arg(long, help = preset_default("Friction coefficient of the tangential COR (-, Eq. 4.14)", |s| s.collision.mu_friction.to_string()))]
+    #[arg(long, allow_negative_numbers = true, help = preset_default("Friction coefficient of the tangential COR (-, Eq. 4.14)", |s| s.collision.mu_friction.to_string()))]
     pub mu_fric: Option<f64>,
     #[arg(long, allow_negative_numbers = true, help = preset_default("Stokes drag parameter k_drag, 1/s (0 = vacuum)", |s| match s.environment.k_drag {
         Some(k) => format!("{k} 1/s"),
         None => "0 (vacuum)".to_string(),
     }))]
     pub k_drag: Option<f64>,
-    #[arg(long, help = preset_default("Angle of repose, degrees", |s| format!("{} deg", s.material.aor_deg)))]
+    #[arg(long, allow_negative_numbers = true, help = preset_default("Angle of repose, degrees", |s| format!("{} deg", s.material.aor_deg)))]
     pub aor: Option<f64>,
     #[arg(long, help = preset_default("Material preset: lunar-regolith, quartz-sand, glass-beads", |s| s.material.name.clone()))]
     pub material: Option<String>,

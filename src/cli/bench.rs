@@ -11,7 +11,7 @@ use serde_json::json;
 
 use crate::engine::{make_engine, BatchEvaluator, EngineKind};
 use crate::model::prepare;
-use crate::model::sampling::{neighbourhood, random_valid_designs};
+use crate::model::sampling::{sample_neighbourhood, sample_valid_designs};
 use crate::model::scenario::EnvPreset;
 use crate::model::{Design, Scenario};
 use rayon::prelude::*;
@@ -221,9 +221,10 @@ pub fn run(a: BenchArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         EnvPreset::Earth => Design::earth_solution_c(),
     };
     let designs = match a.sample {
-        Sample::Neighbourhood => neighbourhood(&scenario, &centre, a.designs, 0.05, a.seed),
-        Sample::Random => random_valid_designs(&scenario, a.designs, a.seed),
-    };
+        Sample::Neighbourhood => sample_neighbourhood(&scenario, &centre, a.designs, 0.05, a.seed),
+        Sample::Random => sample_valid_designs(&scenario, a.designs, a.seed),
+    }
+    .map_err(|e| anyhow::anyhow!("--designs {} with --sample: {e}", a.designs))?;
     // The CPU-side preparation (validity, fill area, launch points) every engine pays; the
     // best of the repeats, as for the engines (a single run counted the thread pool's start).
     let prepare_s = (0..a.repeats.max(1))

@@ -36,14 +36,21 @@ pub fn run_cli(a: ConformanceArgs, out: &mut dyn Write) -> anyhow::Result<ExitCo
     for (name, s) in scenarios(&[Scenario::lunar(), Scenario::earth()], a.particles) {
         s.validate().map_err(|e| anyhow::anyhow!("{name}: invalid setting: {}", super::args::in_user_terms(&e)))?;
     }
-    let gpu = GpuEngine::new(AdapterChoice::Any)?;
     let envs: Vec<Scenario> = match a.env {
         Some(e) => vec![Scenario::preset(e)],
         None => vec![Scenario::lunar(), Scenario::earth()],
     };
     let envs: Vec<Scenario> =
         envs.into_iter().map(|s| if a.compat_listing { s.into_listing_compat() } else { s }).collect();
-    let report = run(&gpu, &scenarios(&envs, a.particles), a.designs, a.seed, Tolerances::default());
+    let cases = scenarios(&envs, a.particles);
+    // the designs each case will draw (the same seeds as `run`), checked before a device is
+    // opened: a case that seats no design is an error naming why, not a panic in the engine
+    for (ci, (name, s)) in cases.iter().enumerate() {
+        crate::model::sampling::sample_valid_designs(s, a.designs, a.seed.wrapping_add(ci as u64))
+            .map_err(|e| anyhow::anyhow!("{name} (--particles {}, --designs {}): {e}", a.particles, a.designs))?;
+    }
+    let gpu = GpuEngine::new(AdapterChoice::Any)?;
+    let report = run(&gpu, &cases, a.designs, a.seed, Tolerances::default());
     if a.json {
         writeln!(out, "{}", serde_json::to_string_pretty(&report)?).context("writing output")?;
     } else {

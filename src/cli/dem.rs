@@ -41,7 +41,7 @@ pub struct CaseArgs {
     pub design: Option<String>,
     /// Grain diameter in micrometres [default: [dem] grain_diameter_m, else the diameter at
     /// which --particles grains hold the model's fill mass].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub grain_diameter_um: Option<f64>,
 }
 
@@ -59,7 +59,7 @@ pub struct RunArgs {
     #[command(flatten)]
     pub case: CaseArgs,
     /// Runs, seeds --seed, --seed + 1, ...
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = super::args::count::<u32>(&crate::schema::DEM_RUNS))]
     pub runs: u32,
     /// LIGGGHTS processes at a time [default: the cores].
     #[arg(long)]
@@ -86,7 +86,7 @@ pub struct CheckArgs {
     #[arg(long, default_value_t = 2)]
     pub front: usize,
     /// DEM seeds per design.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = super::args::count::<u32>(&crate::schema::DEM_RUNS))]
     pub seeds: u32,
     /// Grains per DEM run [default: [dem]'s default].
     #[arg(long)]
@@ -193,9 +193,6 @@ fn jobs(j: Option<usize>) -> anyhow::Result<usize> {
 }
 
 fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    if a.runs == 0 || a.runs > 10_000 {
-        bail!("--runs must lie in [1, 10000], got {}", a.runs);
-    }
     let jobs = jobs(a.jobs)?;
     let (scenario, design, settings, known) = resolve(&a.case)?;
     let plan = Plan { first_seed: scenario.sim.seed, scenario, design, settings, runs: a.runs, known_return: known };

@@ -47,10 +47,10 @@ pub struct DiagnoseArgs {
     #[arg(long, value_enum)]
     pub normalise: Option<Normalise>,
     /// Fresh particle streams every fitted model is re-scored with.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, value_parser = super::args::count::<usize>(&crate::schema::RESCORE_STREAMS))]
     pub rescore_streams: usize,
     /// Bootstrap replicates for the intervals (resampling held-out runs).
-    #[arg(long, default_value_t = 400)]
+    #[arg(long, default_value_t = 400, value_parser = super::args::count::<usize>(&crate::schema::DIAGNOSE_BOOTSTRAP))]
     pub bootstrap: usize,
     /// Write report.md, diagnosis.json and the figures residuals, ranking, distributions (.svg and .png) here.
     #[arg(long)]
@@ -74,20 +74,6 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         bail!("--engine listing: the effects are in the cpu and gpu engines only; use --engine cpu or auto");
     }
     a.effort.validate()?;
-    if a.rescore_streams < 1 {
-        bail!("--rescore-streams must be >= 1, got 0");
-    }
-    if a.bootstrap < 2 {
-        bail!("--bootstrap must be >= 2, got {}", a.bootstrap);
-    }
-    const BOOTSTRAP_MAX: usize = 100_000;
-    const STREAMS_MAX: usize = 1000;
-    if a.bootstrap > BOOTSTRAP_MAX {
-        bail!("--bootstrap must be at most {BOOTSTRAP_MAX}, got {}", a.bootstrap);
-    }
-    if a.rescore_streams > STREAMS_MAX {
-        bail!("--rescore-streams must be at most {STREAMS_MAX}, got {}", a.rescore_streams);
-    }
     let mut conditions: Vec<Condition> = Vec::with_capacity(a.data.len());
     for (data, setup) in a.data.iter().zip(&a.setup) {
         let mut name = stem(data);

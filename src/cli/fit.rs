@@ -49,7 +49,7 @@ pub struct FitArgs {
     #[arg(long, default_value_t = 3)]
     pub holdout: usize,
     /// Bootstrap replicates over the runs for the parameter uncertainty (0 = off).
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, value_parser = super::args::count::<usize>(&crate::schema::FIT_BOOTSTRAP))]
     pub bootstrap: usize,
     /// Do not fit: score these values (`k_elastic=0.854,mu_fric=0.133,k_drag=5.347`) against
     /// the runs; the parameters not named keep the setup's values.
@@ -74,10 +74,6 @@ pub fn run(a: FitArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         (None, None) => (None, None),
     };
     a.effort.validate()?;
-    const BOOTSTRAP_MAX: usize = 10_000;
-    if a.bootstrap > BOOTSTRAP_MAX {
-        bail!("--bootstrap must be at most {BOOTSTRAP_MAX}, got {}", a.bootstrap);
-    }
     let condition = measured_condition::load(&a.data, &a.setup, stem(&a.data), a.normalise, a.seed)?;
     let n = condition.runs.runs.len();
     if a.holdout >= n {

@@ -35,7 +35,7 @@ pub struct GaArgs {
     pub algorithm: Option<Algorithm>,
     /// Function tolerance of the spread-stall stop, relative (thesis: 1e-4, high fidelity
     /// 1e-6) [default: 1e-6].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub tol: Option<f64>,
     /// Generations over which the spread change is averaged (MATLAB: MaxStallGenerations 100)
     /// [default: 100].
@@ -94,9 +94,7 @@ impl GaArgs {
         if generations > MAX_GENERATIONS {
             bail!("--generations must be at most {MAX_GENERATIONS}, got {generations}");
         }
-        if !(tol > 0.0 && tol.is_finite()) {
-            bail!("--tol must be a positive number, got {tol}");
-        }
+        crate::schema::OPT_TOL.check("--tol", tol).map_err(anyhow::Error::msg)?;
         if final_particles == 0 || replicates == 0 {
             bail!("--final-particles and --replicates must be at least 1");
         }

@@ -37,7 +37,7 @@ pub struct Common {
     pub ga: GaArgs,
     /// Mass flow the runs are compared at, kg/s (default: 0.022 lunar, 0.008 terrestrial,
     /// as Tables C.2-C.3; erratum 17).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub target_mass_flow: Option<f64>,
     /// Output directory: one run folder per member, then runs.csv/grid.csv, summary.csv and the
     /// figure (.svg and .png); rerunning reads finished members back and resumes the rest.

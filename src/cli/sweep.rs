@@ -26,7 +26,7 @@ pub struct SweepArgs {
     #[command(flatten)]
     pub ga: GaArgs,
     /// Angle step, degrees.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1.0)]
     pub step: f64,
     /// Output directory: one run folder per angle, then summary.csv and sweep.svg/.png;
     /// rerunning reads finished angles back and resumes the rest.

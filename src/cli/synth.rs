@@ -30,10 +30,10 @@ pub struct SynthArgs {
     #[arg(long, default_value_t = 2000, value_parser = super::args::count::<u32>(&crate::schema::SYNTH_PARTICLES))]
     pub particles: u32,
     /// Loaded mass per run, g (run-to-run sd 0.03 g).
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 2.0)]
     pub mass_g: f64,
     /// Scale resolution, g (default: the setup's [measurement] scale_resolution_g, else 0.01).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub resolution_g: Option<f64>,
     /// Output CSV.
     #[arg(long)]

@@ -86,9 +86,7 @@ impl DemSettings {
                 Err(format!("[dem] {key} must lie in [{lo}, {hi}], got {v}"))
             }
         };
-        if !(1..=200_000).contains(&self.particles) {
-            return Err(format!("[dem] particles (--particles) must lie in [1, 200000], got {}", self.particles));
-        }
+        crate::schema::DEM_PARTICLES.check_u32("[dem] particles (--particles)", self.particles)?;
         if let Some(d) = self.grain_diameter_m {
             within("grain_diameter_m", d, 1e-6, 0.05)?;
         }
@@ -98,9 +96,7 @@ impl DemSettings {
         within("max_time_s", self.max_time_s, 0.01, 1000.0)?;
         within("rest_speed_m_s", self.rest_speed_m_s, 1e-6, 1.0)?;
         if let Some(t) = self.teeth {
-            if !(2..=1000).contains(&t) {
-                return Err(format!("[dem] teeth must lie in [2, 1000], got {t}"));
-            }
+            crate::schema::DEM_TEETH.check_u32("[dem] teeth", t)?;
         }
         Ok(())
     }

@@ -229,14 +229,12 @@ impl MeasurementTable {
         }
         // the bounds of the sled-motion effect (`Effects::validate`)
         if let Some(v) = self.motion_delay_s {
-            if !(v.is_finite() && (0.0..=100.0).contains(&v)) {
-                bail!("measurement.motion_delay_s must lie in [0, 100] s, got {v}");
-            }
+            crate::schema::MOTION_DELAY.check("measurement.motion_delay_s", v).map_err(anyhow::Error::msg)?;
         }
         if let Some(v) = self.motion_return_speed_m_s {
-            if !(v.is_finite() && (1e-6..=10.0).contains(&v)) {
-                bail!("measurement.motion_return_speed_m_s must lie in [1e-6, 10] m/s, got {v}");
-            }
+            crate::schema::MOTION_RETURN_SPEED
+                .check("measurement.motion_return_speed_m_s", v)
+                .map_err(anyhow::Error::msg)?;
         }
         if let Some(p) = &self.motion_profile {
             if p != "poc" && p != "delayed" {

@@ -311,42 +311,35 @@ impl Scenario {
                 Err(format!("`{name}` must be > 0, got {v}"))
             }
         }
-        fn within(name: &str, v: f64, lo: f64, hi: f64) -> Result<(), String> {
-            finite(name, v)?;
-            if v >= lo && v <= hi {
-                Ok(())
-            } else {
-                Err(format!("`{name}` must lie in [{lo}, {hi}], got {v}"))
-            }
-        }
+        // every bound is declared once, in crate::schema, beside the names a user meets it by
+        use crate::schema as b;
+        let named = |bound: &b::Real, name: &str, v: f64| bound.check(&format!("`{name}`"), v).map(|_| ());
         let e = &self.environment;
-        positive("environment.g", e.g)?;
-        within("environment.alpha_deg", e.alpha_deg, 0.0, 80.0)?;
+        named(&b::ENV_G, "environment.g", e.g)?;
+        named(&b::ENV_ALPHA, "environment.alpha_deg", e.alpha_deg)?;
         if let Some(k) = e.k_drag {
-            positive("environment.k_drag", k)?;
+            named(&b::ENV_K_DRAG, "environment.k_drag", k)?;
         }
         let m = &self.material;
-        within("material.aor_deg", m.aor_deg, 0.0, 89.0)?;
-        positive("material.bulk_density", m.bulk_density)?;
+        named(&b::MATERIAL_AOR, "material.aor_deg", m.aor_deg)?;
+        named(&b::MATERIAL_BULK_DENSITY, "material.bulk_density", m.bulk_density)?;
         for (who, s) in [("particle", &m.particle), ("conveyor", &m.conveyor)] {
-            positive(&format!("material.{who}.youngs_modulus"), s.youngs_modulus)?;
-            within(&format!("material.{who}.poisson_ratio"), s.poisson_ratio, -1.0, 0.5)?;
-            positive(&format!("material.{who}.strength"), s.strength)?;
-            positive(&format!("material.{who}.density"), s.density)?;
+            named(&b::SOLID_YOUNGS_MODULUS, &format!("material.{who}.youngs_modulus"), s.youngs_modulus)?;
+            named(&b::SOLID_POISSON_RATIO, &format!("material.{who}.poisson_ratio"), s.poisson_ratio)?;
+            named(&b::SOLID_STRENGTH, &format!("material.{who}.strength"), s.strength)?;
+            named(&b::SOLID_DENSITY, &format!("material.{who}.density"), s.density)?;
         }
-        within("collision.k_elastic", self.collision.k_elastic, 0.0, 1.0)?;
-        within("collision.mu_friction", self.collision.mu_friction, 0.0, 10.0)?;
+        named(&b::COLLISION_K_ELASTIC, "collision.k_elastic", self.collision.k_elastic)?;
+        named(&b::COLLISION_MU_FRICTION, "collision.mu_friction", self.collision.mu_friction)?;
         let s = &self.sim;
-        use crate::schema::{SIM_MAX_BOUNCES, SIM_PARTICLES, SIM_TEETH};
-        SIM_TEETH.check_u32("`sim.teeth`", s.teeth)?;
-        SIM_PARTICLES.check_u32("`sim.particles`", s.particles)?;
-        SIM_MAX_BOUNCES.check_u32("`sim.max_bounces`", s.max_bounces)?;
-        within("sim.random_band", s.random_band, 0.0, 0.9)?;
-        within("sim.rest_threshold", s.rest_threshold, 0.0, 1.0)?;
-        within("sim.launch_offset_deg", s.launch_offset_deg, -90.0, 90.0)?;
+        b::SIM_TEETH.check_u32("`sim.teeth`", s.teeth)?;
+        b::SIM_PARTICLES.check_u32("`sim.particles`", s.particles)?;
+        b::SIM_MAX_BOUNCES.check_u32("`sim.max_bounces`", s.max_bounces)?;
+        named(&b::SIM_RANDOM_BAND, "sim.random_band", s.random_band)?;
+        named(&b::SIM_REST_THRESHOLD, "sim.rest_threshold", s.rest_threshold)?;
+        named(&b::SIM_LAUNCH_OFFSET, "sim.launch_offset_deg", s.launch_offset_deg)?;
         let p = &self.performance;
         // each value positive and below the bound past which it is a typo (schema::PERFORMANCE)
-        use crate::schema as b;
         for (bound, v) in [
             (&b::PERF_CONVEYOR_LENGTH, p.conveyor_length),
             (&b::PERF_REGOLITH_WIDTH, p.regolith_width),

@@ -70,21 +70,13 @@ impl Manifest {
             STALL_GENERATIONS.check("`config.mode.stall_generations`", stall_generations)?;
         }
         if let Mode::MatlabLike { pareto_fraction, tol, .. } = c.mode {
-            if !(tol > 0.0 && tol.is_finite()) {
-                return Err(format!("`config.mode.tol` must be a positive number, got {tol}"));
-            }
-            if !(pareto_fraction > 0.0 && pareto_fraction <= 1.0) {
-                return Err(format!("`config.mode.pareto_fraction` must lie in (0, 1], got {pareto_fraction}"));
-            }
+            crate::schema::OPT_TOL.check("`config.mode.tol`", tol)?;
+            crate::schema::PARETO_FRACTION.check("`config.mode.pareto_fraction`", pareto_fraction)?;
         }
         for (name, v) in [("config.crossover_eta", c.crossover_eta), ("config.mutation_eta", c.mutation_eta)] {
-            if !(v >= 0.0 && v.is_finite()) {
-                return Err(format!("`{name}` must be a finite number >= 0, got {v}"));
-            }
+            crate::schema::DISTRIBUTION_INDEX.check(&format!("`{name}`"), v)?;
         }
-        if !(0.0..=1.0).contains(&c.crossover_prob) {
-            return Err(format!("`config.crossover_prob` must lie in [0, 1], got {}", c.crossover_prob));
-        }
+        crate::schema::CROSSOVER_PROB.check("`config.crossover_prob`", c.crossover_prob)?;
         FINAL_PARTICLES.check_u32("`final_particles`", self.final_particles)?;
         REPLICATES.check_u32("`replicates`", self.replicates)?;
         for &alpha in &self.slopes_deg {
