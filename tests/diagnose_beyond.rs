@@ -6,8 +6,6 @@
 //! Three conditions per campaign on the practice campaigns' rig (`data/campaign_rig`), made
 //! by `synth` (10 runs each) and diagnosed with every candidate at a CI-sized budget.
 
-use std::path::PathBuf;
-
 use serde_json::Value;
 
 mod common;
