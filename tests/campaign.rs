@@ -4,28 +4,12 @@
 //! folders refuse a second writer; SIGTERM (Slurm's cancel) saves a checkpoint that the
 //! next task resumes from. The real-Slurm test is tests/campaign_slurm.rs.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::path::Path;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn bin() -> &'static str {
-    env!("CARGO_BIN_EXE_sawtooth")
-}
-
-fn run(args: &[&str]) -> (i32, String, String) {
-    let o: Output = Command::new(bin()).args(args).env_remove("SLURM_ARRAY_TASK_ID").output().unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stdout).into(),
-        String::from_utf8_lossy(&o.stderr).into(),
-    )
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("sawtooth-campaign-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
+mod common;
+use common::{fresh_dir, run, sawtooth};
 
 const GA: &[&str] = &[
     "--pop",
@@ -56,7 +40,7 @@ fn same_file(a: &Path, b: &Path) {
 
 /// Plan into `arr`, run every task alone, gather; compare with the one-process `local`.
 fn plan_tasks_gather_matches_local(cmd: &[&str], n: usize, members: &[&str], summaries: &[&str], name: &str) {
-    let (local, arr) = (tmp(&format!("{name}-local")), tmp(&format!("{name}-arr")));
+    let (local, arr) = (fresh_dir(&format!("{name}-local")), fresh_dir(&format!("{name}-arr")));
     let mut a = with_ga(cmd);
     a.extend(["--out", local.to_str().unwrap()]);
     let (code, local_out, err) = run(&a);
@@ -123,7 +107,7 @@ fn a_repeatability_study_run_task_by_task_gives_the_one_process_bytes() {
 
 #[test]
 fn gather_refuses_a_partial_campaign_and_names_what_is_missing() {
-    let arr = tmp("partial");
+    let arr = fresh_dir("partial");
     let d = arr.to_str().unwrap();
     let (code, _, err) =
         run(&with_ga(&["gpu-sweep", "--env", "lunar", "--alpha", "20..30", "--step", "10", "--out", d, "--plan"]));
@@ -148,7 +132,7 @@ fn gather_refuses_a_partial_campaign_and_names_what_is_missing() {
 
 #[test]
 fn bad_campaign_input_is_named() {
-    let arr = tmp("bad");
+    let arr = fresh_dir("bad");
     let d = arr.to_str().unwrap();
     let (code, _, err) =
         run(&with_ga(&["gpu-sweep", "--env", "lunar", "--alpha", "20..30", "--step", "10", "--out", d, "--plan"]));
@@ -156,7 +140,7 @@ fn bad_campaign_input_is_named() {
     let (code, _, err) = run(&["campaign", "run", d, "--task", "2"]);
     assert_eq!(code, 2);
     assert!(err.contains("--task 2") && err.contains("2 members"), "{err}");
-    let o = Command::new(bin()).args(["campaign", "run", d]).env("SLURM_ARRAY_TASK_ID", "x1").output().unwrap();
+    let o = sawtooth().args(["campaign", "run", d]).env("SLURM_ARRAY_TASK_ID", "x1").output().unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("SLURM_ARRAY_TASK_ID"));
     for (flag, v) in [("--time", "1 hour"), ("--partition", "a b"), ("--cpus-per-task", "0"), ("--max-parallel", "0")] {
@@ -179,7 +163,7 @@ fn bad_campaign_input_is_named() {
         assert!(script.contains(line), "{line} in\n{script}");
     }
     // not a campaign
-    let plain = tmp("plain");
+    let plain = fresh_dir("plain");
     std::fs::create_dir_all(&plain).unwrap();
     let (code, _, err) = run(&["campaign", "gather", plain.to_str().unwrap()]);
     assert_eq!(code, 2);
@@ -206,7 +190,7 @@ fn bad_campaign_input_is_named() {
 
 #[test]
 fn a_member_owned_by_another_process_is_refused() {
-    let arr = tmp("locked");
+    let arr = fresh_dir("locked");
     let d = arr.to_str().unwrap();
     let (code, _, err) =
         run(&with_ga(&["gpu-sweep", "--env", "lunar", "--alpha", "20..30", "--step", "10", "--out", d, "--plan"]));
@@ -239,7 +223,7 @@ fn a_member_owned_by_another_process_is_refused() {
 
 #[test]
 fn sigterm_saves_a_checkpoint_and_the_next_task_resumes_to_the_same_bytes() {
-    let (whole, cut) = (tmp("whole"), tmp("cut"));
+    let (whole, cut) = (fresh_dir("whole"), fresh_dir("cut"));
     let ga = [
         "--pop",
         "16",
@@ -265,7 +249,7 @@ fn sigterm_saves_a_checkpoint_and_the_next_task_resumes_to_the_same_bytes() {
     let (code, _, err) = run(&["campaign", "run", whole.to_str().unwrap(), "--task", "1"]);
     assert_eq!(code, 0, "{err}");
 
-    let mut child = Command::new(bin())
+    let mut child = sawtooth()
         .args(["campaign", "run", cut.to_str().unwrap(), "--task", "1"])
         .stdout(Stdio::null())
         .stderr(Stdio::null())
@@ -294,7 +278,7 @@ fn sigterm_saves_a_checkpoint_and_the_next_task_resumes_to_the_same_bytes() {
 
 #[test]
 fn a_sensitivity_plan_holds_the_grid_and_the_repeatability_interval() {
-    let (rep, sens) = (tmp("rep-summary"), tmp("sens-plan"));
+    let (rep, sens) = (fresh_dir("rep-summary"), fresh_dir("sens-plan"));
     std::fs::create_dir_all(&rep).unwrap();
     // the w_spec row of a gathered repeatability study: mean 400, half width 12.5
     std::fs::write(

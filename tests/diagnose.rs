@@ -12,57 +12,20 @@
 //! one returning down the slope; a sled motion that only one condition has.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 mod common;
-use common::{assert_figure, assert_png_beside, svg_texts};
+use common::campaigns::{self, rig_setup, synth, validation_setup, RIG};
+use common::{assert_figure, assert_png_beside, sawtooth, scratch, svg_texts};
 
 use serde_json::Value;
-
-/// The default solver budget with fewer particles than the data call for (12 000 by
-/// default), so the suite stays CI-sized.
-const CI_BUDGET: [&str; 2] = ["--max-particles", "6000"];
 
 /// Why a campaign test belongs to the full tier (docs/testing.md): plain `cargo test` skips it.
 const HEAVY: &str = "a three-condition diagnosis with every candidate, 0.5-1.5 min on 2 cores";
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_sawtooth"))
-}
-
-fn setup(name: &str) -> String {
-    format!("{}/data/validation/{name}.toml", env!("CARGO_MANIFEST_DIR"))
-}
-
-fn tmp(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("sawtooth-diagnose-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn synth(setup: &str, effect: Option<&str>, seed: u64, out: &Path) {
-    let mut c = bin();
-    c.args(["synth", "--setup", setup, "--runs", "10", "--seed", &seed.to_string(), "--resolution-g", "0.01"]);
-    if let Some(e) = effect {
-        c.args(["--effect", e]);
-    }
-    let o = c.args(["--out", out.to_str().unwrap()]).output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-}
-
+/// `common::campaigns::diagnose`, and every file of the report: the figures in SVG and PNG
+/// with their axes, labels and the ranking's rows, and diagnosis.json's nine keys.
 fn diagnose(pairs: &[(&Path, &str)], out: &Path) -> Value {
-    let mut c = bin();
-    c.arg("diagnose");
-    for (data, setup) in pairs {
-        c.args(["--data", data.to_str().unwrap(), "--setup", setup]);
-    }
-    // every candidate effect (the default `all`): the diagnosis is not told which one made
-    // the data; a CI-sized budget (the defaults take 2-3 min a campaign)
-    let o = c.args(CI_BUDGET).args(["--json", "--out", out.to_str().unwrap()]).output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
-    let file: Value = serde_json::from_str(&std::fs::read_to_string(out.join("diagnosis.json")).unwrap()).unwrap();
-    assert_eq!(v, file, "--json prints diagnosis.json");
+    let v = campaigns::diagnose(pairs, out);
     for f in ["report.md", "residuals.svg", "ranking.svg", "distributions.svg"] {
         let text = std::fs::read_to_string(out.join(f)).unwrap();
         assert!(!text.is_empty(), "{f}");
@@ -158,14 +121,6 @@ fn check_found(v: &Value, truth: &str) {
     assert!(lo <= hi && lo >= 0.0, "{s}");
 }
 
-/// The rig of the independent practice campaigns (`data/campaign_rig`): glass beads on the
-/// Table-4.3 rig at v0 1.1 and 1.4 m/s on a 30° incline and 1.1 m/s on 15°.
-const RIG: [&str; 3] = ["slow", "fast", "shallow"];
-
-fn rig_setup(name: &str) -> String {
-    format!("{}/data/campaign_rig/{name}.toml", env!("CARGO_MANIFEST_DIR"))
-}
-
 /// A rig setup edited by `edit` (an effect table appended, a line replaced), written into
 /// `dir`.
 fn rig_variant(dir: &Path, name: &str, edit: impl Fn(String) -> String) -> String {
@@ -201,7 +156,7 @@ fn launch_spread_is_found() {
     if !common::full_tier("diagnose::launch_spread_is_found", HEAVY) {
         return;
     }
-    let d = tmp("ls");
+    let d = scratch("ls");
     let v = rig_campaign(&d, Some("launch-spread=0.3,6"), 30);
     check_found(&v, "launch-spread");
     // where: the conditions are reported tooth by tooth, with the first-flight split
@@ -219,7 +174,7 @@ fn polydispersity_is_found() {
     if !common::full_tier("diagnose::polydispersity_is_found", HEAVY) {
         return;
     }
-    let d = tmp("pd");
+    let d = scratch("pd");
     let v = rig_campaign(&d, Some("polydisperse=0.35"), 40);
     check_found(&v, "polydisperse");
     std::fs::remove_dir_all(&d).ok();
@@ -231,7 +186,7 @@ fn uniform_sizes_are_found_as_polydispersity() {
         return;
     }
     // the data's sizes are uniform in number, the candidate's log-normal: another form
-    let d = tmp("pdu");
+    let d = scratch("pdu");
     let makers: Vec<String> = RIG
         .iter()
         .map(|n| rig_variant(&d, n, |t| t + "\n[effects.polydisperse]\nsigma_ln = 0.3\nform = \"uniform\"\n"))
@@ -249,7 +204,7 @@ fn impact_scatter_is_found() {
     if !common::full_tier("diagnose::impact_scatter_is_found", HEAVY) {
         return;
     }
-    let d = tmp("is");
+    let d = scratch("is");
     let v = rig_campaign(&d, Some("impact-scatter=10"), 60);
     check_found(&v, "impact-scatter");
     std::fs::remove_dir_all(&d).ok();
@@ -263,7 +218,7 @@ fn uniform_tilt_on_random_launch_points_is_found_as_impact_scatter() {
     // two forms differ from the model's at once: the data's impact tilt is uniform (the
     // candidate's is normal, same sd) and its launch points are independent uniform draws
     // (the model's are Halton points)
-    let d = tmp("isu");
+    let d = scratch("isu");
     let makers: Vec<String> = RIG
         .iter()
         .map(|n| {
@@ -288,7 +243,7 @@ fn sled_returning_along_the_launch_direction_is_found_as_sled_motion() {
     }
     // as below, but the data's sled returns along the launch direction, the candidate's
     // down the slope; the setup states the delay and speed, not the direction
-    let d = tmp("sml");
+    let d = scratch("sml");
     let stated = |t: String| {
         t.replace("motion_delay_s = 5.0", "motion_delay_s = 0.0")
             .replace("motion_return_speed_m_s = 0.05", "motion_return_speed_m_s = 0.3")
@@ -315,7 +270,7 @@ fn sled_motion_is_found() {
     }
     // one condition's sled returns at once at 0.3 m/s and its setup says so; the others rest
     // 5 s (as in the practice campaign 4)
-    let d = tmp("sm");
+    let d = scratch("sm");
     let moving = rig_variant(&d, "slow", |t| {
         t.replace("motion_delay_s = 5.0", "motion_delay_s = 0.0")
             .replace("motion_return_speed_m_s = 0.05", "motion_return_speed_m_s = 0.3")
@@ -337,7 +292,7 @@ fn quadratic_drag_is_found() {
     }
     // Schiller-Naumann drag on 150 µm beads: a linear k_drag cannot serve a slow and a fast
     // launch alike
-    let d = tmp("qd");
+    let d = scratch("qd");
     let v = rig_campaign(&d, Some("quadratic-drag=150e-6,2500"), 80);
     check_found(&v, "quadratic-drag");
     std::fs::remove_dir_all(&d).ok();
@@ -348,7 +303,7 @@ fn no_effect_no_best() {
     if !common::full_tier("diagnose::no_effect_no_best", HEAVY) {
         return;
     }
-    let d = tmp("none");
+    let d = scratch("none");
     let v = rig_campaign(&d, None, 90);
     eprintln!("none: {}", summary(&v));
     assert!(v["best"].is_null(), "an effect was declared best on data without one: {}", summary(&v));
@@ -376,11 +331,11 @@ fn no_effect_no_best() {
 /// parameters and its uncertainty).
 #[test]
 fn the_text_summary_shows_the_score_it_ranks_by() {
-    let d = tmp("text");
+    let d = scratch("text");
     let data = d.join("synth.csv");
-    synth(&setup("test3"), Some("impact-scatter=8"), 3, &data);
-    let o = bin()
-        .args(["diagnose", "--data", data.to_str().unwrap(), "--setup", &setup("test3")])
+    synth(&validation_setup("test3"), Some("impact-scatter=8"), 3, &data);
+    let o = sawtooth()
+        .args(["diagnose", "--data", data.to_str().unwrap(), "--setup", &validation_setup("test3")])
         .args(["--effects", "impact-scatter,launch-spread", "--max-particles", "2000", "--pop", "8"])
         .args(["--generations", "4", "--polish", "3", "--bootstrap", "50", "--out"])
         .arg(d.join("out"))
@@ -402,18 +357,21 @@ fn the_text_summary_shows_the_score_it_ranks_by() {
 #[test]
 fn bad_input_is_named_with_exit_2() {
     let data = format!("{}/data/validation/test3.csv", env!("CARGO_MANIFEST_DIR"));
-    let out = tmp("bad");
+    let out = scratch("bad");
     let o_str = out.to_str().unwrap();
-    let s3 = setup("test3");
+    let s3 = validation_setup("test3");
     let s3 = s3.as_str();
     let bad_motion = out.join("bad_motion.toml");
-    let text =
-        std::fs::read_to_string(setup("test1")).unwrap().replace("motion_delay_s = 0.0", "motion_delay_s = -1.0");
+    let text = std::fs::read_to_string(validation_setup("test1"))
+        .unwrap()
+        .replace("motion_delay_s = 0.0", "motion_delay_s = -1.0");
     std::fs::write(&bad_motion, text).unwrap();
     let bad_motion = bad_motion.to_str().unwrap().to_string();
     // Test 3's rig in vacuum: an effect that only changes drag has nothing to act on
     let vacuum = out.join("vacuum.toml");
-    let text = std::fs::read_to_string(setup("test3")).unwrap().replace("k_drag_per_s = 5.347", "k_drag_per_s = 0.0");
+    let text = std::fs::read_to_string(validation_setup("test3"))
+        .unwrap()
+        .replace("k_drag_per_s = 5.347", "k_drag_per_s = 0.0");
     std::fs::write(&vacuum, text).unwrap();
     let vacuum = vacuum.to_str().unwrap().to_string();
     let cases: [(Vec<&str>, &str); 8] = [
@@ -433,7 +391,7 @@ fn bad_input_is_named_with_exit_2() {
         ),
     ];
     for (args, needle) in cases {
-        let o = bin().arg("diagnose").args(&args).args(["--out", o_str]).output().unwrap();
+        let o = sawtooth().arg("diagnose").args(&args).args(["--out", o_str]).output().unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains(needle), "{args:?}: `{needle}` not in {err}");

@@ -6,56 +6,11 @@
 //! Three conditions per campaign on the practice campaigns' rig (`data/campaign_rig`), made
 //! by `synth` (10 runs each) and diagnosed with every candidate at a CI-sized budget.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
-
 use serde_json::Value;
 
-/// The default solver budget with fewer particles, so the suite stays CI-sized.
-const CI_BUDGET: [&str; 2] = ["--max-particles", "6000"];
-const RIG: [&str; 3] = ["slow", "fast", "shallow"];
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_sawtooth"))
-}
-
-fn rig_setup(name: &str) -> String {
-    format!("{}/data/campaign_rig/{name}.toml", env!("CARGO_MANIFEST_DIR"))
-}
-
-fn tmp(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("sawtooth-beyond-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn synth(setup: &str, effect: Option<&str>, seed: u64, out: &Path) {
-    let mut c = bin();
-    c.args(["synth", "--setup", setup, "--runs", "10", "--seed", &seed.to_string(), "--resolution-g", "0.01"]);
-    if let Some(e) = effect {
-        c.args(["--effect", e]);
-    }
-    let o = c.args(["--out", out.to_str().unwrap()]).output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-}
-
-/// Diagnose (data, setup) pairs with every candidate; diagnosis.json.
-fn diagnose(pairs: &[(PathBuf, String)], out: &Path) -> Value {
-    let mut c = bin();
-    c.arg("diagnose");
-    for (data, setup) in pairs {
-        c.arg("--data").arg(data).args(["--setup", setup]);
-    }
-    let o = c.args(CI_BUDGET).args(["--json", "--out"]).arg(out).output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
-    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
-    assert!(
-        report.contains(&format!("## Verdict: {}", v["verdict"].as_str().unwrap())),
-        "report.md states the verdict"
-    );
-    v
-}
+mod common;
+use common::campaigns::{diagnose, rig_setup, synth, RIG};
+use common::scratch;
 
 fn summary(v: &Value) -> String {
     let r: Vec<String> = v["ranking"]
@@ -132,7 +87,7 @@ fn reshape_moves_the_stated_shares_and_keeps_the_mass() {
 /// residual that every model leaves, in every condition.
 #[test]
 fn data_whose_shape_no_candidate_makes_is_unexplained() {
-    let d = tmp("oof");
+    let d = scratch("oof");
     let mut pairs = Vec::new();
     for (i, n) in RIG.iter().enumerate() {
         let plain = d.join(format!("{n}-plain.csv"));
@@ -168,7 +123,7 @@ fn data_whose_shape_no_candidate_makes_is_unexplained() {
 #[test]
 #[ignore = "issue 32 item 4 is not met yet: the motion screen does not find an unstated motion (docs/diagnosis-report.md)"]
 fn sled_motion_that_no_setup_states_is_found() {
-    let d = tmp("unstated");
+    let d = scratch("unstated");
     let mut pairs = Vec::new();
     for (i, n) in RIG.iter().enumerate() {
         let text = std::fs::read_to_string(rig_setup(n)).unwrap();
@@ -197,7 +152,7 @@ fn sled_motion_that_no_setup_states_is_found() {
 /// with it among them (the practice campaigns' grading).
 #[test]
 fn a_subtle_impact_scatter_is_resolved() {
-    let d = tmp("subtle");
+    let d = scratch("subtle");
     let mut pairs = Vec::new();
     for (i, n) in RIG.iter().enumerate() {
         let data = d.join(format!("{n}.csv"));

@@ -4,8 +4,11 @@
 //! check later" fails here instead of bringing the machine down.
 
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
+
+mod common;
+use common::repo;
 
 /// Address space granted to one probe: far below what any refused input would allocate.
 const PROBE_MEMORY_BYTES: u64 = 3 << 30;
@@ -18,8 +21,9 @@ struct Outcome {
     stderr: String,
 }
 
+/// The binary run in `dir` under the probe's memory and time limits, its output captured.
 fn sawtooth_in(dir: &Path, args: &[&str]) -> Outcome {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_sawtooth"));
+    let mut cmd = common::sawtooth();
     cmd.args(args).current_dir(dir).stdout(Stdio::piped()).stderr(Stdio::piped());
     #[cfg(target_os = "linux")]
     {
@@ -77,10 +81,6 @@ extern "C" {
 #[cfg(target_os = "linux")]
 fn libc_rlimit(bytes: u64) -> Rlimit {
     Rlimit { cur: bytes, max: bytes }
-}
-
-fn repo() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
 /// `args` is refused with exit 2, no panic, and a message holding every one of `names`.

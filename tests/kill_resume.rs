@@ -11,6 +11,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
+mod common;
+
 const SMALL: &[&str] = &[
     "--pop",
     "8",
@@ -25,9 +27,10 @@ const SMALL: &[&str] = &[
     "--quiet",
 ];
 
+/// The binary with `args`, from the repository root; stdout dropped, stderr kept for errors.
 fn sawtooth(args: &[String]) -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_sawtooth"));
-    c.args(args).current_dir(env!("CARGO_MANIFEST_DIR")).stdout(Stdio::null()).stderr(Stdio::piped());
+    let mut c = common::sawtooth();
+    c.args(args).stdout(Stdio::null()).stderr(Stdio::piped());
     c
 }
 

@@ -2,23 +2,14 @@
 //! Ctrl-C (SIGINT) that resumes to the identical front of an uninterrupted run with the same
 //! seed.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 mod common;
+use common::{fresh_dir, sawtooth};
 
 use sawtooth::optim::runner::{EvaluationRow, GenerationRow};
-
-fn bin() -> &'static str {
-    env!("CARGO_BIN_EXE_sawtooth")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("sawtooth-opt-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
 
 const ARGS: &[&str] = &[
     "optimize",
@@ -44,7 +35,7 @@ const ARGS: &[&str] = &[
 ];
 
 fn run_to_end(out: &Path, extra: &[&str]) -> String {
-    let o = Command::new(bin()).args(ARGS).args(["--out", out.to_str().unwrap()]).args(extra).output().unwrap();
+    let o = sawtooth().args(ARGS).args(["--out", out.to_str().unwrap()]).args(extra).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
@@ -55,7 +46,7 @@ fn rows(path: &Path) -> usize {
 
 #[test]
 fn optimize_writes_its_outputs_and_resumes_after_a_kill_to_the_same_front() {
-    let full = tmp("full");
+    let full = fresh_dir("full");
     let stdout = run_to_end(&full, &[]);
     for f in ["run.toml", "evaluations.csv", "generations.csv", "checkpoint.json", "pareto.csv", "pareto.svg"] {
         assert!(full.join(f).exists(), "missing {f}");
@@ -83,8 +74,8 @@ fn optimize_writes_its_outputs_and_resumes_after_a_kill_to_the_same_front() {
     assert!(rows(&full.join("pareto.csv")) >= 1);
 
     // the same run, killed once it has logged a few generations
-    let cut = tmp("cut");
-    let mut child = Command::new(bin())
+    let cut = fresh_dir("cut");
+    let mut child = sawtooth()
         .args(ARGS)
         .args(["--out", cut.to_str().unwrap()])
         .stdout(Stdio::null())
@@ -100,7 +91,7 @@ fn optimize_writes_its_outputs_and_resumes_after_a_kill_to_the_same_front() {
     let done = rows(&cut.join("generations.csv"));
     assert!(done < 14, "the run finished before it could be killed ({done} generations)");
     // a second start without --resume refuses to overwrite
-    let o = Command::new(bin()).args(ARGS).args(["--out", cut.to_str().unwrap()]).output().unwrap();
+    let o = sawtooth().args(ARGS).args(["--out", cut.to_str().unwrap()]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
     run_to_end(&cut, &["--resume"]);
     for f in ["pareto.csv", "generations.csv"] {
@@ -121,8 +112,8 @@ fn optimize_writes_its_outputs_and_resumes_after_a_kill_to_the_same_front() {
 
     // Ctrl-C: the run stops after the generation it is in, with a checkpoint of it (saved
     // at the stop: the periodic ones come every 5 generations here), exit 130
-    let int = tmp("int");
-    let child = Command::new(bin())
+    let int = fresh_dir("int");
+    let child = sawtooth()
         .args(ARGS)
         .args(["--out", int.to_str().unwrap(), "--checkpoint-every", "5"])
         .stdout(Stdio::null())
@@ -158,11 +149,8 @@ fn optimize_writes_its_outputs_and_resumes_after_a_kill_to_the_same_front() {
 
 #[test]
 fn optimize_rejects_bad_settings() {
-    let out = tmp("bad");
-    let o = Command::new(bin())
-        .args(["optimize", "--pop", "2", "--out", out.to_str().unwrap(), "--quiet"])
-        .output()
-        .unwrap();
+    let out = fresh_dir("bad");
+    let o = sawtooth().args(["optimize", "--pop", "2", "--out", out.to_str().unwrap(), "--quiet"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--pop"));
     // sizes that are typos are refused before any allocation or work, naming the flag
@@ -172,15 +160,12 @@ fn optimize_rejects_bad_settings() {
         ("--replicates", "5000"),
         ("--generations", "9999999999"),
     ] {
-        let o = Command::new(bin())
-            .args(["optimize", flag, value, "--out", out.to_str().unwrap(), "--quiet"])
-            .output()
-            .unwrap();
+        let o = sawtooth().args(["optimize", flag, value, "--out", out.to_str().unwrap(), "--quiet"]).output().unwrap();
         assert_eq!(o.status.code(), Some(2), "{flag} {value}");
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(err.contains(flag) && err.contains("must lie in"), "{flag}: {err}");
     }
-    let o = Command::new(bin()).args(["optimize", "--resume", "--out", out.to_str().unwrap()]).output().unwrap();
+    let o = sawtooth().args(["optimize", "--resume", "--out", out.to_str().unwrap()]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("run.toml"));
 }
@@ -205,7 +190,7 @@ const SMALL: &[&str] = &[
 ];
 
 fn small(out: &Path, extra: &[&str]) -> std::process::Output {
-    Command::new(bin()).args(SMALL).args(["--out", out.to_str().unwrap()]).args(extra).output().unwrap()
+    sawtooth().args(SMALL).args(["--out", out.to_str().unwrap()]).args(extra).output().unwrap()
 }
 
 fn ok(o: &std::process::Output) {
@@ -228,7 +213,7 @@ fn generations(dir: &Path) -> Vec<String> {
 
 #[test]
 fn resume_checks_the_stored_run_and_the_flags_given_with_it() {
-    let dir = tmp("resume-rules");
+    let dir = fresh_dir("resume-rules");
     ok(&small(&dir, &["--generations", "3"]));
     let manifest = dir.join("run.toml");
     let original = std::fs::read_to_string(&manifest).unwrap();
@@ -257,7 +242,7 @@ fn resume_checks_the_stored_run_and_the_flags_given_with_it() {
     refused(&small(&dir, &["--generations", "2", "--resume"]), &["can only be extended"]);
     // a larger --generations extends the finished run to what a longer run gives
     ok(&small(&dir, &["--generations", "5", "--resume"]));
-    let longer = tmp("resume-longer");
+    let longer = fresh_dir("resume-longer");
     ok(&small(&longer, &["--generations", "5"]));
     assert_eq!(generations(&dir), generations(&longer));
     for f in ["pareto.csv", "evaluations.csv"] {
@@ -266,7 +251,7 @@ fn resume_checks_the_stored_run_and_the_flags_given_with_it() {
     assert!(std::fs::read_to_string(&manifest).unwrap().contains("max_generations = 5"));
 
     // killed before its first checkpoint: only run.toml exists; --resume starts it again
-    let early = tmp("resume-early");
+    let early = fresh_dir("resume-early");
     std::fs::create_dir_all(&early).unwrap();
     // (the marker is written before run.toml: a folder is the project's by its marker only)
     std::fs::copy(longer.join(".sawtooth-run"), early.join(".sawtooth-run")).unwrap();
@@ -277,7 +262,7 @@ fn resume_checks_the_stored_run_and_the_flags_given_with_it() {
     assert_eq!(std::fs::read(early.join("pareto.csv")).unwrap(), std::fs::read(longer.join("pareto.csv")).unwrap());
 
     // run.toml is a config: its scenario, flags on top
-    let o = Command::new(bin())
+    let o = sawtooth()
         .args(["simulate", "--config", manifest.to_str().unwrap(), "--particles", "20", "--json"])
         .args(["--design", "47.376,45.884,34.375,36.916,62.853,17.552,1.299,58.595"])
         .output()
@@ -294,20 +279,15 @@ fn resume_checks_the_stored_run_and_the_flags_given_with_it() {
 
 #[test]
 fn progress_goes_to_a_log_as_lines_and_quiet_is_silent() {
-    let (loud, quiet) = (tmp("progress-loud"), tmp("progress-quiet"));
+    let (loud, quiet) = (fresh_dir("progress-loud"), fresh_dir("progress-quiet"));
     let args = ["optimize", "--env", "lunar", "--pop", "8", "--generations", "4", "--algorithm", "nsga2"];
     let small = ["--particles", "20", "--final-particles", "10", "--replicates", "1"];
     // stderr is a pipe here, not a terminal: periodic lines with the generation and an ETA
-    let o = Command::new(bin()).args(args).args(small).args(["--out", loud.to_str().unwrap()]).output().unwrap();
+    let o = sawtooth().args(args).args(small).args(["--out", loud.to_str().unwrap()]).output().unwrap();
     ok(&o);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("generation 1/4:") && err.contains("generation 4/4:") && err.contains("elapsed"), "{err}");
-    let o = Command::new(bin())
-        .args(args)
-        .args(small)
-        .args(["--quiet", "--out", quiet.to_str().unwrap()])
-        .output()
-        .unwrap();
+    let o = sawtooth().args(args).args(small).args(["--quiet", "--out", quiet.to_str().unwrap()]).output().unwrap();
     ok(&o);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!err.contains("generation"), "--quiet printed: {err}");

@@ -1,28 +1,12 @@
 //! Designing to the thesis's own requirements (issue 13): Table 2.2's verdicts in `simulate`,
 //! the requirements as constraints of `optimize`, and one design judged over the slope range.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::path::Path;
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
-fn bin() -> &'static str {
-    env!("CARGO_BIN_EXE_sawtooth")
-}
-
-fn sawtooth(args: &[&str]) -> (i32, String, String) {
-    let o = Command::new(bin()).args(args).output().expect("run binary");
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stdout).into(),
-        String::from_utf8_lossy(&o.stderr).into(),
-    )
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("sawtooth-req-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
+mod common;
+use common::{fresh_dir, run, sawtooth};
 
 /// Lunar solution C (Table C.6), in the CLI's units.
 const SOLUTION_C: &str = "47.346,46.898,32.183,43.687,94.424,11.964,0.840,32.051";
@@ -30,7 +14,7 @@ const SOLUTION_C: &str = "47.346,46.898,32.183,43.687,94.424,11.964,0.840,32.051
 #[test]
 fn simulate_judges_solution_c_at_its_operating_point() {
     let (code, out, err) =
-        sawtooth(&["simulate", "--design", SOLUTION_C, "--requirements", "table-2.2", "--particles", "600", "--json"]);
+        run(&["simulate", "--design", SOLUTION_C, "--requirements", "table-2.2", "--particles", "600", "--json"]);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     let p = &v["performance"];
@@ -55,7 +39,7 @@ fn simulate_judges_solution_c_at_its_operating_point() {
     assert_eq!(v["scenario"]["environment"]["alpha_deg"], 35.0);
 
     let (code, table, _) =
-        sawtooth(&["simulate", "--design", SOLUTION_C, "--requirements", "table-2.2", "--particles", "600"]);
+        run(&["simulate", "--design", SOLUTION_C, "--requirements", "table-2.2", "--particles", "600"]);
     assert_eq!(code, 0);
     for line in
         ["operating point", "1.1   feed rate >= 6 kg/h", "1.4   power <= 5 W", "5.5   wire", "1.2   material loss"]
@@ -70,7 +54,7 @@ fn simulate_judges_solution_c_at_its_operating_point() {
 fn simulate_over_slopes_names_the_slopes_the_model_rejects() {
     // solution C was optimised at 35 deg; on shallow slopes its accelerated fill surface is
     // steeper than the conveyor, which 5.3.1's spill check rejects
-    let (code, out, err) = sawtooth(&[
+    let (code, out, err) = run(&[
         "simulate",
         "--design",
         SOLUTION_C,
@@ -95,11 +79,11 @@ fn simulate_over_slopes_names_the_slopes_the_model_rejects() {
 
 #[test]
 fn requirements_come_from_files_and_bad_ones_are_named() {
-    let dir = tmp("files");
+    let dir = fresh_dir("files");
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("req.toml");
     std::fs::write(&file, "[requirements]\npreset = \"table-2.2\"\npower_max_w = 3.0\n").unwrap();
-    let (code, out, err) = sawtooth(&[
+    let (code, out, err) = run(&[
         "simulate",
         "--design",
         SOLUTION_C,
@@ -117,12 +101,12 @@ fn requirements_come_from_files_and_bad_ones_are_named() {
     std::fs::write(&config, "env = \"lunar\"\n[requirements]\npreset = \"table-2.2\"\nfeed_rate_min_kg_h = 10.0\n")
         .unwrap();
     let (code, out, _) =
-        sawtooth(&["simulate", "--design", SOLUTION_C, "--config", config.to_str().unwrap(), "--particles", "300"]);
+        run(&["simulate", "--design", SOLUTION_C, "--config", config.to_str().unwrap(), "--particles", "300"]);
     assert_eq!(code, 0);
     assert!(out.contains("feed rate >= 10 kg/h"), "{out}");
 
     // a steeper conveyor than the thesis's is simulated, with a note rather than silently
-    let (code, _, err) = sawtooth(&["simulate", "--design", SOLUTION_C, "--particles", "100", "--alpha", "50"]);
+    let (code, _, err) = run(&["simulate", "--design", SOLUTION_C, "--particles", "100", "--alpha", "50"]);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("beyond the thesis's slope range 0..40 deg"), "{err}");
 
@@ -135,12 +119,12 @@ fn requirements_come_from_files_and_bad_ones_are_named() {
     for (flags, message) in bad {
         let mut args = vec!["simulate", "--design", SOLUTION_C, "--particles", "100"];
         args.extend(flags.iter().copied());
-        let (code, _, err) = sawtooth(&args);
+        let (code, _, err) = run(&args);
         assert_ne!(code, 0, "{flags:?} was accepted");
         assert!(err.contains(message), "{flags:?}: {err}");
     }
     std::fs::write(&file, "[requirements]\npreset = \"table-2.2\"\npower_max_w = -5\n").unwrap();
-    let (code, _, err) = sawtooth(&["simulate", "--design", SOLUTION_C, "--requirements", file.to_str().unwrap()]);
+    let (code, _, err) = run(&["simulate", "--design", SOLUTION_C, "--requirements", file.to_str().unwrap()]);
     assert_ne!(code, 0);
     assert!(err.contains("requirements.power_max_w must be a positive number"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
@@ -202,12 +186,8 @@ fn check_front(dir: &Path) {
 
 #[test]
 fn optimize_constrains_by_the_requirements_over_the_slopes_and_resumes_exactly() {
-    let full = tmp("full");
-    let o = Command::new(bin())
-        .args(OPTIMIZE)
-        .args(["--generations", "10", "--out", full.to_str().unwrap()])
-        .output()
-        .unwrap();
+    let full = fresh_dir("full");
+    let o = sawtooth().args(OPTIMIZE).args(["--generations", "10", "--out", full.to_str().unwrap()]).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(stdout.contains("m_dot_op") && stdout.contains("note: "), "{stdout}");
@@ -220,8 +200,8 @@ fn optimize_constrains_by_the_requirements_over_the_slopes_and_resumes_exactly()
     assert_eq!(rows(&full.join("evaluations.csv")), 32 * 11);
 
     // killed mid-run and resumed: the same front, byte for byte
-    let cut = tmp("cut");
-    let mut child = Command::new(bin())
+    let cut = fresh_dir("cut");
+    let mut child = sawtooth()
         .args(OPTIMIZE)
         .args(["--generations", "10", "--out", cut.to_str().unwrap()])
         .stdout(Stdio::null())
@@ -235,7 +215,7 @@ fn optimize_constrains_by_the_requirements_over_the_slopes_and_resumes_exactly()
     let _ = child.kill();
     let _ = child.wait();
     assert!(rows(&cut.join("generations.csv")) < 10, "the run finished before it could be killed");
-    let o = Command::new(bin())
+    let o = sawtooth()
         .args(OPTIMIZE)
         .args(["--generations", "10", "--out", cut.to_str().unwrap(), "--resume"])
         .output()
@@ -255,8 +235,8 @@ fn optimize_constrains_by_the_requirements_over_the_slopes_and_resumes_exactly()
 #[test]
 fn optimize_over_slopes_runs_on_the_gpu_engine() {
     // lavapipe in CI; every slope of a generation in one GPU job
-    let out = tmp("gpu");
-    let o = Command::new(bin())
+    let out = fresh_dir("gpu");
+    let o = sawtooth()
         .args(OPTIMIZE)
         .args(["--generations", "3", "--engine", "gpu", "--out", out.to_str().unwrap()])
         .env("XDG_RUNTIME_DIR", std::env::var("XDG_RUNTIME_DIR").unwrap_or_else(|_| "/tmp".into()))
@@ -271,8 +251,8 @@ fn optimize_over_slopes_runs_on_the_gpu_engine() {
 fn when_no_design_can_meet_them_the_front_says_what_binds() {
     // on Earth over 0-40 deg nothing in the listing's bounds meets Table 2.2 (README): the
     // run still ends with a front, every design on it marked non-compliant with its reason
-    let out = tmp("earth");
-    let o = Command::new(bin())
+    let out = fresh_dir("earth");
+    let o = sawtooth()
         .args(OPTIMIZE)
         .args(["--env", "earth", "--generations", "6", "--out", out.to_str().unwrap()])
         .output()

@@ -1,28 +1,10 @@
 //! gpu-sweep and the studies end to end with tiny settings: outputs, and a rerun that
 //! reads finished runs back instead of recomputing them.
 
-use std::path::PathBuf;
-use std::process::Command;
-
 mod common;
-use common::{assert_figure, assert_png_beside};
+use common::{assert_figure, assert_png_beside, fresh_dir, run};
 use sawtooth::campaigns::study::{GridRow, RunRow, SummaryRow};
 use sawtooth::campaigns::sweep::SweepRow;
-
-fn run(args: &[&str]) -> (i32, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_sawtooth")).args(args).output().unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stdout).into(),
-        String::from_utf8_lossy(&o.stderr).into(),
-    )
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("sawtooth-study-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
 
 const GA: &[&str] = &[
     "--pop",
@@ -42,7 +24,7 @@ const GA: &[&str] = &[
 
 #[test]
 fn sweep_writes_a_summary_per_angle_and_reruns_from_disk() {
-    let out = tmp("sweep");
+    let out = fresh_dir("sweep");
     let o = out.to_str().unwrap();
     let mut args = vec!["gpu-sweep", "--env", "lunar", "--alpha", "20..40", "--step", "10", "--out", o];
     args.extend_from_slice(GA);
@@ -92,7 +74,7 @@ fn sweep_needs_a_range_and_single_commands_refuse_one() {
 
 #[test]
 fn repeatability_and_sensitivity_write_their_tables() {
-    let rep = tmp("rep");
+    let rep = fresh_dir("rep");
     let mut args = vec!["study", "repeatability", "--env", "lunar", "--runs", "3", "--out", rep.to_str().unwrap()];
     args.extend_from_slice(GA);
     let (code, out, err) = run(&args);
@@ -125,7 +107,7 @@ fn repeatability_and_sensitivity_write_their_tables() {
     assert_eq!(std::fs::read_to_string(rep.join("summary.csv")).unwrap(), summary);
     assert_eq!(std::fs::read_to_string(rep.join("runs.csv")).unwrap(), runs);
 
-    let sens = tmp("sens");
+    let sens = fresh_dir("sens");
     let mut args = vec![
         "study",
         "sensitivity",

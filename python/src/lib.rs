@@ -2,21 +2,28 @@
 //! pure-Python package `sawtooth`). Thin by design: every setting goes through the library's
 //! scenario resolution (`scenario_request::ScenarioRequest::resolve`, as the CLI's flags do),
 //! every design through the library's
-//! engines, `fit` and `diagnose` through the CLI commands themselves, so the numbers and the
-//! error messages are the CLI's. Errors become `ValueError` with the CLI's message.
+//! engines, `fit` and `diagnose` through the library's requests (`fit::request`,
+//! `diagnose::request`, which the CLI's commands build too), so the numbers are the CLI's.
+//! Errors become `ValueError` with the library's message, naming the keyword.
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
 
-use clap::{Parser, ValueEnum};
+use anyhow::Context as _;
+use clap::ValueEnum;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
+use sawtooth::calibrate::{parse_assignments, parse_params, EffortSettings, Spelling};
+use sawtooth::diagnose::diagnose::parse_effects;
+use sawtooth::diagnose::request::{self as diagnose_request, DiagnoseRequest};
+use sawtooth::engine::summary::simulation_json;
 use sawtooth::engine::{cpu_only_effects, evaluate_detailed, make_engine, make_engine_for, Engine, EngineKind};
+use sawtooth::fit::request::{self as fit_request, FitRequest};
 use sawtooth::io::config::load_requirements;
-use sawtooth::model::design::{LOWER_BOUND_CLI, UPPER_BOUND_CLI, VARIABLES};
+use sawtooth::model::design::{DesignRow, LOWER_BOUND_CLI, UPPER_BOUND_CLI, VARIABLES};
 use sawtooth::model::requirements::REQUIREMENT_TOLERANCE;
 use sawtooth::model::scenario::EnvPreset;
 use sawtooth::model::Design;
@@ -239,7 +246,8 @@ fn designs_from(x: &Bound<'_, PyAny>) -> PyResult<Vec<[f64; 8]>> {
     let a = x.as_array();
     if a.ncols() != 8 {
         return Err(PyValueError::new_err(format!(
-            "X must have shape (n, 8): columns l_c_mm, l_a_mm, l_b_mm, r_mm, omega_deg, delta_deg, v0_m_s, a_m_s2; got {} columns",
+            "X must have shape (n, 8): columns {}; got {} columns",
+            DesignRow::COLUMNS.join(", "),
             a.ncols()
         )));
     }
@@ -547,9 +555,10 @@ fn simulate<'py>(
         }
         (None, Some(d)) => d,
         (None, None) => {
-            return Err(PyValueError::new_err(
-                "no design: pass design=[l_c_mm, l_a_mm, l_b_mm, r_mm, omega_deg, delta_deg, v0_m_s, a_m_s2] or a config file with [design]",
-            ))
+            return Err(PyValueError::new_err(format!(
+                "no design: pass design=[{}] or a config file with [design]",
+                DesignRow::COLUMNS.join(", ")
+            )))
         }
     };
     let s = scenario.inner.clone();
@@ -565,7 +574,7 @@ fn simulate<'py>(
     let det = py
         .detach(|| evaluate_detailed(eng.as_ref(), &s, &design, trajectories))
         .map_err(|invalid| PyValueError::new_err(format!("invalid design ({}): {invalid}", invalid.rule())))?;
-    let v = sawtooth::cli::simulate::to_json(&s, &design, eng.name(), &det);
+    let v = simulation_json(&s, &design, eng.name(), &det);
     let out = json_to_py(py, &v)?;
     let d = out.cast::<PyDict>()?;
     let ps = &det.particles;
@@ -634,27 +643,113 @@ fn load_measured<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyD
     Ok(d)
 }
 
-/// Run a CLI command in-process (`["fit", "--data", ...]`), GIL released; returns its stdout.
-/// `fit` and `diagnose` go through here so they stay exactly the CLI's commands while their
-/// internals change.
-#[pyfunction]
-fn _cli(py: Python<'_>, args: Vec<String>) -> PyResult<String> {
-    let argv = std::iter::once("sawtooth".to_string()).chain(args);
-    let cli = sawtooth::cli::Cli::try_parse_from(argv)
-        .map_err(|e| PyValueError::new_err(e.render().to_string().trim().to_string()))?;
-    let (result, out) = py.detach(move || {
-        let mut out: Vec<u8> = Vec::new();
-        let r = sawtooth::cli::run(cli, &mut out);
-        (r, out)
-    });
-    let code = result.map_err(value_error)?;
-    if code != std::process::ExitCode::SUCCESS {
-        return Err(PyValueError::new_err(format!(
-            "the command ended with {code:?}: {}",
-            String::from_utf8_lossy(&out)
-        )));
+/// A choice by name (`objective="sse"`), as the CLI's flag takes it; the error names the
+/// keyword and the choices.
+fn choice<T: ValueEnum>(field: &str, name: &str) -> PyResult<T> {
+    T::from_str(name, false).map_err(|_| {
+        let known: Vec<String> = T::value_variants()
+            .iter()
+            .filter_map(|v| v.to_possible_value())
+            .map(|p| p.get_name().to_string())
+            .collect();
+        PyValueError::new_err(format!("{field}: unknown value `{name}` (known: {})", known.join(", ")))
+    })
+}
+
+/// The effort keywords shared by fit and diagnose, over the library's defaults.
+fn effort_settings(
+    particles: Option<u32>,
+    max_particles: Option<u32>,
+    pop: Option<usize>,
+    generations: Option<usize>,
+    polish: Option<usize>,
+) -> EffortSettings {
+    let d = EffortSettings::default();
+    EffortSettings {
+        particles,
+        max_particles: max_particles.unwrap_or(d.max_particles),
+        pop: pop.unwrap_or(d.pop),
+        generations: generations.unwrap_or(d.generations),
+        polish: polish.unwrap_or(d.polish),
     }
-    String::from_utf8(out).map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// The library's fit (`fit::request`, the request `sawtooth fit` builds from its flags),
+/// GIL released; returns fit.json's object. `params` and `at` come as the CLI's lists
+/// (`sawtooth.fit` joins Python's list and dict); errors name the keywords.
+#[pyfunction]
+#[pyo3(signature = (data, setup, *, params=None, objective="sse", particles=None, max_particles=None, pop=None,
+    generations=None, polish=None, normalise=None, seed=None, engine="cpu", holdout=None, bootstrap=None, at=None,
+    out=None))]
+#[allow(clippy::too_many_arguments)]
+fn _fit<'py>(
+    py: Python<'py>,
+    data: PathBuf,
+    setup: PathBuf,
+    params: Option<String>,
+    objective: &str,
+    particles: Option<u32>,
+    max_particles: Option<u32>,
+    pop: Option<usize>,
+    generations: Option<usize>,
+    polish: Option<usize>,
+    normalise: Option<String>,
+    seed: Option<u64>,
+    engine: &str,
+    holdout: Option<usize>,
+    bootstrap: Option<usize>,
+    at: Option<String>,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let mut r = FitRequest::new(data, setup, Spelling::Keywords);
+    r.params = params.map(|p| parse_params(&p).context("params")).transpose().map_err(value_error)?;
+    r.at = at.map(|a| parse_assignments(&a).context("at")).transpose().map_err(value_error)?;
+    r.objective = choice("objective", objective)?;
+    r.effort = effort_settings(particles, max_particles, pop, generations, polish);
+    r.normalise = normalise.map(|n| choice("normalise", &n)).transpose()?;
+    r.seed = seed;
+    r.engine = engine_kind(engine)?;
+    r.holdout = holdout.unwrap_or(r.holdout);
+    r.bootstrap = bootstrap.unwrap_or(r.bootstrap);
+    r.out = out;
+    let outcome = py.detach(|| fit_request::run(&r, &mut |line| eprintln!("{line}"))).map_err(value_error)?;
+    json_to_py(py, &outcome.json)
+}
+
+/// The library's diagnosis (`diagnose::request`, the request `sawtooth diagnose` builds from
+/// its flags), GIL released; returns diagnosis.json's object, and writes report.md and the
+/// figures into `out` (`sawtooth.diagnose` makes a temporary one when none is given).
+#[pyfunction]
+#[pyo3(signature = (data, setup, out, *, effects="all", seed=None, engine="cpu", particles=None, max_particles=None,
+    pop=None, generations=None, polish=None, normalise=None, rescore_streams=None, bootstrap=None))]
+#[allow(clippy::too_many_arguments)]
+fn _diagnose<'py>(
+    py: Python<'py>,
+    data: Vec<PathBuf>,
+    setup: Vec<PathBuf>,
+    out: PathBuf,
+    effects: &str,
+    seed: Option<u64>,
+    engine: &str,
+    particles: Option<u32>,
+    max_particles: Option<u32>,
+    pop: Option<usize>,
+    generations: Option<usize>,
+    polish: Option<usize>,
+    normalise: Option<String>,
+    rescore_streams: Option<usize>,
+    bootstrap: Option<usize>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let mut r = DiagnoseRequest::new(data, setup, out, Spelling::Keywords);
+    r.effects = parse_effects(effects).context("effects").map_err(value_error)?;
+    r.seed = seed;
+    r.engine = engine_kind(engine)?;
+    r.effort = effort_settings(particles, max_particles, pop, generations, polish);
+    r.normalise = normalise.map(|n| choice("normalise", &n)).transpose()?;
+    r.rescore_streams = rescore_streams.unwrap_or(r.rescore_streams);
+    r.bootstrap = bootstrap.unwrap_or(r.bootstrap);
+    let (_, json) = py.detach(|| diagnose_request::run(&r, &mut |line| eprintln!("{line}"))).map_err(value_error)?;
+    json_to_py(py, &json)
 }
 
 #[pymodule]
@@ -664,8 +759,9 @@ fn _sawtooth(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(evaluate_problem, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(load_measured, m)?)?;
-    m.add_function(wrap_pyfunction!(_cli, m)?)?;
-    m.add("VARIABLES", ["l_c_mm", "l_a_mm", "l_b_mm", "r_mm", "omega_deg", "delta_deg", "v0_m_s", "a_m_s2"])?;
+    m.add_function(wrap_pyfunction!(_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(_diagnose, m)?)?;
+    m.add("VARIABLES", DesignRow::COLUMNS)?;
     m.add("LOWER_BOUNDS", LOWER_BOUND_CLI.to_vec())?;
     m.add("UPPER_BOUNDS", UPPER_BOUND_CLI.to_vec())?;
     m.add("CONSTRAINT_TOLERANCE", CONSTRAINT_TOLERANCE)?;

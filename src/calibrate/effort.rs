@@ -2,6 +2,7 @@
 //! settings for the measured conditions, with the particle count chosen from the data.
 
 use super::condition::Condition;
+use super::fields::Spelling;
 use super::solver::{Solver, FIRST_STEP, MIN_STEP};
 use super::target::ObjectiveKind;
 
@@ -23,6 +24,65 @@ pub struct Effort {
     /// Compass-search iterations of the polish at the full budget.
     pub polish: usize,
     pub seed: u64,
+}
+
+/// The effort a user asks for before the seed is known (`fit` and `diagnose` take it from
+/// the setup): the flags `--particles`, `--max-particles`, `--pop`, `--generations`,
+/// `--polish`, or the Python package's keywords of the same names. [`Default`] is the
+/// CLI's defaults.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EffortSettings {
+    pub particles: Option<u32>,
+    pub max_particles: u32,
+    pub pop: usize,
+    pub generations: usize,
+    pub polish: usize,
+}
+
+impl EffortSettings {
+    pub const DEFAULT_MAX_PARTICLES: u32 = 12_000;
+    pub const DEFAULT_POP: usize = 20;
+    pub const DEFAULT_GENERATIONS: usize = 20;
+    pub const DEFAULT_POLISH: usize = 12;
+
+    /// Each setting within its bounds (`schema`), checked before anything is read or
+    /// simulated; an error names the field as `spelling` writes it.
+    pub fn validate(&self, spelling: Spelling) -> Result<(), String> {
+        use crate::schema::{FIT_GENERATIONS, FIT_MAX_PARTICLES, FIT_PARTICLES, FIT_POLISH, FIT_POP};
+        let name = |f: &str| spelling.name(f);
+        FIT_POP.check_usize(&name("pop"), self.pop)?;
+        FIT_GENERATIONS.check_usize(&name("generations"), self.generations)?;
+        FIT_POLISH.check_usize(&name("polish"), self.polish)?;
+        if let Some(p) = self.particles {
+            FIT_PARTICLES.check_u32(&name("particles"), p)?;
+        }
+        FIT_MAX_PARTICLES.check_u32(&name("max_particles"), self.max_particles)?;
+        Ok(())
+    }
+
+    /// The effort with the calibration's seed.
+    pub fn with_seed(&self, seed: u64) -> Effort {
+        Effort {
+            particles: self.particles,
+            max_particles: self.max_particles,
+            pop: self.pop,
+            generations: self.generations,
+            polish: self.polish,
+            seed,
+        }
+    }
+}
+
+impl Default for EffortSettings {
+    fn default() -> Self {
+        EffortSettings {
+            particles: None,
+            max_particles: Self::DEFAULT_MAX_PARTICLES,
+            pop: Self::DEFAULT_POP,
+            generations: Self::DEFAULT_GENERATIONS,
+            polish: Self::DEFAULT_POLISH,
+        }
+    }
 }
 
 /// Particles per simulation that the data call for: the Monte-Carlo variance of every

@@ -9,6 +9,8 @@
 pub mod batch;
 pub mod condition;
 pub mod effort;
+pub mod fields;
+pub mod measured;
 pub mod objective;
 pub mod param;
 pub mod solver;
@@ -18,7 +20,8 @@ pub mod target;
 
 pub use batch::Simulator;
 pub use condition::{Condition, KnownMotion, Normalise};
-pub use effort::{particles_from_data, Effort, MIN_PARTICLES};
+pub use effort::{particles_from_data, Effort, EffortSettings, MIN_PARTICLES};
+pub use fields::Spelling;
 pub use param::{parse_assignments, parse_params, Param};
 pub use solver::{Fit, Model, Probe, Solver};
 pub use space::{shared_params, Space};

@@ -401,12 +401,13 @@ mod tests {
 
     fn test3() -> Condition {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/validation");
-        crate::cli::measured_condition::load(
+        crate::calibrate::measured::load(
             &dir.join("test3.csv"),
             &dir.join("test3.toml"),
             "test3".into(),
             None,
             Some(0),
+            crate::calibrate::Spelling::Flags,
         )
         .unwrap()
     }

@@ -3,12 +3,14 @@
 //! ([`plan`]: its members, each an `optimize` run with its own folder, seed and settings)
 //! that runs in one process or member by member (a Slurm array task each); once every
 //! member is finished, its summary files, table and figure ([`panels`]) are built from the
-//! members' files by the study's own summariser ([`sweep`], [`study`]). The CLI's
+//! members' files by the study's own summariser ([`sweep`], [`study`]); on a cluster, one
+//! Slurm array task per member ([`slurm`]: the sbatch scripts). The CLI's
 //! `gpu-sweep`, `study` and `campaign` commands parse arguments into a [`plan::Plan`] and
 //! print; the work is here.
 
 pub mod panels;
 pub mod plan;
+pub mod slurm;
 pub mod study;
 pub mod sweep;
 

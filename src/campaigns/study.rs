@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 use super::panels::{Panel, PanelsPlot, Series};
 use super::plan::Plan;
 use crate::io::table::write_table;
+use crate::model::design::DesignRow;
 use crate::optim::front::{closest_to_mass_flow, FrontPoint};
 use crate::plot;
 
@@ -33,7 +34,7 @@ struct Point {
     m_dot_kg_s: Option<f64>,
     d_avg_m: Option<f64>,
     n_wire: Option<u32>,
-    x: Option<[f64; 8]>,
+    design: Option<DesignRow>,
 }
 
 impl Point {
@@ -46,12 +47,9 @@ impl Point {
                 m_dot_kg_s: Some(p.m_dot_kg_s),
                 d_avg_m: Some(p.d_avg_m),
                 n_wire: Some(p.n_wire),
-                x: Some(p.design.to_cli_units()),
+                design: Some(DesignRow::of(&p.design)),
             },
         }
-    }
-    fn x(&self, i: usize) -> Option<f64> {
-        self.x.map(|x| x[i])
     }
 }
 
@@ -65,14 +63,9 @@ pub struct RunRow {
     pub m_dot_kg_s: Option<f64>,
     pub d_avg_m: Option<f64>,
     pub n_wire: Option<u32>,
-    pub l_c_mm: Option<f64>,
-    pub l_a_mm: Option<f64>,
-    pub l_b_mm: Option<f64>,
-    pub r_mm: Option<f64>,
-    pub omega_deg: Option<f64>,
-    pub delta_deg: Option<f64>,
-    pub v0_m_s: Option<f64>,
-    pub a_m_s2: Option<f64>,
+    /// The design, empty where the front holds none.
+    #[serde(flatten, serialize_with = "DesignRow::serialize_optional")]
+    pub design: Option<DesignRow>,
     /// (m_dot - target) / target, -.
     pub m_dot_from_target_rel: Option<f64>,
     /// Within ±AT_TARGET_REL of the target.
@@ -92,14 +85,9 @@ pub struct GridRow {
     pub m_dot_kg_s: Option<f64>,
     pub d_avg_m: Option<f64>,
     pub n_wire: Option<u32>,
-    pub l_c_mm: Option<f64>,
-    pub l_a_mm: Option<f64>,
-    pub l_b_mm: Option<f64>,
-    pub r_mm: Option<f64>,
-    pub omega_deg: Option<f64>,
-    pub delta_deg: Option<f64>,
-    pub v0_m_s: Option<f64>,
-    pub a_m_s2: Option<f64>,
+    /// The design, empty where the front holds none.
+    #[serde(flatten, serialize_with = "DesignRow::serialize_optional")]
+    pub design: Option<DesignRow>,
     /// W_spec inside the repeatability study's 95 % interval (with --repeatability).
     pub w_spec_within_repeatability_ci: Option<bool>,
 }
@@ -150,14 +138,7 @@ pub fn summarise_repeatability(
             m_dot_kg_s: q.m_dot_kg_s,
             d_avg_m: q.d_avg_m,
             n_wire: q.n_wire,
-            l_c_mm: q.x(0),
-            l_a_mm: q.x(1),
-            l_b_mm: q.x(2),
-            r_mm: q.x(3),
-            omega_deg: q.x(4),
-            delta_deg: q.x(5),
-            v0_m_s: q.x(6),
-            a_m_s2: q.x(7),
+            design: q.design,
             m_dot_from_target_rel: distance,
             at_target,
         });
@@ -284,14 +265,7 @@ pub fn summarise_sensitivity(
             m_dot_kg_s: q.m_dot_kg_s,
             d_avg_m: q.d_avg_m,
             n_wire: q.n_wire,
-            l_c_mm: q.x(0),
-            l_a_mm: q.x(1),
-            l_b_mm: q.x(2),
-            r_mm: q.x(3),
-            omega_deg: q.x(4),
-            delta_deg: q.x(5),
-            v0_m_s: q.x(6),
-            a_m_s2: q.x(7),
+            design: q.design,
             w_spec_within_repeatability_ci: within,
         });
         let wv = p.map_or(f64::NAN, |p| p.w_spec_j_kg);
@@ -321,4 +295,33 @@ pub fn summarise_sensitivity(
     };
     plot::write_figure_files(root, "sensitivity", &figure)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::table::table_text;
+    use crate::model::Design;
+
+    /// A run whose front holds no design keeps its eight design cells, empty, so the columns
+    /// after them stay in place; both rows read back as written.
+    #[test]
+    fn a_run_without_a_design_has_empty_design_cells_and_reads_back() {
+        let design = DesignRow::of(&Design::lunar_solution_c());
+        let rows = [
+            RunRow { run: 0, seed: 7, at_target: None, ..Default::default() },
+            RunRow { run: 1, seed: 8, design: Some(design), at_target: Some(true), ..Default::default() },
+        ];
+        let text = table_text(&rows).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines[0].split(',').count(), 17, "{text}");
+        assert_eq!(lines[1], "0,7,,,,,,,,,,,,,,,");
+        assert!(lines[2].starts_with("1,8,,,,,,47.346,46.898,32.183,43.687,"), "{text}");
+        assert!(lines[2].ends_with(",32.051,,true"), "{text}");
+        let back: Vec<RunRow> =
+            csv::Reader::from_reader(text.as_bytes()).deserialize().collect::<Result<_, _>>().unwrap();
+        assert_eq!(back[0].design, None);
+        assert_eq!(back[1].design, Some(design));
+        assert_eq!(back[1].at_target, Some(true));
+    }
 }

@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 use super::panels::{Panel, PanelsPlot, Series};
 use super::plan::Plan;
 use crate::io::table::write_table;
+use crate::model::design::DesignRow;
 use crate::optim::front::FrontPoint;
 use crate::optim::front::{closest_to_mass_flow, picks, TARGET_MASS_FLOW_KG_S};
 use crate::plot;
@@ -26,14 +27,8 @@ pub struct SweepRow {
     pub m_dot_se_kg_s: f64,
     pub d_avg_m: f64,
     pub n_wire: u32,
-    pub l_c_mm: f64,
-    pub l_a_mm: f64,
-    pub l_b_mm: f64,
-    pub r_mm: f64,
-    pub omega_deg: f64,
-    pub delta_deg: f64,
-    pub v0_m_s: f64,
-    pub a_m_s2: f64,
+    #[serde(flatten)]
+    pub design: DesignRow,
 }
 
 /// summary.csv, sweep.svg and the table of a finished sweep.
@@ -47,7 +42,6 @@ pub fn summarise(root: &Path, plan: &Plan, fronts: &[Vec<FrontPoint>], out: &mut
     for (alpha, front) in angles.iter().zip(fronts) {
         let ps = picks(front);
         for (name, p) in &ps {
-            let x = p.design.to_cli_units();
             rows.push(SweepRow {
                 alpha_deg: *alpha,
                 pick: name.to_string(),
@@ -58,14 +52,7 @@ pub fn summarise(root: &Path, plan: &Plan, fronts: &[Vec<FrontPoint>], out: &mut
                 m_dot_se_kg_s: p.m_dot_se,
                 d_avg_m: p.d_avg_m,
                 n_wire: p.n_wire,
-                l_c_mm: x[0],
-                l_a_mm: x[1],
-                l_b_mm: x[2],
-                r_mm: x[3],
-                omega_deg: x[4],
-                delta_deg: x[5],
-                v0_m_s: x[6],
-                a_m_s2: x[7],
+                design: DesignRow::of(&p.design),
             });
             writeln!(
                 out,

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use anyhow::Context as _;
 use clap::Args;
 
+use crate::calibrate::EffortSettings;
 use crate::engine::EngineKind;
 use crate::io::config::{load_requirements, ConfigFile};
 use crate::model::requirements::Requirements;
@@ -238,42 +239,29 @@ pub struct EffortArgs {
     #[arg(long, value_parser = count::<u32>(&schema::FIT_PARTICLES))]
     pub particles: Option<u32>,
     /// The most particles per simulation the data may call for.
-    #[arg(long, default_value_t = 12_000, value_parser = count::<u32>(&schema::FIT_MAX_PARTICLES))]
+    #[arg(long, default_value_t = EffortSettings::DEFAULT_MAX_PARTICLES, value_parser = count::<u32>(&schema::FIT_MAX_PARTICLES))]
     pub max_particles: u32,
     /// Differential-evolution population per model (>= 5), screening at 1/8 of the particles.
-    #[arg(long, default_value_t = 20, value_parser = count::<usize>(&schema::FIT_POP))]
+    #[arg(long, default_value_t = EffortSettings::DEFAULT_POP, value_parser = count::<usize>(&schema::FIT_POP))]
     pub pop: usize,
     /// Differential-evolution generations per model.
-    #[arg(long, default_value_t = 20, value_parser = count::<usize>(&schema::FIT_GENERATIONS))]
+    #[arg(long, default_value_t = EffortSettings::DEFAULT_GENERATIONS, value_parser = count::<usize>(&schema::FIT_GENERATIONS))]
     pub generations: usize,
     /// Compass-search iterations polishing each fit (and each bootstrap refit of `fit`) at
     /// the full budget.
-    #[arg(long, default_value_t = 12, value_parser = count::<usize>(&schema::FIT_POLISH))]
+    #[arg(long, default_value_t = EffortSettings::DEFAULT_POLISH, value_parser = count::<usize>(&schema::FIT_POLISH))]
     pub polish: usize,
 }
 
 impl EffortArgs {
-    /// The flags' own rules, checked before anything is read or simulated.
-    pub fn validate(&self) -> anyhow::Result<()> {
-        use crate::schema::{FIT_GENERATIONS, FIT_MAX_PARTICLES, FIT_PARTICLES, FIT_POLISH, FIT_POP};
-        FIT_POP.check_usize("--pop", self.pop).map_err(anyhow::Error::msg)?;
-        FIT_GENERATIONS.check_usize("--generations", self.generations).map_err(anyhow::Error::msg)?;
-        FIT_POLISH.check_usize("--polish", self.polish).map_err(anyhow::Error::msg)?;
-        if let Some(p) = self.particles {
-            FIT_PARTICLES.check_u32("--particles", p).map_err(anyhow::Error::msg)?;
-        }
-        FIT_MAX_PARTICLES.check_u32("--max-particles", self.max_particles).map_err(anyhow::Error::msg)?;
-        Ok(())
-    }
-
-    pub fn effort(&self, seed: u64) -> crate::calibrate::Effort {
-        crate::calibrate::Effort {
+    /// The library's effort settings (checked by the library, naming these flags).
+    pub fn settings(&self) -> crate::calibrate::EffortSettings {
+        crate::calibrate::EffortSettings {
             particles: self.particles,
             max_particles: self.max_particles,
             pop: self.pop,
             generations: self.generations,
             polish: self.polish,
-            seed,
         }
     }
 }

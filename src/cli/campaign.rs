@@ -14,9 +14,9 @@ use clap::{Args, Subcommand};
 use crate::campaigns::plan::{
     execute, finished_fronts, member_state, read_plan, write_plan, MemberState, Plan, CAMPAIGN_KIND, PLAN_FILE,
 };
+use crate::campaigns::slurm::{array_spec, submit, submit_command, write_scripts, SlurmSettings};
 use crate::campaigns::summarise;
 use crate::engine::make_engine_for;
-use crate::io::atomic::write_atomic;
 use crate::io::run_dir::{Access, RunDir};
 use crate::optim::runner::{run as run_optimisation, RunOptions};
 
@@ -75,6 +75,20 @@ pub struct SlurmArgs {
     /// Submit with sbatch instead of only printing the commands.
     #[arg(long)]
     pub submit: bool,
+}
+
+impl SlurmArgs {
+    /// The library's settings from the flags.
+    pub fn settings(&self) -> SlurmSettings {
+        SlurmSettings {
+            partition: self.partition.clone(),
+            time: self.time.clone(),
+            cpus_per_task: self.cpus_per_task,
+            gpus_per_task: self.gpus_per_task,
+            max_parallel: self.max_parallel,
+            unfinished: self.unfinished,
+        }
+    }
 }
 
 pub fn run(c: CampaignCommand, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
@@ -205,191 +219,32 @@ fn status(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// `s` quoted for a POSIX shell; paths with a quote or a newline are refused.
-fn shell_quote(what: &str, s: &str) -> anyhow::Result<String> {
-    if s.contains('\'') || s.contains('\n') {
-        bail!("{what} `{s}` contains a quote or a newline; move the campaign to a plain path");
-    }
-    Ok(format!("'{s}'"))
-}
-
-fn check_token(flag: &str, v: &str, ok: impl Fn(char) -> bool, rule: &str) -> anyhow::Result<()> {
-    if v.is_empty() || !v.chars().all(ok) {
-        bail!("{flag} `{v}`: {rule}");
-    }
-    Ok(())
-}
-
-/// `0-3` for a contiguous run, else `0,2,5`.
-fn array_spec(tasks: &[usize]) -> String {
-    let contiguous = tasks.windows(2).all(|w| w[1] == w[0] + 1);
-    match (tasks.first(), tasks.last()) {
-        (Some(a), Some(b)) if contiguous && a != b => format!("{a}-{b}"),
-        _ => tasks.iter().map(|t| t.to_string()).collect::<Vec<_>>().join(","),
-    }
-}
-
-fn scripts(a: &SlurmArgs, plan: &Plan, root: &str, exe: &str, tasks: &[usize]) -> anyhow::Result<(String, String)> {
-    let q_root = shell_quote("the campaign folder", root)?;
-    let q_exe = shell_quote("the sawtooth executable", exe)?;
-    let name =
-        Path::new(root).file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "campaign".into());
-    let name: String =
-        name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect();
-    let mut common = String::new();
-    if let Some(p) = &a.partition {
-        common.push_str(&format!("#SBATCH --partition={p}\n"));
-    }
-    if let Some(t) = &a.time {
-        common.push_str(&format!("#SBATCH --time={t}\n"));
-    }
-    let mut array = format!(
-        "#!/bin/bash\n\
-         # Written by `sawtooth campaign slurm`: one array task per member of the campaign\n\
-         # {root} ({}, {} members). Task I runs member I alone and resumes it from its own\n\
-         # checkpoint when requeued; DIR and the executable must be on a filesystem every node sees.\n\
-         #SBATCH --job-name=sawtooth-{name}\n\
-         #SBATCH --array={}{}\n\
-         #SBATCH --output={root}/logs/%A_%a.out\n\
-         #SBATCH --open-mode=append\n\
-         #SBATCH --requeue\n\
-         #SBATCH --ntasks=1\n\
-         #SBATCH --cpus-per-task={}\n",
-        plan.command,
-        plan.members.len(),
-        array_spec(tasks),
-        a.max_parallel.map(|k| format!("%{k}")).unwrap_or_default(),
-        a.cpus_per_task
-    );
-    if let Some(g) = a.gpus_per_task {
-        array.push_str(&format!("#SBATCH --gpus-per-task={g}\n"));
-    }
-    array.push_str(&common);
-    array.push_str(&format!(
-        "set -eu\n\
-         # the CPU engine's threads: the cores Slurm gave this task\n\
-         export RAYON_NUM_THREADS=\"${{SLURM_CPUS_PER_TASK:-1}}\"\n\
-         exec {q_exe} campaign run {q_root} --task \"$SLURM_ARRAY_TASK_ID\"\n"
-    ));
-    let gather = format!(
-        "#!/bin/bash\n\
-         # Written by `sawtooth campaign slurm`: the summary of {root}, run once every array\n\
-         # task has succeeded (submitted with --dependency=afterok:ARRAY_JOB).\n\
-         #SBATCH --job-name=sawtooth-{name}-gather\n\
-         #SBATCH --output={root}/logs/gather_%j.out\n\
-         #SBATCH --ntasks=1\n\
-         #SBATCH --cpus-per-task=1\n\
-         {common}\
-         set -eu\n\
-         exec {q_exe} campaign gather {q_root}\n"
-    );
-    Ok((array, gather))
-}
-
-/// The job ids of the last `--submit`, in DIR/slurm.
-const LAST_SUBMIT: &str = "last-submit";
-
-/// Run sbatch; the job id it prints with --parsable (`ID` or `ID;CLUSTER`).
-fn sbatch(args: &[&str]) -> anyhow::Result<String> {
-    let o = std::process::Command::new("sbatch").arg("--parsable").args(args).output().context(
-        "--submit: running sbatch (is this a Slurm login node? without --submit the scripts are only written)",
-    )?;
-    if !o.status.success() {
-        bail!("--submit: sbatch {} failed: {}", args.join(" "), String::from_utf8_lossy(&o.stderr).trim());
-    }
-    let text = String::from_utf8_lossy(&o.stdout);
-    let id = text.trim().split(';').next().unwrap_or("").to_string();
-    if id.is_empty() || !id.chars().all(|c| c.is_ascii_digit()) {
-        bail!("--submit: sbatch printed `{}`, not a job id", text.trim());
-    }
-    Ok(id)
-}
-
 fn slurm(a: SlurmArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    let plan = read_plan(&a.dir)?;
-    if let Some(p) = &a.partition {
-        check_token(
-            "--partition",
-            p,
-            |c| c.is_ascii_alphanumeric() || "_-.,".contains(c),
-            "a partition name is letters, digits, `_-.` (comma-separated)",
-        )?;
-    }
-    if let Some(t) = &a.time {
-        check_token(
-            "--time",
-            t,
-            |c| c.is_ascii_digit() || c == ':' || c == '-',
-            "Slurm's time format: MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM or D-HH:MM:SS",
-        )?;
-    }
-    if a.cpus_per_task == 0 {
-        bail!("--cpus-per-task must be at least 1");
-    }
-    if a.gpus_per_task == Some(0) {
-        bail!("--gpus-per-task must be at least 1 (leave it out for none)");
-    }
-    if a.max_parallel == Some(0) {
-        bail!("--max-parallel must be at least 1");
-    }
-    let tasks: Vec<usize> = (0..plan.members.len())
-        .filter(|&i| !a.unfinished || member_state(&plan.member_dir(&a.dir, i)) != MemberState::Finished)
-        .collect();
-    if tasks.is_empty() {
-        bail!(
-            "every member of {} is finished: nothing to submit; summarise with `sawtooth campaign gather {}`",
-            a.dir.display(),
-            a.dir.display()
-        );
-    }
-    let root = std::fs::canonicalize(&a.dir).with_context(|| format!("resolving {}", a.dir.display()))?;
     let exe = std::env::current_exe().and_then(std::fs::canonicalize).context("locating the sawtooth executable")?;
-    let (root_s, exe_s) = (root.to_string_lossy().into_owned(), exe.to_string_lossy().into_owned());
-    let (array, gather) = scripts(&a, &plan, &root_s, &exe_s, &tasks)?;
-    let sdir = root.join("slurm");
-    std::fs::create_dir_all(&sdir).with_context(|| format!("creating {}", sdir.display()))?;
-    std::fs::create_dir_all(root.join("logs")).with_context(|| format!("creating {}", root.join("logs").display()))?;
-    let (array_path, gather_path) = (sdir.join("array.sbatch"), sdir.join("gather.sbatch"));
-    write_atomic(&array_path, array.as_bytes())?;
-    write_atomic(&gather_path, gather.as_bytes())?;
-    let (ap, gp) = (array_path.to_string_lossy().into_owned(), gather_path.to_string_lossy().into_owned());
-    writeln!(out, "wrote {ap} ({} tasks: {}) and {gp}", tasks.len(), array_spec(&tasks))?;
-    let last = sdir.join(LAST_SUBMIT);
-    if a.unfinished {
-        if let Some(g) = std::fs::read_to_string(&last)
-            .ok()
-            .and_then(|t| t.split_whitespace().find_map(|w| w.strip_prefix("gather=").map(String::from)))
-        {
-            writeln!(out, "note: the gather job of the last submission ({g}) can never start once a task of its array failed or was cancelled; if squeue still shows it: scancel {g}")?;
-        }
+    let w = write_scripts(&a.dir, &a.settings(), &exe)?;
+    writeln!(
+        out,
+        "wrote {} ({} tasks: {}) and {}",
+        w.array.display(),
+        w.tasks.len(),
+        array_spec(&w.tasks),
+        w.gather.display()
+    )?;
+    if let Some(g) = &w.stale_gather {
+        writeln!(out, "note: the gather job of the last submission ({g}) can never start once a task of its array failed or was cancelled; if squeue still shows it: scancel {g}")?;
     }
     if !a.submit {
         writeln!(out, "submit with:")?;
-        writeln!(
-            out,
-            "  jid=$(sbatch --parsable {}) && sbatch --dependency=afterok:${{jid%%;*}} {}",
-            shell_quote("path", &ap)?,
-            shell_quote("path", &gp)?
-        )?;
+        writeln!(out, "  {}", submit_command(&w)?)?;
         return Ok(ExitCode::SUCCESS);
     }
-    let jid = sbatch(&[&ap])?;
-    let dependency = format!("--dependency=afterok:{jid}");
-    let gid = sbatch(&[&dependency, &gp])?;
-    write_atomic(&last, format!("array={jid} gather={gid}\n").as_bytes())?;
-    writeln!(out, "submitted array job {jid} (tasks {}) and gather job {gid} ({dependency})", array_spec(&tasks))?;
-    writeln!(out, "logs in {}/logs; follow with `sawtooth campaign status {}`", root_s, root_s)?;
+    let (jid, gid) = submit(&w)?;
+    writeln!(
+        out,
+        "submitted array job {jid} (tasks {}) and gather job {gid} (--dependency=afterok:{jid})",
+        array_spec(&w.tasks)
+    )?;
+    let root = w.root.display();
+    writeln!(out, "logs in {root}/logs; follow with `sawtooth campaign status {root}`")?;
     Ok(ExitCode::SUCCESS)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::array_spec;
-
-    #[test]
-    fn array_specs_are_ranges_or_lists() {
-        assert_eq!(array_spec(&[0, 1, 2, 3]), "0-3");
-        assert_eq!(array_spec(&[2]), "2");
-        assert_eq!(array_spec(&[0, 2, 3]), "0,2,3");
-    }
 }

@@ -8,6 +8,7 @@ use clap::Args;
 
 use crate::engine::conformance::{run, scenarios, Tolerances};
 use crate::engine::gpu::{AdapterChoice, GpuEngine};
+use crate::model::design::DesignRow;
 use crate::model::scenario::EnvPreset;
 use crate::model::Scenario;
 
@@ -97,12 +98,8 @@ pub fn run_cli(a: ConformanceArgs, out: &mut dyn Write) -> anyhow::Result<ExitCo
         if !report.worst.is_empty() {
             writeln!(out, "worst cases:")?;
             for m in &report.worst {
-                let d = m.design;
-                writeln!(
-                    out,
-                    "  [{}] design {:.3},{:.3},{:.3},{:.3},{:.2},{:.2},{:.3},{:.2} particle {}: {}",
-                    m.scenario, d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], m.particle, m.what
-                )?;
+                let design = DesignRow::from_values(m.design).cli_argument();
+                writeln!(out, "  [{}] design {design} particle {}: {}", m.scenario, m.particle, m.what)?;
             }
         }
         for f in &report.failures {

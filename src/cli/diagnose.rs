@@ -1,23 +1,20 @@
 //! `sawtooth diagnose`: locate the sim-to-real gap in one or more measured conditions and
-//! rank the candidate effects by held-out error (issue 5 §2). The work is in
-//! [`crate::diagnose::diagnose`].
+//! rank the candidate effects by held-out error (issue 5 §2). The flags become a
+//! [`DiagnoseRequest`], which the library checks and runs ([`crate::diagnose::request`], as
+//! the Python package does); the work is in [`crate::diagnose::diagnose`].
 
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Context as _};
+use anyhow::Context as _;
 use clap::Args;
 
 use super::args::EffortArgs;
-use super::measured_condition::{self, stem};
-use crate::calibrate::Normalise;
-use crate::diagnose::diagnose::{
-    applicable_effects, diagnose, parse_effects, to_json, Condition, Settings, NO_EFFECT_APPLIES,
-};
-use crate::diagnose::render;
-use crate::engine::{make_engine, EngineKind};
-use crate::io::run_dir::{Access, RunDir};
+use crate::calibrate::{Normalise, Spelling};
+use crate::diagnose::diagnose::parse_effects;
+use crate::diagnose::request::{self, DiagnoseRequest};
+use crate::engine::EngineKind;
 
 #[derive(Debug, Args)]
 pub struct DiagnoseArgs {
@@ -47,10 +44,10 @@ pub struct DiagnoseArgs {
     #[arg(long, value_enum)]
     pub normalise: Option<Normalise>,
     /// Fresh particle streams every fitted model is re-scored with.
-    #[arg(long, default_value_t = 4, value_parser = super::args::count::<usize>(&crate::schema::RESCORE_STREAMS))]
+    #[arg(long, default_value_t = DiagnoseRequest::DEFAULT_RESCORE_STREAMS, value_parser = super::args::count::<usize>(&crate::schema::RESCORE_STREAMS))]
     pub rescore_streams: usize,
     /// Bootstrap replicates for the intervals (resampling held-out runs).
-    #[arg(long, default_value_t = 400, value_parser = super::args::count::<usize>(&crate::schema::DIAGNOSE_BOOTSTRAP))]
+    #[arg(long, default_value_t = DiagnoseRequest::DEFAULT_BOOTSTRAP, value_parser = super::args::count::<usize>(&crate::schema::DIAGNOSE_BOOTSTRAP))]
     pub bootstrap: usize,
     /// Write report.md, diagnosis.json and the figures residuals, ranking, distributions (.svg and .png) here.
     #[arg(long)]
@@ -61,59 +58,15 @@ pub struct DiagnoseArgs {
 }
 
 pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    // cheap checks first: nothing is simulated before every input is known to be good
-    if a.data.len() != a.setup.len() {
-        bail!(
-            "--data and --setup must come in pairs (matched by order): got {} --data and {} --setup",
-            a.data.len(),
-            a.setup.len()
-        );
-    }
-    let effects = parse_effects(&a.effects).context("--effects")?;
-    if a.engine == EngineKind::Listing {
-        bail!("--engine listing: the effects are in the cpu and gpu engines only; use --engine cpu or auto");
-    }
-    a.effort.validate()?;
-    let mut conditions: Vec<Condition> = Vec::with_capacity(a.data.len());
-    for (data, setup) in a.data.iter().zip(&a.setup) {
-        let mut name = stem(data);
-        if conditions.iter().any(|c| c.name == name) {
-            name = format!("{name}#{}", conditions.len() + 1);
-        }
-        // every condition runs on the first setup's seed unless --seed is given
-        let seed = a.seed.or(conditions.first().map(|c| c.base.sim.seed));
-        let mut c = measured_condition::load(data, setup, name, a.normalise, seed)?;
-        if c.base.effects.any() {
-            eprintln!(
-                "diagnose: {}: the setup's [effects] ({}) are switched off; the diagnosis fits them itself",
-                setup.display(),
-                c.base.effects.active().join(", ")
-            );
-            c.base.effects = Default::default();
-        }
-        if c.runs.runs.len() < 2 {
-            bail!(
-                "--data {}: has {} run(s); the diagnosis needs at least 2 (their spread is the measurement's uncertainty)",
-                data.display(),
-                c.runs.runs.len()
-            );
-        }
-        conditions.push(c);
-    }
-    if applicable_effects(&effects, &conditions).0.is_empty() {
-        bail!("--effects: {NO_EFFECT_APPLIES}");
-    }
-    let seed = conditions[0].base.sim.seed;
-    // the output folder is owned before the work, so a busy or foreign folder costs nothing
-    let _owned = RunDir::acquire(&a.out, "diagnose", Access::Exclusive).context("--out")?;
-    let engine = make_engine(a.engine)?;
-    let settings =
-        Settings { effects, effort: a.effort.effort(seed), rescore_streams: a.rescore_streams, bootstrap: a.bootstrap };
-    let started = std::time::Instant::now();
-    let d = diagnose(engine.as_ref(), conditions, settings, &mut |line| eprintln!("{line}"))?;
-    eprintln!("diagnose: done in {:.1} s", started.elapsed().as_secs_f64());
-    let json = to_json(&d);
-    render::write_dir(&a.out, &d, &json).context("--out")?;
+    let mut r = DiagnoseRequest::new(a.data.clone(), a.setup.clone(), a.out.clone(), Spelling::Flags);
+    r.effects = parse_effects(&a.effects).context("--effects")?;
+    r.seed = a.seed;
+    r.engine = a.engine;
+    r.effort = a.effort.settings();
+    r.normalise = a.normalise;
+    r.rescore_streams = a.rescore_streams;
+    r.bootstrap = a.bootstrap;
+    let (d, json) = request::run(&r, &mut |line| eprintln!("{line}"))?;
     if a.json {
         writeln!(out, "{}", serde_json::to_string_pretty(&json)?).context("writing output")?;
     } else {

@@ -1,21 +1,19 @@
 //! `sawtooth fit`: calibrate k_elastic, mu_fric and k_drag against measured tooth masses
-//! (thesis 4.3.4-4.3.5, listing D.4). The work is in [`crate::fit`], on the calibration
-//! engine `diagnose` uses ([`crate::calibrate`]).
+//! (thesis 4.3.4-4.3.5, listing D.4). The flags become a [`FitRequest`], which the library
+//! checks and runs ([`crate::fit::request`], as the Python package does); the work is in
+//! [`crate::fit`], on the calibration engine `diagnose` uses ([`crate::calibrate`]).
 
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Context as _};
+use anyhow::Context as _;
 use clap::Args;
 
 use super::args::{EffortArgs, EngineArgs};
-use super::measured_condition::{self, stem};
-use crate::calibrate::{parse_assignments, parse_params, shared_params, Normalise, ObjectiveKind};
-use crate::engine::make_engine;
-use crate::fit::report::{self, Meta};
-use crate::fit::FitSettings;
-use crate::io::run_dir::{Access, RunDir};
+use crate::calibrate::{parse_assignments, parse_params, Normalise, ObjectiveKind, Spelling};
+use crate::fit::report;
+use crate::fit::request::{self, FitOutcome, FitRequest};
 
 #[derive(Debug, Args)]
 pub struct FitArgs {
@@ -46,10 +44,10 @@ pub struct FitArgs {
     #[command(flatten)]
     pub engine: EngineArgs,
     /// Hold out the last K runs: fit on the others, score on them (0 = off).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = FitRequest::DEFAULT_HOLDOUT)]
     pub holdout: usize,
     /// Bootstrap replicates over the runs for the parameter uncertainty (0 = off).
-    #[arg(long, default_value_t = 20, value_parser = super::args::count::<usize>(&crate::schema::FIT_BOOTSTRAP))]
+    #[arg(long, default_value_t = FitRequest::DEFAULT_BOOTSTRAP, value_parser = super::args::count::<usize>(&crate::schema::FIT_BOOTSTRAP))]
     pub bootstrap: usize,
     /// Do not fit: score these values (`k_elastic=0.854,mu_fric=0.133,k_drag=5.347`) against
     /// the runs; the parameters not named keep the setup's values.
@@ -63,58 +61,31 @@ pub struct FitArgs {
     pub json: bool,
 }
 
-pub fn run(a: FitArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    // cheap checks first: nothing is simulated before every input is known to be good
-    let (params, at) = match (&a.at, &a.params) {
-        (Some(list), _) => {
-            let (p, v) = parse_assignments(list).context("--at")?;
-            (Some(p), Some(v))
+impl FitArgs {
+    /// The library's request from the flags; the lists are parsed here, where an error can
+    /// name the flag.
+    pub fn request(&self) -> anyhow::Result<FitRequest> {
+        let mut r = FitRequest::new(self.data.clone(), self.setup.clone(), Spelling::Flags);
+        match (&self.at, &self.params) {
+            (Some(list), _) => r.at = Some(parse_assignments(list).context("--at")?),
+            (None, Some(list)) => r.params = Some(parse_params(list).context("--params")?),
+            (None, None) => {}
         }
-        (None, Some(list)) => (Some(parse_params(list).context("--params")?), None),
-        (None, None) => (None, None),
-    };
-    a.effort.validate()?;
-    let condition = measured_condition::load(&a.data, &a.setup, stem(&a.data), a.normalise, a.seed)?;
-    let n = condition.runs.runs.len();
-    if a.holdout >= n {
-        bail!("--holdout must be < the number of runs in {} ({n}), got {}", a.data.display(), a.holdout);
+        r.objective = self.objective;
+        r.effort = self.effort.settings();
+        r.normalise = self.normalise;
+        r.seed = self.seed;
+        r.engine = self.engine.kind();
+        r.holdout = self.holdout;
+        r.bootstrap = self.bootstrap;
+        r.out = self.out.clone();
+        Ok(r)
     }
-    // the output folder is owned before the work, so a busy or foreign folder costs nothing
-    let _owned = match &a.out {
-        Some(dir) => Some(RunDir::acquire(dir, "fit", Access::Exclusive).context("--out")?),
-        None => None,
-    };
-    let params = params.unwrap_or_else(|| shared_params(std::slice::from_ref(&condition)));
-    let seed = condition.base.sim.seed;
-    let effort = a.effort.effort(seed);
-    let engine = make_engine(a.engine.kind())?;
-    let started = std::time::Instant::now();
-    let report = match &at {
-        Some(x) => crate::fit::evaluate_at(engine.as_ref(), &condition, &params, x, a.objective, effort)
-            .map_err(|e| anyhow::anyhow!("--at: {e}"))?,
-        None => {
-            let settings = FitSettings { objective: a.objective, effort, bootstrap: a.bootstrap, holdout: a.holdout };
-            let r = crate::fit::fit(engine.as_ref(), &condition, &params, settings, &mut |line| eprintln!("{line}"))
-                .with_context(|| format!("--data {}", a.data.display()))?;
-            eprintln!("fit: done in {:.1} s", started.elapsed().as_secs_f64());
-            r
-        }
-    };
+}
 
-    let meta = Meta {
-        data: a.data.display().to_string(),
-        setup: a.setup.display().to_string(),
-        engine: engine.backend().to_string(),
-        particles: report.particles,
-        seed,
-        teeth: condition.teeth(),
-        measured_teeth: condition.runs.teeth,
-        run_ids: condition.runs.runs.iter().map(|r| r.id.clone()).collect(),
-    };
-    let json = report::to_json(&report, &meta);
-    if let Some(dir) = &a.out {
-        report::write_dir(dir, &report, &meta, &json)?;
-    }
+pub fn run(a: FitArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    let r = a.request()?;
+    let FitOutcome { report, meta, json } = request::run(&r, &mut |line| eprintln!("{line}"))?;
     if a.json {
         writeln!(out, "{}", serde_json::to_string_pretty(&json)?).context("writing output")?;
     } else {

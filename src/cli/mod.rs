@@ -8,7 +8,6 @@ pub mod conformance;
 pub mod dem;
 pub mod diagnose;
 pub mod fit;
-pub mod measured_condition;
 pub mod optimize;
 pub mod simulate;
 pub mod study;

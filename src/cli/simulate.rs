@@ -10,6 +10,7 @@ use serde_json::json;
 
 use super::args::{EngineArgs, RequirementArgs, ScenarioArgs};
 use crate::engine::{evaluate_detailed, make_engine_for, Detailed, EngineKind};
+use crate::model::design::DesignRow;
 use crate::model::outcome::centre_and_dispersion;
 use crate::model::requirements::{worst_over_slopes, Assessment, Requirements, NOT_ASSESSED};
 use crate::model::{Design, PhysicsMode, Scenario};
@@ -91,7 +92,7 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         r.assess(&e.performance, &scenario.performance, e.sim.lost_fraction)
     });
     if a.json {
-        let mut v = to_json(&scenario, &design, engine.name(), &det);
+        let mut v = crate::engine::summary::simulation_json(&scenario, &design, engine.name(), &det);
         if let (Some(r), Some(x)) = (&requirements, &assessment) {
             v["requirements"] = requirements_json(r, &[(scenario.environment.alpha_deg, x.clone())]);
         }
@@ -322,40 +323,11 @@ fn requirements_json(r: &Requirements, per_slope: &[(f64, Assessment)]) -> serde
 }
 
 fn design_json(d: &Design) -> serde_json::Value {
-    json!({
-        "l_c_mm": d.l_c * 1e3, "l_a_mm": d.l_a * 1e3, "l_b_mm": d.l_b * 1e3, "r_mm": d.r * 1e3,
-        "omega_deg": d.omega_deg, "delta_deg": d.delta_deg, "v0_m_s": d.v0, "a_m_s2": d.a,
-    })
+    json!(DesignRow::of(d))
 }
 
 fn describe(d: &Design) -> String {
-    let v = d.to_cli_units();
-    format!(
-        "l_c {:.3} l_a {:.3} l_b {:.3} r {:.3} mm, omega {:.2} delta {:.2} deg, v0 {:.3} m/s, a {:.2} m/s2",
-        v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]
-    )
-}
-
-pub fn to_json(s: &Scenario, d: &Design, engine: &str, det: &Detailed) -> serde_json::Value {
-    let sim = &det.evaluation.sim;
-    let (ex, sx) = centre_and_dispersion(&sim.distribution);
-    json!({
-        "engine": engine,
-        "mode": s.mode,
-        "scenario": s,
-        "design": design_json(d),
-        "distribution": sim.distribution,
-        "d_avg_m": sim.d_avg_m,
-        "advance_m": sim.advance_m,
-        "lost_fraction": sim.lost_fraction,
-        "unsettled_fraction": sim.unsettled_fraction,
-        "fill_area_mm2": sim.fill_area_mm2,
-        "bounces": sim.bounces,
-        "mean_bounces": sim.mean_bounces,
-        "centre_of_mass_teeth": ex,
-        "dispersion_teeth": sx,
-        "performance": det.evaluation.performance,
-    })
+    DesignRow::of(d).describe()
 }
 
 fn write_table(out: &mut dyn Write, s: &Scenario, d: &Design, engine: &str, det: &Detailed) -> std::io::Result<()> {

@@ -149,27 +149,8 @@ impl Figure for ComparisonPlot<'_> {
         let mut dem: Vec<(f64, f64)> = c.dem_pct[..n].iter().map(|s| (s.mean, s.sd)).collect();
         dem.push((c.dem_lost_pct.mean, c.dem_lost_pct.sd));
         let hi = model.iter().copied().chain(dem.iter().map(|(m, s)| m + s)).fold(1.0f64, f64::max);
-        let mut chart = ChartBuilder::on(&panel)
-            .margin(12)
-            .x_label_area_size(48)
-            .y_label_area_size(75)
-            .build_cartesian_2d(plot::category_range(labels.len()), 0.0..hi * 1.08)
-            .drawn()?;
-        let x_label = plot::category_label(&labels);
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .x_labels(labels.len() + 1)
-            .x_label_formatter(&x_label)
-            .y_label_formatter(&plot::tick)
-            .x_desc("tooth")
-            .y_desc("share of the loaded mass [%]")
-            .label_style(plot::text_style(plot::SMALL_SIZE))
-            .axis_desc_style(plot::text_style(plot::SMALL_SIZE))
-            .bold_line_style(plot::GRID)
-            .max_light_lines(1)
-            .draw()
-            .drawn()?;
+        let mut chart =
+            plot::category_chart(&panel, None, &labels, 0.0..hi * 1.08, "tooth", "share of the loaded mass [%]")?;
         const BAR: f64 = 0.35;
         for (k, (m, (d, sd))) in model.iter().zip(&dem).enumerate() {
             let x = k as f64;

@@ -147,18 +147,7 @@ pub fn setup_toml(case: &Case, known_return: Option<(f64, f64)>, description: &s
         "# DEM campaign setup written by `sawtooth dem run` (docs/dem.md): the scenario of the runs as config keys."
     );
     let _ = writeln!(t, "mode = \"physical\"\n");
-    let _ = writeln!(
-        t,
-        "[design]\nl_c_mm = {}\nl_a_mm = {}\nl_b_mm = {}\nr_mm = {}\nomega_deg = {}\ndelta_deg = {}\nv0_m_s = {}\na_m_s2 = {}\n",
-        d.l_c * 1e3,
-        d.l_a * 1e3,
-        d.l_b * 1e3,
-        d.r * 1e3,
-        d.omega_deg,
-        d.delta_deg,
-        d.v0,
-        d.a
-    );
+    let _ = writeln!(t, "{}", crate::model::design::DesignRow::of(d).config_table());
     let _ = writeln!(
         t,
         "[environment]\ng_m_s2 = {}\nalpha_deg = {}\nk_drag_per_s = {}\n",

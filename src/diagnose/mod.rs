@@ -8,5 +8,6 @@
 pub mod diagnose;
 pub mod model_result;
 pub mod render;
+pub mod request;
 pub mod synth;
 pub mod verdict;

@@ -8,7 +8,6 @@ use std::path::Path;
 use anyhow::Context as _;
 use serde_json::Value;
 
-use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -416,40 +415,6 @@ const DARK_GREY: RGBColor = RGBColor(0x55, 0x55, 0x55);
 const WIDTH_PX: u32 = 900;
 const PANEL_PX: u32 = 330;
 
-/// A chart of categories (teeth) against a linear y range, with tick labels and units.
-fn category_chart<'a, DB: DrawingBackend>(
-    area: &'a DrawingArea<DB, Shift>,
-    caption: &str,
-    labels: &'a [String],
-    y: std::ops::Range<f64>,
-    x_desc: &str,
-    y_desc: &str,
-) -> anyhow::Result<ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>> {
-    let mut chart = ChartBuilder::on(area)
-        .caption(caption, plot::text_style(plot::LABEL_SIZE))
-        .margin(12)
-        .x_label_area_size(48)
-        .y_label_area_size(75)
-        .build_cartesian_2d(plot::category_range(labels.len()), y)
-        .drawn()?;
-    let x_label = plot::category_label(labels);
-    chart
-        .configure_mesh()
-        .disable_x_mesh()
-        .x_labels(labels.len() + 1)
-        .x_label_formatter(&x_label)
-        .y_label_formatter(&plot::tick)
-        .x_desc(x_desc)
-        .y_desc(y_desc)
-        .label_style(plot::text_style(plot::SMALL_SIZE))
-        .axis_desc_style(plot::text_style(plot::SMALL_SIZE))
-        .bold_line_style(plot::GRID)
-        .max_light_lines(1)
-        .draw()
-        .drawn()?;
-    Ok(chart)
-}
-
 /// A vertical interval from `lo` to `hi` at `x`, `width` pixels wide.
 fn interval(x: f64, lo: f64, hi: f64, colour: RGBColor, width: u32) -> PathElement<(f64, f64)> {
     PathElement::new(vec![(x, lo), (x, hi)], colour.stroke_width(width))
@@ -503,7 +468,8 @@ impl Figure for ResidualsPlot<'_> {
                 "tooth (E_x residual {:+.3}, z {:+.1}; σ_x residual {:+.3}, z {:+.1})",
                 w.centre.residual, w.centre.z, w.dispersion.residual, w.dispersion.z
             );
-            let mut chart = category_chart(panel, &c.name, &labels, y, &x_desc, "simulated − measured [pp]")?;
+            let mut chart =
+                plot::category_chart(panel, Some(&c.name), &labels, y, &x_desc, "simulated − measured [pp]")?;
             let n = labels.len() as f64;
             chart.draw_series(std::iter::once(PathElement::new(vec![(-0.5, 0.0), (n - 0.5, 0.0)], BLACK))).drawn()?;
             for (j, r) in rs.iter().enumerate() {
@@ -682,7 +648,7 @@ impl Figure for DistributionsPlot<'_> {
             let labels: Vec<String> =
                 idx.iter().map(|&j| if j < teeth { format!("{}", j + 1) } else { c.last_bin_label().into() }).collect();
             let y = 0.0..(100.0 * hi * 1.08).max(1.0);
-            let mut chart = category_chart(panel, &c.name, &labels, y, "tooth", "share of mass [%]")?;
+            let mut chart = plot::category_chart(panel, Some(&c.name), &labels, y, "tooth", "share of mass [%]")?;
             const BAR: f64 = 0.25;
             for (k, &j) in idx.iter().enumerate() {
                 let xc = k as f64;

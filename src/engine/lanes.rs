@@ -4,7 +4,7 @@
 //! (Earth's). The branches of the scalar search become masks and selects on AVX-512 lanes,
 //! and every lane does the scalar search's IEEE operations in the scalar search's order, so
 //! each lane's hit is the scalar hit to the bit (`tests` below, and
-//! `examples/engine_digest.rs`). A lane whose particle has finished its teeth (or its
+//! `examples/dev/engine_digest.rs`). A lane whose particle has finished its teeth (or its
 //! Halley steps) idles while the others go on. Beside it, on the same lanes: the launch
 //! randomisation ([`randomise_launches`]), the restitution law ([`bounce_velocities`]) and
 //! the counter-based generator's hash ([`uniforms`]). `exp_m1`, `sin_cos`, `atan2`, `ln`

@@ -30,6 +30,7 @@
 //!   and a parameter pinned at a bound gets a one-sided, possibly degenerate interval.
 
 pub mod report;
+pub mod request;
 
 use anyhow::bail;
 use rand::{Rng, SeedableRng};

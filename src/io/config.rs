@@ -7,6 +7,7 @@ use std::path::Path;
 use anyhow::{bail, Context as _};
 use serde::Deserialize;
 
+use crate::model::design::DesignRow;
 use crate::model::requirements::{Requirements, PRESET_TABLE_2_2};
 use crate::model::scenario::{EnvPreset, Material, PhysicsMode, Scenario};
 use crate::model::Design;
@@ -18,7 +19,8 @@ pub struct ConfigFile {
     pub env: Option<EnvPreset>,
     /// `physical` (thesis text) or `listing` (compatibility).
     pub mode: Option<PhysicsMode>,
-    pub design: Option<DesignTable>,
+    /// The design in the units of Table 5.3 (`[design]`, the columns of every table).
+    pub design: Option<DesignRow>,
     pub environment: Option<EnvironmentTable>,
     pub material: Option<MaterialTable>,
     pub collision: Option<CollisionTable>,
@@ -58,20 +60,6 @@ pub struct DemTable {
     pub rest_speed_m_s: Option<f64>,
     /// Teeth of the mesh; absent: the model's reach plus a margin (at most `sim.teeth`).
     pub teeth: Option<u32>,
-}
-
-/// The design in the units of Table 5.3.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DesignTable {
-    pub l_c_mm: f64,
-    pub l_a_mm: f64,
-    pub l_b_mm: f64,
-    pub r_mm: f64,
-    pub omega_deg: f64,
-    pub delta_deg: f64,
-    pub v0_m_s: f64,
-    pub a_m_s2: f64,
 }
 
 #[derive(Clone, Debug, Default, Deserialize)]
@@ -256,10 +244,8 @@ impl ConfigFile {
         if let Some(m) = &c.measurement {
             m.validate()?;
         }
-        if let Some(d) = c.design() {
-            const KEYS: [&str; 8] =
-                ["l_c_mm", "l_a_mm", "l_b_mm", "r_mm", "omega_deg", "delta_deg", "v0_m_s", "a_m_s2"];
-            d.check_sensible(|i| format!("design.{}", KEYS[i])).map_err(anyhow::Error::msg)?;
+        if let Some(d) = &c.design {
+            d.checked_design("design.").map_err(anyhow::Error::msg)?;
         }
         Ok(c)
     }
@@ -324,9 +310,7 @@ impl ConfigFile {
     }
 
     pub fn design(&self) -> Option<Design> {
-        self.design.as_ref().map(|d| {
-            Design::from_cli_units([d.l_c_mm, d.l_a_mm, d.l_b_mm, d.r_mm, d.omega_deg, d.delta_deg, d.v0_m_s, d.a_m_s2])
-        })
+        self.design.as_ref().map(DesignRow::design)
     }
 }
 

@@ -83,7 +83,8 @@ impl Design {
         [self.l_c * 1e3, self.l_a * 1e3, self.l_b * 1e3, self.r * 1e3, self.omega_deg, self.delta_deg, self.v0, self.a]
     }
 
-    /// Parse `l_c,l_a,l_b,r,omega_deg,delta_deg,v0,a` in mm, mm, mm, mm, °, °, m/s, m/s².
+    /// Parse `l_c,l_a,l_b,r,omega_deg,delta_deg,v0,a` in mm, mm, mm, mm, °, °, m/s, m/s²
+    /// (the order and units of [`DesignRow`]).
     pub fn parse_cli(s: &str) -> Result<Self, String> {
         let parts: Vec<&str> = s.split(',').map(str::trim).collect();
         if parts.len() != 8 {
@@ -124,5 +125,161 @@ impl Design {
     /// The validation rig (Table 4.3, Profile 1 of the proof-of-concept tests).
     pub fn validation_rig() -> Self {
         Self::from_cli_units([20.0, 15.0, 5.0, 5.0, 60.0, 0.0, 1.0, 60.0])
+    }
+}
+
+/// The eight design variables in user units, named as every file spells them: the columns
+/// of every CSV (pareto.csv, evaluations.csv, the sweep and study tables), the keys of a
+/// config's `[design]` table and of the JSON reports, and the column names the Python
+/// package documents. A table row takes it with `#[serde(flatten)]` (`io::table` writes
+/// such rows), so the eight names, their order and their units are written down once, here.
+///
+/// Values are [`Design::to_cli_units`]' exactly (mm = m × 1e3), so a file written from a
+/// design and read back gives the same bits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DesignRow {
+    pub l_c_mm: f64,
+    pub l_a_mm: f64,
+    pub l_b_mm: f64,
+    pub r_mm: f64,
+    pub omega_deg: f64,
+    pub delta_deg: f64,
+    pub v0_m_s: f64,
+    pub a_m_s2: f64,
+}
+
+impl DesignRow {
+    /// The column names, in order (a unit in every name that is not SI).
+    pub const COLUMNS: [&'static str; 8] =
+        ["l_c_mm", "l_a_mm", "l_b_mm", "r_mm", "omega_deg", "delta_deg", "v0_m_s", "a_m_s2"];
+
+    pub fn of(d: &Design) -> Self {
+        Self::from_values(d.to_cli_units())
+    }
+
+    /// From the eight values in [`Self::COLUMNS`]' order and units.
+    pub fn from_values(v: [f64; 8]) -> Self {
+        let [l_c_mm, l_a_mm, l_b_mm, r_mm, omega_deg, delta_deg, v0_m_s, a_m_s2] = v;
+        DesignRow { l_c_mm, l_a_mm, l_b_mm, r_mm, omega_deg, delta_deg, v0_m_s, a_m_s2 }
+    }
+
+    /// The eight values in [`Self::COLUMNS`]' order and units.
+    pub fn values(&self) -> [f64; 8] {
+        [self.l_c_mm, self.l_a_mm, self.l_b_mm, self.r_mm, self.omega_deg, self.delta_deg, self.v0_m_s, self.a_m_s2]
+    }
+
+    /// The design in SI (angles stay in degrees, as in [`Design`]), unchecked.
+    pub fn design(&self) -> Design {
+        Design::from_cli_units(self.values())
+    }
+
+    /// The design, every value finite and sensible ([`Design::check_sensible`]); an error
+    /// names the column as the user wrote it, after `prefix` (`design.` in a config file).
+    pub fn checked_design(&self, prefix: &str) -> Result<Design, String> {
+        let d = self.design();
+        d.check_sensible(|i| format!("{prefix}{}", Self::COLUMNS[i]))?;
+        Ok(d)
+    }
+
+    /// The `--design` argument that gives this design back: mm and m/s to 3 decimals,
+    /// angles and m/s² to 2 (what the optimiser's picks print for the user to copy).
+    pub fn cli_argument(&self) -> String {
+        let v = self.values();
+        format!("{:.3},{:.3},{:.3},{:.3},{:.2},{:.2},{:.3},{:.2}", v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7])
+    }
+
+    /// One readable line with the units, for reports.
+    pub fn describe(&self) -> String {
+        let v = self.values();
+        format!(
+            "l_c {:.3} l_a {:.3} l_b {:.3} r {:.3} mm, omega {:.2} delta {:.2} deg, v0 {:.3} m/s, a {:.2} m/s2",
+            v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]
+        )
+    }
+
+    /// A config file's `[design]` table with every value exact (`{}` is the shortest form
+    /// that reads back to the same f64), one key per line.
+    pub fn config_table(&self) -> String {
+        let mut t = String::from("[design]\n");
+        for (name, v) in Self::COLUMNS.iter().zip(self.values()) {
+            t.push_str(&format!("{name} = {v}\n"));
+        }
+        t
+    }
+
+    /// Serialize an optional design as its eight columns, empty where there is none (a
+    /// study run whose front holds no design). serde leaves a flattened `None` out of the
+    /// row, which would shift the columns after it; read back, `Option<DesignRow>` with
+    /// `#[serde(flatten)]` is `None` when the cells are empty.
+    pub fn serialize_optional<S: serde::Serializer>(row: &Option<DesignRow>, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct as _;
+        let mut st = s.serialize_struct("DesignRow", 8)?;
+        for (i, name) in Self::COLUMNS.iter().enumerate() {
+            st.serialize_field(name, &row.map(|r| r.values()[i]))?;
+        }
+        st.end()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_design_row_holds_the_cli_units_and_gives_the_same_design_back() {
+        let d = Design::lunar_solution_c();
+        let row = DesignRow::of(&d);
+        assert_eq!(row.values(), d.to_cli_units());
+        assert_eq!(row.design(), d);
+        assert_eq!(DesignRow::from_values(row.values()), row);
+        assert_eq!(row.l_c_mm, 47.346);
+        assert_eq!(row.omega_deg, 1.648f64.to_degrees());
+    }
+
+    #[test]
+    fn a_design_row_names_its_columns_in_order_wherever_it_is_serialized() {
+        let v = serde_json::to_value(DesignRow::of(&Design::validation_rig())).unwrap();
+        let keys: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
+        let mut sorted = DesignRow::COLUMNS.to_vec();
+        sorted.sort_unstable();
+        assert_eq!(keys, sorted);
+        // every column has a unit in its name, and the CLI's VARIABLES in the same order
+        for (c, (name, _)) in DesignRow::COLUMNS.iter().zip(VARIABLES) {
+            assert!(c.starts_with(name), "{c} vs {name}");
+        }
+    }
+
+    #[test]
+    fn the_cli_argument_and_the_config_table_read_back() {
+        let row = DesignRow::of(&Design::validation_rig());
+        assert_eq!(row.cli_argument(), "20.000,15.000,5.000,5.000,60.00,0.00,1.000,60.00");
+        assert_eq!(Design::parse_cli(&row.cli_argument()).unwrap(), Design::validation_rig());
+        let c = DesignRow::of(&Design::lunar_solution_c());
+        let text = c.config_table();
+        assert!(text.starts_with("[design]\nl_c_mm = 47.346\n"), "{text}");
+        #[derive(Deserialize)]
+        struct File {
+            design: DesignRow,
+        }
+        let back: File = toml::from_str(&text).unwrap();
+        assert_eq!(back.design, c);
+    }
+
+    #[test]
+    fn a_checked_design_names_the_users_field() {
+        let mut row = DesignRow::of(&Design::validation_rig());
+        assert!(row.checked_design("design.").is_ok());
+        row.a_m_s2 = 1e300;
+        let e = row.checked_design("design.").unwrap_err();
+        assert!(e.starts_with("design.a_m_s2 = 1e300 m/s^2 is beyond any conveyor"), "{e}");
+        row.a_m_s2 = f64::NAN;
+        assert!(row.checked_design("[design] ").unwrap_err().starts_with("[design] a_m_s2 must be a finite number"));
+    }
+
+    #[test]
+    fn unknown_keys_are_refused_in_a_design_table() {
+        let e = toml::from_str::<DesignRow>("l_c = 1.0").unwrap_err().to_string();
+        assert!(e.contains("unknown field `l_c`"), "{e}");
     }
 }

@@ -17,6 +17,7 @@ use serde::{Deserialize, Serialize};
 use super::sawtooth::{design_of, shown_slope, slope_scenarios, violation};
 use crate::engine::BatchEvaluator;
 use crate::io::atomic::write_atomic;
+use crate::model::design::DesignRow;
 use crate::model::requirements::{Assessment, Limit};
 use crate::model::{Design, Scenario};
 use crate::plot::{self, Drawn as _, Figure, Mark};
@@ -65,14 +66,8 @@ pub struct Compliance {
 /// file equal those made in the run.
 #[derive(Debug, Default, Serialize, Deserialize)]
 struct ParetoRow {
-    l_c_mm: f64,
-    l_a_mm: f64,
-    l_b_mm: f64,
-    r_mm: f64,
-    omega_deg: f64,
-    delta_deg: f64,
-    v0_m_s: f64,
-    a_m_s2: f64,
+    #[serde(flatten)]
+    design: DesignRow,
     f_stroke_hz: f64,
     w_spec_j_kg: f64,
     m_dot_kg_s: f64,
@@ -109,17 +104,9 @@ fn nan() -> f64 {
 
 impl From<&FrontPoint> for ParetoRow {
     fn from(p: &FrontPoint) -> Self {
-        let x = p.design.to_cli_units();
         let c = p.compliance.as_ref();
         ParetoRow {
-            l_c_mm: x[0],
-            l_a_mm: x[1],
-            l_b_mm: x[2],
-            r_mm: x[3],
-            omega_deg: x[4],
-            delta_deg: x[5],
-            v0_m_s: x[6],
-            a_m_s2: x[7],
+            design: DesignRow::of(&p.design),
             f_stroke_hz: p.f_stroke_hz,
             w_spec_j_kg: p.w_spec_j_kg,
             m_dot_kg_s: p.m_dot_kg_s,
@@ -158,16 +145,7 @@ impl From<ParetoRow> for FrontPoint {
             _ => None,
         };
         FrontPoint {
-            design: Design::from_cli_units([
-                r.l_c_mm,
-                r.l_a_mm,
-                r.l_b_mm,
-                r.r_mm,
-                r.omega_deg,
-                r.delta_deg,
-                r.v0_m_s,
-                r.a_m_s2,
-            ]),
+            design: r.design.design(),
             f_stroke_hz: r.f_stroke_hz,
             w_spec_j_kg: r.w_spec_j_kg,
             w_spec_se: r.w_spec_se_j_kg,
@@ -591,12 +569,7 @@ pub fn print_picks(
         writeln!(out, "note: {note}")?;
     }
     for (name, p) in picks(front) {
-        let x = p.design.to_cli_units();
-        writeln!(
-            out,
-            "{name}: --design {:.3},{:.3},{:.3},{:.3},{:.2},{:.2},{:.3},{:.2}",
-            x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]
-        )?;
+        writeln!(out, "{name}: --design {}", DesignRow::of(&p.design).cli_argument())?;
     }
     Ok(())
 }

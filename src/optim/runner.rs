@@ -26,6 +26,7 @@ use crate::engine::BatchEvaluator;
 use crate::io::atomic::write_atomic;
 use crate::io::run_dir::{Access, RunDir};
 use crate::io::table::{csv_header, csv_text};
+use crate::model::design::DesignRow;
 
 /// Hypervolume reference point (f_stroke Hz, W_spec J/kg): the 2 Hz limit and a specific
 /// energy well above every published front point.
@@ -59,14 +60,9 @@ pub struct RunOutcome {
 #[derive(Debug, Default, Serialize, Deserialize, PartialEq)]
 pub struct EvaluationRow {
     pub generation: u64,
-    pub l_c_mm: f64,
-    pub l_a_mm: f64,
-    pub l_b_mm: f64,
-    pub r_mm: f64,
-    pub omega_deg: f64,
-    pub delta_deg: f64,
-    pub v0_m_s: f64,
-    pub a_m_s2: f64,
+    /// The design in user units (its eight columns).
+    #[serde(flatten)]
+    pub design: DesignRow,
     /// The objectives the GA ranks by: f_stroke (Hz) and W_spec (J/kg), with the 2 Hz penalty
     /// of Eq. 5.17-5.18, D.6's 1000003-1000007 for a rejected design, 1e12 where not simulated.
     pub objective_f_stroke_hz: f64,
@@ -96,19 +92,11 @@ pub struct EvaluationRow {
 
 impl EvaluationRow {
     fn of(l: &Logged) -> Self {
-        let x = l.x;
         let e = l.evaluation.as_ref();
         let a = l.assessment.as_ref();
         EvaluationRow {
             generation: l.generation,
-            l_c_mm: x[0],
-            l_a_mm: x[1],
-            l_b_mm: x[2],
-            r_mm: x[3],
-            omega_deg: x[4],
-            delta_deg: x[5],
-            v0_m_s: x[6],
-            a_m_s2: x[7],
+            design: DesignRow::from_values(l.x),
             objective_f_stroke_hz: l.objectives[0],
             objective_w_spec_j_kg: l.objectives[1],
             violation: l.violation,

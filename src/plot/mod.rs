@@ -21,6 +21,7 @@ use std::path::Path;
 use std::sync::Once;
 
 use anyhow::{anyhow, bail, Context as _};
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -324,6 +325,46 @@ pub fn category_label(labels: &[String]) -> impl Fn(&f64) -> String + '_ {
             String::new()
         }
     }
+}
+
+/// A chart of categories along x (teeth, bins) and values up y, as the diagnosis and the
+/// DEM comparison draw them: the categories' labels under their bars, no vertical grid
+/// lines, `tick` numbers up the side, small text, the light grid; `caption` above the plot
+/// area, if any.
+pub fn category_chart<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    caption: Option<&str>,
+    labels: &[String],
+    y: Range<f64>,
+    x_desc: &str,
+    y_desc: &str,
+) -> anyhow::Result<ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>> {
+    let mut builder = ChartBuilder::on(area);
+    if let Some(c) = caption {
+        builder.caption(c, text_style(LABEL_SIZE));
+    }
+    let mut chart = builder
+        .margin(12)
+        .x_label_area_size(48)
+        .y_label_area_size(75)
+        .build_cartesian_2d(category_range(labels.len()), y)
+        .drawn()?;
+    let x_label = category_label(labels);
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(labels.len() + 1)
+        .x_label_formatter(&x_label)
+        .y_label_formatter(&tick)
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .label_style(text_style(SMALL_SIZE))
+        .axis_desc_style(text_style(SMALL_SIZE))
+        .bold_line_style(GRID)
+        .max_light_lines(1)
+        .draw()
+        .drawn()?;
+    Ok(chart)
 }
 
 /// The axis range of `n` categories, each one unit wide around its index.

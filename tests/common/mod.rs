@@ -1,6 +1,52 @@
-//! Helpers shared by the integration tests that read the figures the CLI writes.
+//! Helpers shared by the integration tests: the binary as a command, scratch folders, the
+//! figures the CLI writes, the test tiers, and ([`campaigns`]) synthetic measurement
+//! campaigns diagnosed by the CLI.
 // each test binary includes this module and uses a part of it
 #![allow(dead_code)]
+
+pub mod campaigns;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The repository root: where the tests' relative paths (`data/...`, `examples/...`) point.
+pub fn repo() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The `sawtooth` binary of this build as a command, run from the repository root.
+pub fn sawtooth() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_sawtooth"));
+    c.current_dir(repo());
+    c
+}
+
+/// `sawtooth args` from the repository root, to its end: exit code, stdout, stderr. Outside
+/// a Slurm array task even when the tests run inside one (`campaign run` reads the task).
+pub fn run(args: &[&str]) -> (i32, String, String) {
+    let o = sawtooth().args(args).env_remove("SLURM_ARRAY_TASK_ID").output().expect("run the sawtooth binary");
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into(),
+        String::from_utf8_lossy(&o.stderr).into(),
+    )
+}
+
+/// A path under the temporary directory for a folder the test's command makes itself,
+/// named after the test binary, `tag` and this process (test binaries run side by side);
+/// whatever an earlier run left there is removed.
+pub fn fresh_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("sawtooth-{}-{tag}-{}", env!("CARGO_CRATE_NAME"), std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// [`fresh_dir`], made: an empty scratch folder for the test's own files.
+pub fn scratch(tag: &str) -> PathBuf {
+    let d = fresh_dir(tag);
+    std::fs::create_dir_all(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display()));
+    d
+}
 
 /// The `<text>` contents of an SVG document (trimmed).
 pub fn svg_texts(svg: &str) -> Vec<String> {

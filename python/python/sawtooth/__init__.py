@@ -11,7 +11,6 @@ rule it breaks). The same scenario and seed give the same numbers as ``sawtooth 
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import tempfile
@@ -28,7 +27,8 @@ from ._sawtooth import (  # noqa: F401
     VARIABLES,
     Scenario,
     __version__,
-    _cli,
+    _diagnose,
+    _fit,
     evaluate,
     evaluate_problem,
     load_measured,
@@ -56,40 +56,33 @@ __all__ = [
 PathLike = Union[str, "os.PathLike[str]"]
 
 
-def _flag(name: str) -> str:
-    return "--" + name.replace("_", "-")
-
-
-def _flags(options: Dict[str, Any]) -> list:
-    out = []
-    for key, value in options.items():
-        if value is None or value is False:
-            continue
-        if value is True:
-            out.append(_flag(key))
-        elif isinstance(value, (list, tuple)):
-            out += [_flag(key), ",".join(str(v) for v in value)]
-        elif isinstance(value, dict):
-            out += [_flag(key), ",".join(f"{k}={v}" for k, v in value.items())]
-        else:
-            out += [_flag(key), str(value)]
-    return out
+def _list(value: Any) -> Any:
+    """A list as the library's comma list; a dict as ``name=value`` pairs; else as given."""
+    if isinstance(value, dict):
+        return ",".join(f"{k}={v}" for k, v in value.items())
+    if isinstance(value, (list, tuple)):
+        return ",".join(str(v) for v in value)
+    return value
 
 
 def fit(data: PathLike, setup: PathLike, **options: Any) -> Dict[str, Any]:
     """Calibrate k_elastic, mu_fric (and k_drag, 1/s) against measured tooth masses.
 
-    Runs ``sawtooth fit --data DATA --setup SETUP --json`` in-process (the GIL released) and
-    returns its JSON object as a dict: ``params``, ``objective``, ``sse_percent2`` (%^2),
-    ``heldout``, ``uncertainty``, ``distribution``, ``metrics``. Keyword options are the
-    command's flags with underscores: ``params=["k_elastic", "mu_fric"]``, ``objective="sse"``,
-    ``pop``, ``generations``, ``polish``, ``particles`` (default: from the data),
-    ``max_particles``, ``normalise="loaded"|"recovered"``, ``seed``, ``engine``, ``holdout``,
-    ``bootstrap``,
+    The library's fit, as ``sawtooth fit --data DATA --setup SETUP --json`` runs it, in-process
+    (the GIL released); returns its JSON object as a dict: ``params``, ``objective``,
+    ``sse_percent2`` (%^2), ``heldout``, ``uncertainty``, ``distribution``, ``metrics``.
+    Keyword options are the command's flags with underscores: ``params=["k_elastic", "mu_fric"]``,
+    ``objective="sse"``, ``pop``, ``generations``, ``polish``, ``particles`` (default: from the
+    data), ``max_particles``, ``normalise="loaded"|"recovered"``, ``seed``, ``engine``,
+    ``holdout``, ``bootstrap``,
     ``at={"k_elastic": 0.854, "mu_fric": 0.133}`` (score without fitting), ``out=DIR``.
     """
-    args = ["fit", "--data", os.fspath(data), "--setup", os.fspath(setup), "--json"] + _flags(options)
-    return json.loads(_cli(args))
+    for key in ("params", "at"):
+        if key in options:
+            options[key] = _list(options[key])
+    if options.get("out") is not None:
+        options["out"] = os.fspath(options["out"])
+    return _fit(os.fspath(data), os.fspath(setup), **options)
 
 
 def diagnose(
@@ -109,18 +102,14 @@ def diagnose(
     """
     datas = [data] if isinstance(data, (str, os.PathLike)) else list(data)
     setups = [setup] if isinstance(setup, (str, os.PathLike)) else list(setup)
-    args = ["diagnose"]
-    for d in datas:
-        args += ["--data", os.fspath(d)]
-    for s in setups:
-        args += ["--setup", os.fspath(s)]
+    if "effects" in options:
+        options["effects"] = _list(options["effects"])
     tmp = None
     if out is None:
         tmp = tempfile.mkdtemp(prefix="sawtooth-diagnose-")
         out = tmp
     try:
-        text = _cli(args + ["--out", os.fspath(out), "--json"] + _flags(options))
+        return _diagnose([os.fspath(d) for d in datas], [os.fspath(s) for s in setups], os.fspath(out), **options)
     finally:
         if tmp is not None:
             shutil.rmtree(tmp, ignore_errors=True)
-    return json.loads(text)

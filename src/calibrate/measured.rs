@@ -1,11 +1,13 @@
-//! A measured condition from a `--data` CSV and its `--setup` TOML: what `fit` and
-//! `diagnose` both read, checked before anything is simulated.
+//! A measured condition from a data CSV (`--data`) and its setup TOML (`--setup`): what
+//! `fit` and `diagnose` both read, checked before anything is simulated. Errors name the
+//! two files' fields as the user spelled them ([`Spelling`]).
 
 use std::path::Path;
 
 use anyhow::{bail, Context as _};
 
-use crate::calibrate::{objective, Condition, KnownMotion, Normalise};
+use super::fields::Spelling;
+use super::{objective, Condition, KnownMotion, Normalise};
 use crate::io::config::ConfigFile;
 use crate::io::measured;
 
@@ -23,20 +25,22 @@ pub fn load(
     name: String,
     normalise: Option<Normalise>,
     seed: Option<u64>,
+    spelling: Spelling,
 ) -> anyhow::Result<Condition> {
-    let runs = measured::load(data).with_context(|| format!("--data {}", data.display()))?;
-    let config = ConfigFile::load(setup).with_context(|| format!("--setup {}", setup.display()))?;
+    let (data_field, setup_field) = (spelling.name("data"), spelling.name("setup"));
+    let runs = measured::load(data).with_context(|| format!("{data_field} {}", data.display()))?;
+    let config = ConfigFile::load(setup).with_context(|| format!("{setup_field} {}", setup.display()))?;
     let Some(design) = config.design() else {
-        bail!("--setup {}: no [design] table (the rig's sawtooth design is required)", setup.display());
+        bail!("{setup_field} {}: no [design] table (the rig's sawtooth design is required)", setup.display());
     };
-    let mut scenario = config.scenario().with_context(|| format!("--setup {}", setup.display()))?;
+    let mut scenario = config.scenario().with_context(|| format!("{setup_field} {}", setup.display()))?;
     scenario.sim.seed = seed.unwrap_or(scenario.sim.seed);
     if let Err(e) = scenario.validate() {
-        bail!("--setup {}: invalid setting: {e}", setup.display());
+        bail!("{setup_field} {}: invalid setting: {e}", setup.display());
     }
     if runs.teeth > scenario.sim.teeth as usize {
         bail!(
-            "--data {} has {} teeth but the setup simulates only {} (sim.teeth): raise sim.teeth in {}",
+            "{data_field} {} has {} teeth but the setup simulates only {} (sim.teeth): raise sim.teeth in {}",
             data.display(),
             runs.teeth,
             scenario.sim.teeth,
@@ -44,10 +48,10 @@ pub fn load(
         );
     }
     if runs.runs.iter().any(|r| r.recovered_g() <= 0.0) {
-        bail!("--data {}: every run needs a positive recovered mass", data.display());
+        bail!("{data_field} {}: every run needs a positive recovered mass", data.display());
     }
     if let Err(invalid) = crate::model::prepare(&scenario, &design) {
-        bail!("--setup {}: the design cannot be simulated ({}): {invalid}", setup.display(), invalid.rule());
+        bail!("{setup_field} {}: the design cannot be simulated ({}): {invalid}", setup.display(), invalid.rule());
     }
     let measurement = config.measurement.as_ref();
     let resolution_g = measurement
@@ -55,7 +59,7 @@ pub fn load(
         .unwrap_or_else(|| objective::infer_resolution(runs.runs.iter().flat_map(|r| r.teeth_g.iter().copied())));
     let normalise = match normalise {
         Some(Normalise::Loaded) if !Condition::has_input_mass(&runs) => {
-            bail!("--normalise loaded: --data {} lacks input_mass in some run", data.display())
+            bail!("{} loaded: {data_field} {} lacks input_mass in some run", spelling.name("normalise"), data.display())
         }
         Some(n) => n,
         None if Condition::has_input_mass(&runs) => Normalise::Loaded,

@@ -1,0 +1,151 @@
+//! One `diagnose` as the user asks for it: measured conditions (data and setup in pairs),
+//! the candidate effects and typed settings, checked, run and written as a whole. The CLI
+//! (`sawtooth diagnose`) and the Python package (`sawtooth.diagnose`) both build a
+//! [`DiagnoseRequest`] and call [`run`], so the checks, the numbers, report.md and
+//! diagnosis.json are the same from either.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context as _};
+use serde_json::Value;
+
+use super::diagnose::{
+    applicable_effects, diagnose, to_json, Condition, Diagnosis, EffectKind, Settings, NO_EFFECT_APPLIES,
+};
+use super::render;
+use crate::calibrate::measured::{self, stem};
+use crate::calibrate::{EffortSettings, Normalise, Spelling};
+use crate::engine::{make_engine, EngineKind};
+use crate::io::run_dir::{Access, RunDir};
+
+/// The most bootstrap replicates and fresh particle streams a diagnosis takes (declared in
+/// crate::schema, with the CLI's parsers).
+pub const BOOTSTRAP_MAX: usize = crate::schema::DIAGNOSE_BOOTSTRAP.max as usize;
+pub const STREAMS_MAX: usize = crate::schema::RESCORE_STREAMS.max as usize;
+
+/// What a diagnosis needs; [`DiagnoseRequest::new`] gives the CLI's defaults.
+#[derive(Clone, Debug)]
+pub struct DiagnoseRequest {
+    /// Measured runs (CSV), one per condition; the i-th goes with the i-th setup.
+    pub data: Vec<PathBuf>,
+    /// The rig's setup of each condition (config TOML with [design], optional [measurement]).
+    pub setup: Vec<PathBuf>,
+    /// The candidate effects.
+    pub effects: Vec<EffectKind>,
+    /// None: the first setup's sim.seed.
+    pub seed: Option<u64>,
+    pub engine: EngineKind,
+    pub effort: EffortSettings,
+    /// None: fractions of the loaded mass where every run records it, else of the recovered.
+    pub normalise: Option<Normalise>,
+    /// Fresh particle streams every fitted model is re-scored with.
+    pub rescore_streams: usize,
+    /// Bootstrap replicates for the intervals.
+    pub bootstrap: usize,
+    /// report.md, diagnosis.json and the figures go here.
+    pub out: PathBuf,
+    /// How the user spelled the fields, for the errors.
+    pub spelling: Spelling,
+}
+
+impl DiagnoseRequest {
+    pub const DEFAULT_RESCORE_STREAMS: usize = 4;
+    pub const DEFAULT_BOOTSTRAP: usize = 400;
+
+    pub fn new(data: Vec<PathBuf>, setup: Vec<PathBuf>, out: PathBuf, spelling: Spelling) -> Self {
+        DiagnoseRequest {
+            data,
+            setup,
+            effects: EffectKind::ALL.to_vec(),
+            seed: None,
+            engine: EngineKind::Cpu,
+            effort: EffortSettings::default(),
+            normalise: None,
+            rescore_streams: Self::DEFAULT_RESCORE_STREAMS,
+            bootstrap: Self::DEFAULT_BOOTSTRAP,
+            out,
+            spelling,
+        }
+    }
+}
+
+/// Check, load every condition, diagnose, and write `out`. Cheap checks come first:
+/// nothing is simulated before every input is known to be good. `log` receives the
+/// progress lines. Returns the diagnosis and diagnosis.json's object.
+pub fn run(r: &DiagnoseRequest, log: &mut dyn FnMut(String)) -> anyhow::Result<(Diagnosis, Value)> {
+    let name = |f: &str| r.spelling.name(f);
+    if r.data.is_empty() {
+        bail!(
+            "{}: a diagnosis needs at least one measured condition (a {} and its {})",
+            name("data"),
+            name("data"),
+            name("setup")
+        );
+    }
+    if r.data.len() != r.setup.len() {
+        bail!(
+            "{} and {} must come in pairs (matched by order): got {} {} and {} {}",
+            name("data"),
+            name("setup"),
+            r.data.len(),
+            name("data"),
+            r.setup.len(),
+            name("setup")
+        );
+    }
+    if r.engine == EngineKind::Listing {
+        let e = name("engine");
+        bail!("{e} listing: the effects are in the cpu and gpu engines only; use {e} cpu or auto");
+    }
+    r.effort.validate(r.spelling).map_err(anyhow::Error::msg)?;
+    crate::schema::RESCORE_STREAMS
+        .check_usize(&name("rescore_streams"), r.rescore_streams)
+        .map_err(anyhow::Error::msg)?;
+    crate::schema::DIAGNOSE_BOOTSTRAP.check_usize(&name("bootstrap"), r.bootstrap).map_err(anyhow::Error::msg)?;
+    let mut conditions: Vec<Condition> = Vec::with_capacity(r.data.len());
+    for (data, setup) in r.data.iter().zip(&r.setup) {
+        let mut short = stem(data);
+        if conditions.iter().any(|c| c.name == short) {
+            short = format!("{short}#{}", conditions.len() + 1);
+        }
+        // every condition runs on the first setup's seed unless a seed is given
+        let seed = r.seed.or(conditions.first().map(|c| c.base.sim.seed));
+        let mut c = measured::load(data, setup, short, r.normalise, seed, r.spelling)?;
+        if c.base.effects.any() {
+            log(format!(
+                "diagnose: {}: the setup's [effects] ({}) are switched off; the diagnosis fits them itself",
+                setup.display(),
+                c.base.effects.active().join(", ")
+            ));
+            c.base.effects = Default::default();
+        }
+        if c.runs.runs.len() < 2 {
+            bail!(
+                "{} {}: has {} run(s); the diagnosis needs at least 2 (their spread is the measurement's uncertainty)",
+                name("data"),
+                data.display(),
+                c.runs.runs.len()
+            );
+        }
+        conditions.push(c);
+    }
+    if applicable_effects(&r.effects, &conditions).0.is_empty() {
+        bail!("{}: {NO_EFFECT_APPLIES}", name("effects"));
+    }
+    let seed = conditions[0].base.sim.seed;
+    // the output folder is owned before the work, so a busy or foreign folder costs nothing
+    let _owned = RunDir::acquire(&r.out, "diagnose", Access::Exclusive).with_context(|| name("out"))?;
+    let engine = make_engine(r.engine)?;
+    let settings = Settings {
+        effects: r.effects.clone(),
+        effort: r.effort.with_seed(seed),
+        rescore_streams: r.rescore_streams,
+        bootstrap: r.bootstrap,
+    };
+    let started = std::time::Instant::now();
+    let d = diagnose(engine.as_ref(), conditions, settings, log)?;
+    log(format!("diagnose: done in {:.1} s", started.elapsed().as_secs_f64()));
+    let json = to_json(&d);
+    render::write_dir(&r.out, &d, &json).with_context(|| name("out"))?;
+    Ok((d, json))
+}

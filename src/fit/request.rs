@@ -1,0 +1,130 @@
+//! One `fit` as the user asks for it: the measured runs, the rig's setup and typed settings,
+//! checked, run and written as a whole. The CLI (`sawtooth fit`) and the Python package
+//! (`sawtooth.fit`) both build a [`FitRequest`] and call [`run`], so the checks, the numbers,
+//! the files and the JSON are the same from either.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context as _};
+use serde_json::Value;
+
+use super::report::{self, Meta};
+use super::{FitReport, FitSettings};
+use crate::calibrate::measured::{self, stem};
+use crate::calibrate::{shared_params, EffortSettings, Normalise, ObjectiveKind, Param, Spelling};
+use crate::engine::{make_engine, EngineKind};
+use crate::io::run_dir::{Access, RunDir};
+
+/// The most bootstrap replicates a fit takes (declared in crate::schema).
+pub const BOOTSTRAP_MAX: usize = crate::schema::FIT_BOOTSTRAP.max as usize;
+
+/// What a fit needs; [`FitRequest::new`] gives the CLI's defaults.
+#[derive(Clone, Debug)]
+pub struct FitRequest {
+    /// Measured runs: CSV `run,tooth_1,..,tooth_n[,input_mass]` (grams).
+    pub data: PathBuf,
+    /// The rig's setup: a config TOML with [design] (and optionally [measurement]).
+    pub setup: PathBuf,
+    /// The parameters to fit; None: k_elastic, mu_fric, and k_drag where the setup has drag.
+    pub params: Option<Vec<Param>>,
+    /// Score these values instead of fitting (the parameters not named keep the setup's).
+    pub at: Option<(Vec<Param>, Vec<f64>)>,
+    pub objective: ObjectiveKind,
+    pub effort: EffortSettings,
+    /// None: fractions of the loaded mass where every run records it, else of the recovered.
+    pub normalise: Option<Normalise>,
+    /// None: the setup's sim.seed.
+    pub seed: Option<u64>,
+    pub engine: EngineKind,
+    /// Runs held out at the end of the file (0 = off).
+    pub holdout: usize,
+    /// Bootstrap replicates over the runs (0 = off).
+    pub bootstrap: usize,
+    /// Write fit.json, fit.csv, fit.svg and fit.png into this directory.
+    pub out: Option<PathBuf>,
+    /// How the user spelled the fields, for the errors.
+    pub spelling: Spelling,
+}
+
+/// A finished fit: the report, where its numbers came from, and `fit.json`'s object.
+pub struct FitOutcome {
+    pub report: FitReport,
+    pub meta: Meta,
+    pub json: Value,
+}
+
+impl FitRequest {
+    pub const DEFAULT_HOLDOUT: usize = 3;
+    pub const DEFAULT_BOOTSTRAP: usize = 20;
+
+    pub fn new(data: PathBuf, setup: PathBuf, spelling: Spelling) -> Self {
+        FitRequest {
+            data,
+            setup,
+            params: None,
+            at: None,
+            objective: ObjectiveKind::Sse,
+            effort: EffortSettings::default(),
+            normalise: None,
+            seed: None,
+            engine: EngineKind::Cpu,
+            holdout: Self::DEFAULT_HOLDOUT,
+            bootstrap: Self::DEFAULT_BOOTSTRAP,
+            out: None,
+            spelling,
+        }
+    }
+}
+
+/// Check, load, fit (or score `at`), and write `out` if asked. Cheap checks come first:
+/// nothing is simulated before every input is known to be good. `log` receives the
+/// progress lines.
+pub fn run(r: &FitRequest, log: &mut dyn FnMut(String)) -> anyhow::Result<FitOutcome> {
+    let name = |f: &str| r.spelling.name(f);
+    if r.at.is_some() && r.params.is_some() {
+        bail!("{} and {} exclude each other: `at` scores given values, `params` fits", name("at"), name("params"));
+    }
+    r.effort.validate(r.spelling).map_err(anyhow::Error::msg)?;
+    crate::schema::FIT_BOOTSTRAP.check_usize(&name("bootstrap"), r.bootstrap).map_err(anyhow::Error::msg)?;
+    let condition = measured::load(&r.data, &r.setup, stem(&r.data), r.normalise, r.seed, r.spelling)?;
+    let n = condition.runs.runs.len();
+    if r.holdout >= n {
+        bail!("{} must be < the number of runs in {} ({n}), got {}", name("holdout"), r.data.display(), r.holdout);
+    }
+    // the output folder is owned before the work, so a busy or foreign folder costs nothing
+    let _owned = match &r.out {
+        Some(dir) => Some(RunDir::acquire(dir, "fit", Access::Exclusive).with_context(|| name("out"))?),
+        None => None,
+    };
+    let seed = condition.base.sim.seed;
+    let effort = r.effort.with_seed(seed);
+    let engine = make_engine(r.engine)?;
+    let started = std::time::Instant::now();
+    let report = match &r.at {
+        Some((params, x)) => super::evaluate_at(engine.as_ref(), &condition, params, x, r.objective, effort)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", name("at")))?,
+        None => {
+            let params = r.params.clone().unwrap_or_else(|| shared_params(std::slice::from_ref(&condition)));
+            let settings = FitSettings { objective: r.objective, effort, bootstrap: r.bootstrap, holdout: r.holdout };
+            let report = super::fit(engine.as_ref(), &condition, &params, settings, log)
+                .with_context(|| format!("{} {}", name("data"), r.data.display()))?;
+            log(format!("fit: done in {:.1} s", started.elapsed().as_secs_f64()));
+            report
+        }
+    };
+    let meta = Meta {
+        data: r.data.display().to_string(),
+        setup: r.setup.display().to_string(),
+        engine: engine.backend().to_string(),
+        particles: report.particles,
+        seed,
+        teeth: condition.teeth(),
+        measured_teeth: condition.runs.teeth,
+        run_ids: condition.runs.runs.iter().map(|r| r.id.clone()).collect(),
+    };
+    let json = report::to_json(&report, &meta);
+    if let Some(dir) = &r.out {
+        report::write_dir(dir, &report, &meta, &json)?;
+    }
+    Ok(FitOutcome { report, meta, json })
+}
