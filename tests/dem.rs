@@ -225,3 +225,68 @@ fn a_real_stroke_lands_grains_in_later_teeth_as_the_model_does() {
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("resuming: 1 of 1 runs already done"), "{err}");
 }
+
+/// The polydisperse size law in the real engine, CI-sized: the case holds the law's five size
+/// classes, each with its own Stokes drag, LIGGGHTS runs it, every grain keeps its class's
+/// diameter, the campaign's loaded mass is the grains' mass, grains leave tooth 1, and the
+/// setup describes the rig without switching the size law on (what `diagnose` must find).
+#[test]
+fn a_polydisperse_fill_runs_as_size_classes_with_their_own_drag() {
+    if !liggghts_present() {
+        return;
+    }
+    let (_d, dir) = tmp("poly");
+    let out = dir.to_str().unwrap();
+    let args = [
+        "dem",
+        "run",
+        "--config",
+        RIG,
+        "--particles",
+        "80",
+        "--effect",
+        "polydisperse=0.3",
+        "--runs",
+        "1",
+        "--jobs",
+        "1",
+        "--out",
+        out,
+    ];
+    let (code, _, err) = sawtooth(&args);
+    assert_eq!(code, 0, "{err}");
+
+    let script = read(&dir.join("run-001/in.sawtooth"));
+    assert_eq!(script.matches(" viscous ").count(), 5, "{script}");
+    assert_eq!(script.matches("group size").count(), 5, "{script}");
+    let case: serde_json::Value = serde_json::from_str(&read(&dir.join("run-001/case.json"))).unwrap();
+    let classes = case["placement"]["classes"].as_array().unwrap();
+    let class_d: Vec<f64> = classes.iter().map(|c| c["diameter_m"].as_f64().unwrap()).collect();
+    let dump = read(&dir.join("run-001/final.dump"));
+    let atoms: Vec<Vec<f64>> = dump
+        .lines()
+        .skip_while(|l| !l.starts_with("ITEM: ATOMS"))
+        .skip(1)
+        .map(|l| l.split_whitespace().map(|f| f.parse().unwrap()).collect())
+        .collect();
+    assert!(!atoms.is_empty());
+    // columns: id type diameter mass ...; every grain's diameter is one of the classes'
+    for a in &atoms {
+        assert!(class_d.iter().any(|d| (a[2] / d - 1.0).abs() < 1e-6), "diameter {} not a class's: {class_d:?}", a[2]);
+    }
+    let sizes_seen = class_d.iter().filter(|d| atoms.iter().any(|a| (a[2] / **d - 1.0).abs() < 1e-6)).count();
+    assert_eq!(sizes_seen, 5);
+
+    let result: serde_json::Value = serde_json::from_str(&read(&dir.join("run-001/result.json"))).unwrap();
+    let loaded = result["input_mass_g"].as_f64().unwrap();
+    let placed_g = case["placement"]["mass_kg"].as_f64().unwrap() * 1e3;
+    // the dump prints masses to about 7 digits
+    assert!((loaded / placed_g - 1.0).abs() < 1e-5, "loaded {loaded} g, placed {placed_g} g");
+    let teeth_g: Vec<f64> = result["teeth_g"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let later: f64 = teeth_g[1..].iter().sum::<f64>() / loaded;
+    assert!(later > 0.3, "only {later} of the mass left tooth 1: {teeth_g:?}");
+
+    let setup = read(&dir.join("setup.toml"));
+    assert!(!setup.contains("[effects"), "{setup}");
+    assert!(setup.contains("polydisperse size law"), "{setup}");
+}

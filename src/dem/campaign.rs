@@ -12,7 +12,7 @@ use std::sync::Mutex;
 use anyhow::{bail, Context as _};
 use serde::{Deserialize, Serialize};
 
-use super::case::{Case, DUMP};
+use super::case::{Case, DUMP, STROKE_TIME};
 use super::gather::{measured_csv, parse_dump, reduce, setup_toml, RunResult};
 use super::run::{find_liggghts, run_case};
 use super::settings::DemSettings;
@@ -165,7 +165,12 @@ fn one_run(dir: &Path, plan: &Plan, r: u32, binary: &Path, say: &(dyn Fn(String)
     })?;
     let dump =
         std::fs::read_to_string(rd.join(DUMP)).with_context(|| format!("reading {}", rd.join(DUMP).display()))?;
-    let result = reduce(&case, &parse_dump(&dump)?, finished.wall_s);
+    // a case written before the stop time was recorded ran every movement of the mesh
+    let stroke_time = match std::fs::read_to_string(rd.join(STROKE_TIME)) {
+        Ok(t) => t.trim().parse::<f64>().with_context(|| format!("reading {}", rd.join(STROKE_TIME).display()))?,
+        Err(_) => f64::INFINITY,
+    };
+    let result = reduce(&case, &parse_dump(&dump)?, stroke_time, finished.wall_s);
     write_atomic(&rd.join(RESULT), serde_json::to_string_pretty(&result)?.as_bytes())?;
     say(format!(
         "run {} done in {:.1} s: d_avg {:.2} mm, {} of {} grains lost, {} still moving",

@@ -16,9 +16,10 @@ use std::path::Path;
 use serde::Serialize;
 
 use super::contact::{contact, Contact};
-use super::grains::{mass_matching_diameter, place, Placement};
+use super::grains::{mass_matching_diameter, place, place_sized, Placement};
 use super::motion::SledMotion;
 use super::settings::{check_representable, DemSettings};
+use super::sizes::{reference_diameter, size_classes};
 use super::stl::{extrude, profile_polyline, stl_text, subdivide, MAX_FACET_M};
 use crate::engine::{evaluate_detailed, make_engine, EngineKind};
 use crate::io::atomic::write_atomic;
@@ -30,6 +31,8 @@ pub const MESH: &str = "sled.stl";
 pub const GRAINS: &str = "grains.data";
 pub const MANIFEST: &str = "case.json";
 pub const DUMP: &str = "final.dump";
+/// The stroke time at which the run ended, s (the mesh's position then is the binning frame).
+pub const STROKE_TIME: &str = "stroke_time.txt";
 
 /// Simulated time per rest check, s.
 const CHUNK_S: f64 = 0.02;
@@ -53,7 +56,8 @@ pub struct Case {
     pub placement: Placement,
     pub contact: Contact,
     pub motion: SledMotion,
-    /// Stokes drag γ = m k_drag per grain, kg/s; None in vacuum.
+    /// Stokes drag γ = m k_drag of a grain of the placement's diameter (polydisperse: of
+    /// the mass median; each class has its own, `placement.classes`), kg/s; None in vacuum.
     pub drag_gamma_kg_s: Option<f64>,
     /// Simulation box [lo, hi] in x, y, z, m.
     pub bounds: [[f64; 2]; 3],
@@ -87,7 +91,7 @@ impl Case {
             None => model_reach(scenario, design)?,
         };
         let m = &scenario.material;
-        let d = settings.grain_diameter_m.unwrap_or_else(|| {
+        let mono_d = || {
             mass_matching_diameter(
                 prep.fill.area,
                 settings.particles,
@@ -95,15 +99,39 @@ impl Case {
                 m.bulk_density,
                 m.particle.density,
             )
-        });
-        let placement =
-            place(&prep.fill, settings.particles, d, settings.depth_grains, m.particle.density, m.bulk_density, seed)?;
+        };
+        let k_drag = scenario.environment.k_drag;
+        let placement = match scenario.effects.polydisperse {
+            // the size law's classes (`sizes`): the stated diameter is the mass median
+            Some(law) => {
+                let d_ref = settings.grain_diameter_m.unwrap_or_else(|| reference_diameter(&law, mono_d()));
+                let depth = settings.depth_grains * d_ref;
+                let fill_mass = prep.fill.area * depth * m.bulk_density;
+                let classes = size_classes(&law, d_ref, fill_mass, m.particle.density, k_drag);
+                place_sized(&prep.fill, &classes, d_ref, depth, m.particle.density, m.bulk_density, seed)?
+            }
+            None => {
+                let d = settings.grain_diameter_m.unwrap_or_else(mono_d);
+                let mut p = place(
+                    &prep.fill,
+                    settings.particles,
+                    d,
+                    settings.depth_grains,
+                    m.particle.density,
+                    m.bulk_density,
+                    seed,
+                )?;
+                p.classes[0].drag_gamma_kg_s = k_drag.map(|k| p.grain_mass_kg * k);
+                p
+            }
+        };
         let motion = SledMotion::new(scenario, design, prep.launch_angle, known_return);
         // the fastest contact: a grain leaving at v0 and its randomised excess, falling a
-        // tooth's height onto the next
+        // tooth's height onto the next; the smallest grain has the shortest contact (t_c ∝ d)
         let design_speed = 1.5 * design.v0;
-        let contact = contact(scenario, d, design_speed, settings.rolling_friction, settings.max_overlap_fraction);
-        let drag_gamma_kg_s = scenario.environment.k_drag.map(|k| placement.grain_mass_kg * k);
+        let d_min = placement.classes.iter().map(|c| c.diameter_m).fold(f64::INFINITY, f64::min);
+        let contact = contact(scenario, d_min, design_speed, settings.rolling_friction, settings.max_overlap_fraction);
+        let drag_gamma_kg_s = k_drag.map(|k| placement.grain_mass_kg * k);
         let profile = Profile::new(design, prep.profile.local, scenario.environment.alpha_deg, teeth);
         let line = subdivide(&profile_polyline(&profile, teeth), MAX_FACET_M);
         let bounds = bounds(&line, &motion, design, scenario.environment.g, placement.depth_m);
@@ -179,14 +207,25 @@ impl Case {
 
     fn script(&self) -> String {
         let c = &self.contact;
-        let d = self.placement.diameter_m;
+        // the largest grain sets the neighbour skin and the bins
+        let d = self.placement.classes.iter().map(|c| c.diameter_m).fold(self.placement.diameter_m, f64::max);
         let dt = c.timestep_s;
         let pair = |v: f64| format!("{v} {v} {v} {v}");
         let [vx, vy] = self.motion.velocity_expressions("t");
         let chunk = self.steps(CHUNK_S);
         let settle_chunks = (MAX_SETTLE_S / CHUNK_S).ceil() as u64;
         let rest_chunks = (self.settings.max_time_s / CHUNK_S).ceil() as u64;
-        let stroke = self.steps(self.motion.t_still());
+        // the run after the launch checks for rest; grains may count as resting before a
+        // stated return starts (the model's grains have landed by then; a rig's delayed return
+        // carries them in their teeth) or after it ends, never while the mesh moves
+        let stroke = self.steps(self.motion.t_launch());
+        let rested = match self.motion.return_window() {
+            Some((t0, t1)) => format!(
+                "${{vrms}} < {rest:e} && (${{t}} >= {t1:e} || ${{t}} < {t0:e})",
+                rest = self.settings.rest_speed_m_s
+            ),
+            None => format!("${{vrms}} < {:e}", self.settings.rest_speed_m_s),
+        };
         let skin = 0.5 * d;
         // bins no finer than the box can afford (LIGGGHTS bins the whole box)
         let area = (self.bounds[0][1] - self.bounds[0][0]) * (self.bounds[1][1] - self.bounds[1][0]);
@@ -223,12 +262,42 @@ impl Case {
             pair(c.rolling_friction),
             self.scenario.environment.g,
         );
-        if let Some(gamma) = self.drag_gamma_kg_s {
-            let _ = writeln!(
-                s,
-                "# Stokes drag, gamma = m k_drag (Eq. 4.20, k_drag {} 1/s)\nfix drag all viscous {gamma:e}",
-                self.scenario.environment.k_drag.unwrap_or(0.0)
-            );
+        let k_drag = self.scenario.environment.k_drag.unwrap_or(0.0);
+        match self.placement.classes.as_slice() {
+            [one] => {
+                if let Some(gamma) = one.drag_gamma_kg_s {
+                    let _ = writeln!(
+                        s,
+                        "# Stokes drag, gamma = m k_drag (Eq. 4.20, k_drag {k_drag} 1/s)\nfix drag all viscous {gamma:e}"
+                    );
+                }
+            }
+            classes => {
+                // one group per size class (its grains' ids are one range) with its own gamma
+                let _ = writeln!(
+                    s,
+                    "# size classes of the polydisperse law (sizes.rs); Stokes drag per class, gamma = m k_drag (d_ref/d)^2 (Eq. 4.16, 4.20, k_drag {k_drag} 1/s at d_ref {:e} m)",
+                    self.placement.diameter_m
+                );
+                let mut first = 1;
+                for (k, c) in classes.iter().enumerate() {
+                    if c.grains == 0 {
+                        continue;
+                    }
+                    let last = first + c.grains as usize - 1;
+                    let _ = writeln!(
+                        s,
+                        "group size{k} id {first}:{last}  # {} grains of {:e} m, {:.1} % of the mass",
+                        c.grains,
+                        c.diameter_m,
+                        100.0 * c.mass_fraction
+                    );
+                    if let Some(gamma) = c.drag_gamma_kg_s {
+                        let _ = writeln!(s, "fix drag{k} size{k} viscous {gamma:e}");
+                    }
+                    first = last + 1;
+                }
+            }
         }
         let _ = writeln!(
             s,
@@ -242,10 +311,12 @@ impl Case {
              # settle\nvariable settle loop {settle_chunks}\nlabel settling\nrun {chunk}\n\
              if \"${{vrms}} < {rest:e}\" then \"jump SELF settled\"\nnext settle\njump SELF settling\nlabel settled\n\
              variable now equal step\nvariable s0 equal ${{now}}\nprint \"sawtooth: stroke starts at step ${{s0}}\"\n\
-             # the stroke (and the return)\nrun {stroke}\n\
-             # until the grains rest\nvariable rest loop {rest_chunks}\nlabel resting\nrun {chunk}\n\
-             if \"${{vrms}} < {rest:e}\" then \"jump SELF rested\"\nnext rest\njump SELF resting\nlabel rested\n\
+             # the stroke\nrun {stroke}\n\
+             # until the grains rest (and a return is not under way)\nvariable rest loop {rest_chunks}\nlabel resting\nrun {chunk}\n\
+             if \"{rested}\" then \"jump SELF rested\"\nnext rest\njump SELF resting\nlabel rested\n\
              print \"sawtooth: stroke time at the end ${{t}} s\"\n\
+             # where the mesh stopped: the gather bins the grains in its frame then\n\
+             print \"${{t}}\" file {STROKE_TIME} screen no\n\
              write_dump all custom {DUMP} id type diameter mass x y z vx vy vz",
             rest = self.settings.rest_speed_m_s,
         );
@@ -287,4 +358,104 @@ fn bounds(line: &[[f64; 2]], motion: &SledMotion, d: &Design, g: f64, depth: f64
     let margin = 2.0 * d.l_c;
     let apex = (1.5 * d.v0).powi(2) / (2.0 * g);
     [[x0 + dx0 - margin, x1 + dx1 + margin], [y0 + dy0 - margin, y1.max(d.l_b + apex) + dy1 + margin], [0.0, depth]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::effects::{Polydisperse, SizeForm};
+
+    fn rig() -> (Scenario, Design) {
+        let mut s = Scenario::earth();
+        s.sim.teeth = 20;
+        (s, Design::validation_rig())
+    }
+
+    fn settings(particles: u32) -> DemSettings {
+        DemSettings { particles, teeth: Some(8), ..Default::default() }
+    }
+
+    #[test]
+    fn one_size_keeps_one_drag_on_every_grain() {
+        let (s, d) = rig();
+        let case = Case::build(&s, &d, &settings(60), 0, None).unwrap();
+        assert_eq!(case.placement.classes.len(), 1);
+        let script = case.script();
+        let gamma = case.placement.grain_mass_kg * s.environment.k_drag.unwrap();
+        assert!(script.contains(&format!("fix drag all viscous {gamma:e}")), "{script}");
+        assert!(!script.contains("group size"));
+    }
+
+    #[test]
+    fn a_size_law_becomes_classes_each_with_its_own_stokes_drag() {
+        let (mut s, d) = rig();
+        s.effects.polydisperse = Some(Polydisperse { sigma_ln: 0.3, form: SizeForm::Lognormal });
+        let case = Case::build(&s, &d, &settings(150), 0, None).unwrap();
+        let p = &case.placement;
+        assert_eq!(p.classes.len(), crate::dem::sizes::SIZE_CLASSES);
+        let n = p.grains.len() as f64;
+        assert!((n / 150.0 - 1.0).abs() < 0.05, "{n} grains for 150");
+        // the same fill mass as the model's over the slab of the mass-median size
+        assert!((p.fill_fraction - 1.0).abs() < 0.03, "{}", p.fill_fraction);
+        let script = case.script();
+        let k = s.environment.k_drag.unwrap();
+        let mut first = 1;
+        for (i, c) in p.classes.iter().enumerate() {
+            let last = first + c.grains as usize - 1;
+            assert!(script.contains(&format!("group size{i} id {first}:{last} ")), "{script}");
+            // γ = m k_drag (d_ref/d)²
+            let m = crate::dem::sizes::grain_mass(c.diameter_m, case.contact.density_kg_m3);
+            let gamma = m * k * (p.diameter_m / c.diameter_m).powi(2);
+            let line = format!("fix drag{i} size{i} viscous {:e}", c.drag_gamma_kg_s.unwrap());
+            assert!(script.contains(&line), "{script}");
+            assert!((c.drag_gamma_kg_s.unwrap() / gamma - 1.0).abs() < 1e-12);
+            first = last + 1;
+        }
+        assert!(!script.contains("fix drag all"));
+        // each grain's diameter in the data file is its class's
+        let data = case.data();
+        let atoms: Vec<&str> = data.lines().skip_while(|l| *l != "Atoms").skip(2).collect();
+        assert_eq!(atoms.len(), p.grains.len());
+        let last_d: f64 = atoms.last().unwrap().split_whitespace().nth(2).unwrap().parse().unwrap();
+        assert!((last_d / p.classes.last().unwrap().diameter_m - 1.0).abs() < 1e-8);
+        // the smallest grain sets the step: shorter than the one-size case's
+        let mono = Case::build(&rig().0, &d, &settings(150), 0, None).unwrap();
+        assert!(case.contact.timestep_s < mono.contact.timestep_s);
+    }
+
+    /// A rig whose sled rests 5 s before it returns (the campaign rig) must not simulate
+    /// those 5 s: the grains may rest before the return starts, and the run ends then.
+    #[test]
+    fn the_run_may_end_at_rest_before_a_late_return_but_never_while_the_mesh_moves() {
+        let (s, d) = rig();
+        let case = Case::build(&s, &d, &settings(60), 0, Some((5.0, 0.05))).unwrap();
+        let (t0, t1) = case.motion.return_window().unwrap();
+        let script = case.script();
+        // the stroke's own run covers the launch only
+        assert!(script.contains(&format!("# the stroke\nrun {}\n", case.steps(case.motion.t_launch()))), "{script}");
+        assert!(
+            script.contains(&format!(
+                "if \"${{vrms}} < 5e-3 && (${{t}} >= {t1:e} || ${{t}} < {t0:e})\" then \"jump SELF rested\""
+            )),
+            "{script}"
+        );
+        assert!(script.contains(&format!("print \"${{t}}\" file {STROKE_TIME} screen no")));
+        // without a return, rest alone ends the run
+        let still = Case::build(&s, &d, &settings(60), 0, None).unwrap().script();
+        assert!(still.contains("if \"${vrms} < 5e-3\" then \"jump SELF rested\""), "{still}");
+    }
+
+    #[test]
+    fn the_setup_does_not_switch_the_dems_size_law_on() {
+        let (mut s, d) = rig();
+        s.effects.polydisperse = Some(Polydisperse { sigma_ln: 0.3, form: SizeForm::Lognormal });
+        let case = Case::build(&s, &d, &settings(150), 0, None).unwrap();
+        let setup = crate::dem::gather::setup_toml(&case, None, "test").unwrap();
+        assert!(!setup.contains("[effects"), "{setup}");
+        assert!(setup.contains("polydisperse size law (sigma_ln 0.3"), "{setup}");
+        let v: toml::Value = toml::from_str(&setup).unwrap();
+        let smallest = crate::dem::sizes::grain_mass(case.placement.classes[0].diameter_m, case.contact.density_kg_m3);
+        let res = v["measurement"]["scale_resolution_g"].as_float().unwrap();
+        assert!((res / (smallest * 1e3) - 1.0).abs() < 1e-9);
+    }
 }

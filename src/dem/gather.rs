@@ -13,6 +13,7 @@ use anyhow::{bail, Context as _};
 use serde::{Deserialize, Serialize};
 
 use super::case::Case;
+use super::sizes::grain_mass;
 
 /// One grain of the dump.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,18 +71,23 @@ pub struct RunResult {
     pub wall_s: f64,
 }
 
-/// Reduce the dump of `case` to a [`RunResult`].
-pub fn reduce(case: &Case, grains: &[DumpGrain], wall_s: f64) -> RunResult {
+/// Reduce the dump of `case`, written `stroke_time_s` after the stroke began (infinity:
+/// after every movement of the mesh), to a [`RunResult`].
+pub fn reduce(case: &Case, grains: &[DumpGrain], stroke_time_s: f64, wall_s: f64) -> RunResult {
     let profile = case.profile();
-    let shift = case.motion.displacement(f64::INFINITY);
+    let shift = case.motion.displacement(stroke_time_s);
     let placed = case.placement.grains.len();
-    let grain_mass_g = case.placement.grain_mass_kg * 1e3;
+    let rho = case.contact.density_kg_m3;
+    let mut present = vec![false; placed];
     let mut teeth_g = vec![0.0; case.teeth as usize];
     let (mut lost, mut moving, mut credited) = (0usize, 0usize, 0.0);
     let mut mass_total = 0.0;
     for g in grains {
         let m = g.mass_kg * 1e3;
         mass_total += m;
+        if let Some(p) = (g.id as usize).checked_sub(1).and_then(|i| present.get_mut(i)) {
+            *p = true;
+        }
         let speed = (g.vel[0].powi(2) + g.vel[1].powi(2) + g.vel[2].powi(2)).sqrt();
         if speed > case.settings.rest_speed_m_s {
             moving += 1;
@@ -97,7 +103,16 @@ pub fn reduce(case: &Case, grains: &[DumpGrain], wall_s: f64) -> RunResult {
         credited += m * profile.credited_distance(j);
     }
     let left_box = placed.saturating_sub(grains.len());
-    let input_mass_g = mass_total + left_box as f64 * grain_mass_g;
+    // the grains LIGGGHTS deleted weigh what they weighed when placed (grain i has id i + 1)
+    let left_mass_g: f64 = case
+        .placement
+        .grains
+        .iter()
+        .zip(&present)
+        .filter(|(_, p)| !**p)
+        .map(|(g, _)| grain_mass(g.diameter_m, rho) * 1e3)
+        .sum();
+    let input_mass_g = mass_total + left_mass_g;
     RunResult {
         seed: case.seed,
         teeth_g,
@@ -185,12 +200,34 @@ pub fn setup_toml(case: &Case, known_return: Option<(f64, f64)>, description: &s
         "[performance]\nconveyor_length_m = {}\nregolith_width_m = {}\nsled_width_m = {}\ndownstroke_speed_m_s = {}\nf_max_hz = {}\nsled_thickness_m = {}\nsled_density_kg_m3 = {}\ncontraction_ratio = {}\n",
         p.conveyor_length, p.regolith_width, p.sled_width, p.downstroke_speed, p.f_max, p.sled_thickness, p.sled_density, p.contraction_ratio
     );
-    if s.effects.any() {
+    // The size law is the DEM's physics, as grain-grain contacts are: the setup describes the
+    // rig as a rig's setup would (its sieve range in words), so that `fit` and `diagnose`
+    // judge the campaign as measured data and do not start from the answer.
+    let mut effects = s.effects;
+    if let Some(law) = effects.polydisperse.take() {
+        let classes: Vec<String> =
+            case.placement.classes.iter().map(|c| format!("{} x {:.0} um", c.grains, c.diameter_m * 1e6)).collect();
+        let _ = writeln!(
+            t,
+            "# The DEM's grains follow the polydisperse size law (sigma_ln {}, {:?}; classes {}), not switched on here.\n",
+            law.sigma_ln,
+            law.form,
+            classes.join(", ")
+        );
+    }
+    if effects.any() {
         let mut wrapper = toml::map::Map::new();
-        wrapper.insert("effects".into(), toml::Value::try_from(s.effects)?);
+        wrapper.insert("effects".into(), toml::Value::try_from(effects)?);
         let _ = writeln!(t, "{}", toml::to_string(&toml::Value::Table(wrapper))?);
     }
     let c = &case.settings;
+    // one grain is what the scale resolves: the smallest grain of a size law
+    let smallest_grain_g = case
+        .placement
+        .classes
+        .iter()
+        .map(|c| grain_mass(c.diameter_m, case.contact.density_kg_m3) * 1e3)
+        .fold(case.placement.grain_mass_kg * 1e3, f64::min);
     let _ = writeln!(
         t,
         "[dem]\nparticles = {}\ngrain_diameter_m = {:e}\ndepth_grains = {}\nrolling_friction = {}\nmax_overlap_fraction = {}\nmax_time_s = {}\nrest_speed_m_s = {}\nteeth = {}\n",
@@ -206,8 +243,8 @@ pub fn setup_toml(case: &Case, known_return: Option<(f64, f64)>, description: &s
     let _ = writeln!(
         t,
         "[measurement]\nscale_resolution_g = {:e}\nparticle_mass_g = {:e}",
-        case.placement.grain_mass_kg * 1e3,
-        case.placement.grains.len() as f64 * case.placement.grain_mass_kg * 1e3
+        smallest_grain_g,
+        case.placement.mass_kg * 1e3
     );
     if let Some((delay, speed)) = known_return {
         let _ = writeln!(t, "motion_delay_s = {delay}\nmotion_return_speed_m_s = {speed}");

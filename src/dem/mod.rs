@@ -7,6 +7,7 @@
 //! - [`settings`]: what a DEM case needs beyond the scenario (`[dem]`, flags), with its rules;
 //! - [`stl`]: the tooth profile extruded over a periodic depth, as an STL mesh;
 //! - [`grains`]: the grains placed in tooth 0's fill polygon;
+//! - [`sizes`]: the polydisperse size law as size classes of equal mass, each with its drag;
 //! - [`contact`]: contact parameters from the material, the softened modulus, the time step;
 //! - [`motion`]: the sled's motion (stroke, optional return) as mesh velocities;
 //! - [`case`]: the LIGGGHTS input script and the case folder;
@@ -28,6 +29,7 @@ pub mod grains;
 pub mod motion;
 pub mod run;
 pub mod settings;
+pub mod sizes;
 pub mod stl;
 
 pub use case::{Case, CaseFiles};

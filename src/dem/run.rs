@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context as _};
 
-use super::case::{DUMP, SCRIPT};
+use super::case::{DUMP, SCRIPT, STROKE_TIME};
 
 /// Environment variable naming the LIGGGHTS binary (overrides the PATH lookup).
 pub const BINARY_ENV: &str = "SAWTOOTH_LIGGGHTS";
@@ -86,6 +86,7 @@ pub struct Finished {
 /// LIGGGHTS error line and keeps the folder.
 pub fn run_case(binary: &Path, dir: &Path, progress: &mut dyn FnMut(&Thermo)) -> anyhow::Result<Finished> {
     let _ = std::fs::remove_file(dir.join(DUMP));
+    let _ = std::fs::remove_file(dir.join(STROKE_TIME));
     let started = Instant::now();
     let mut cmd = match on_path("stdbuf") {
         Some(stdbuf) => {

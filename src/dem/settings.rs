@@ -105,15 +105,15 @@ impl DemSettings {
 /// Refuse, by name, a scenario a DEM case cannot represent: the listing's compatibility mode
 /// (its geometry forces α = 35° and a 10-point catch arc, erratum 4/20: no real conveyor),
 /// and effects that are the model's stand-ins for what DEM computes itself (impact scatter,
-/// launch spread) or that the case does not carry yet (polydisperse sizes, quadratic drag).
+/// launch spread) or that the case does not carry yet (quadratic drag). The sled's return and
+/// the polydisperse size law (as size classes, `super::sizes`) are carried.
 pub fn check_representable(s: &Scenario) -> Result<(), String> {
     if s.mode == PhysicsMode::Listing {
         return Err("the listing compatibility mode (--compat listing / mode = \"listing\") has no physical geometry to mesh (erratum 4: it forces alpha 35 deg); use the physical mode".into());
     }
     for kind in s.effects.active_kinds() {
         let why = match kind {
-            EffectKind::SledMotion => continue,
-            EffectKind::Polydisperse => "the case places grains of one size (a size law is not carried yet)",
+            EffectKind::SledMotion | EffectKind::Polydisperse => continue,
             EffectKind::ImpactScatter => "the DEM's grain-grain and grain-wall contacts scatter impacts themselves",
             EffectKind::LaunchSpread => "in the DEM grains leave the fill when the contacts let them, not by a law",
             EffectKind::QuadraticDrag => "the DEM case carries the linear Stokes drag (fix viscous) only",
