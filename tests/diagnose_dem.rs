@@ -9,8 +9,9 @@
 //! README), so no LIGGGHTS is needed here. Three conditions each (the campaign rig's slow,
 //! fast and shallow), diagnosed with every candidate at a CI-sized particle budget.
 
+mod common;
+
 use std::path::PathBuf;
-use std::process::Command;
 
 use serde_json::Value;
 
@@ -23,21 +24,20 @@ fn campaign(name: &str) -> (PathBuf, PathBuf) {
     (dir.join("dem.csv"), dir.join("setup.toml"))
 }
 
-fn tmp(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("sawtooth-diagnose-dem-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// Whether this heavy test runs (a three-condition diagnosis each, a minute or two on 2 cores).
+fn heavy(test: &str) -> bool {
+    common::full_tier(test, "a three-condition diagnosis of DEM data with every candidate")
 }
 
 /// Diagnose the named campaigns (one condition each) with every candidate; diagnosis.json.
 fn diagnose(campaigns: &[&str], tag: &str) -> Value {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_sawtooth"));
+    let mut c = common::sawtooth();
     c.arg("diagnose");
     for name in campaigns {
         let (data, setup) = campaign(name);
         c.arg("--data").arg(data).arg("--setup").arg(setup);
     }
-    let out = tmp(tag);
+    let out = common::scratch(&format!("diagnose-dem-{tag}"));
     let o = c.args(CI_BUDGET).args(["--json", "--out"]).arg(&out).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -84,6 +84,9 @@ const ABSENT: [&str; 3] = ["polydisperse", "quadratic-drag", "sled-motion"];
 /// and no candidate is its cause.
 #[test]
 fn a_deep_dem_fill_is_not_explained_by_a_candidate_it_does_not_contain() {
+    if !heavy("diagnose_dem::a_deep_dem_fill_is_not_explained_by_a_candidate_it_does_not_contain") {
+        return;
+    }
     let v = diagnose(&["earth-deep-slow", "earth-deep-fast", "earth-deep-shallow"], "deep");
     let s = summary(&v);
     let over = v["verdict_detail"]["baseline"]["gap_over_floor"].as_f64().unwrap();
@@ -102,6 +105,9 @@ fn a_deep_dem_fill_is_not_explained_by_a_candidate_it_does_not_contain() {
 /// leaves is the DEM's out-of-family rest.
 #[test]
 fn a_stated_sled_return_in_the_dem_is_found() {
+    if !heavy("diagnose_dem::a_stated_sled_return_in_the_dem_is_found") {
+        return;
+    }
     let v = diagnose(&["earth-deep-slow-return", "earth-deep-fast", "earth-deep-shallow"], "return");
     let s = summary(&v);
     assert_eq!(v["best"], "sled-motion", "{s}");
@@ -114,6 +120,9 @@ fn a_stated_sled_return_in_the_dem_is_found() {
 /// fewer grain–grain collisions than the deep fill, still none of the candidates.
 #[test]
 fn a_dem_monolayer_is_not_explained_by_a_candidate_it_does_not_contain() {
+    if !heavy("diagnose_dem::a_dem_monolayer_is_not_explained_by_a_candidate_it_does_not_contain") {
+        return;
+    }
     let v = diagnose(&["earth-mono-slow", "earth-mono-fast", "earth-mono-shallow"], "mono");
     let s = summary(&v);
     assert_names_only_what_the_dem_contains(&v, &[]);
@@ -125,6 +134,9 @@ fn a_dem_monolayer_is_not_explained_by_a_candidate_it_does_not_contain() {
 /// Schiller–Naumann drag or a moving sled is not in it.
 #[test]
 fn a_polydisperse_dem_fill_names_at_most_the_size_law() {
+    if !heavy("diagnose_dem::a_polydisperse_dem_fill_names_at_most_the_size_law") {
+        return;
+    }
     let v = diagnose(&["earth-poly-slow", "earth-poly-fast", "earth-poly-shallow"], "poly");
     let s = summary(&v);
     assert_names_only_what_the_dem_contains(&v, &["polydisperse"]);
