@@ -428,6 +428,8 @@ mod tests {
         assert!(e.set_from_cli("launch-spread=0.3").unwrap_err().contains("takes 2"));
         assert!(e.set_from_cli("polydisperse=-0.1").unwrap_err().contains("effects.polydisperse.sigma_ln"));
         assert!(e.set_from_cli("impact-scatter=90").unwrap_err().contains("sigma_deg"));
+        // a fresh set: a refused spec is left in `e` (the caller reports and stops)
+        let mut e = Effects::default();
         e.set_from_cli("fill-surface-loss=0.2,0.0005").unwrap();
         assert_eq!(e.fill_surface_loss, Some(FillSurfaceLoss { speed_loss: 0.2, decay_depth_m: 0.0005 }));
         assert!(e
