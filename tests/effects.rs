@@ -283,3 +283,81 @@ fn form_variants_parse_change_the_outcome_and_stay_deterministic() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("uniform tilt"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The fill-surface loss (issue 32, item 3; from DEM evidence, docs/physics.md): each grain's
+/// first launch speed is the ideal launch's times 1 − L exp(−z/ℓ), z its launch point's depth
+/// below the fill's free surface as `Fill::depth` defines it, its direction unchanged; at
+/// L = 0 every particle ends where it ends without the effect, to the bit.
+#[test]
+fn fill_surface_loss_slows_the_launch_by_depth_and_does_nothing_at_zero_strength() {
+    use sawtooth::model::effects::FillSurfaceLoss;
+    let (s, d) = rig();
+    let run = |e: Option<FillSurfaceLoss>| {
+        let mut s2 = s.clone();
+        s2.effects.fill_surface_loss = e;
+        evaluate_detailed(particle_engine(EngineKind::Cpu).as_ref(), &s2, &d, true).unwrap()
+    };
+    let base = run(None);
+    let zero = run(Some(FillSurfaceLoss { speed_loss: 0.0, decay_depth_m: 1e-3 }));
+    assert_eq!(format!("{:?}", base.particles), format!("{:?}", zero.particles), "zero strength changes nothing");
+    let (loss, decay) = (0.4, 1e-3);
+    let with = run(Some(FillSurfaceLoss { speed_loss: loss, decay_depth_m: decay }));
+    let launches = |det: &sawtooth::engine::Detailed| -> Vec<[f64; 2]> {
+        let mut v = vec![[0.0; 2]; det.prepared.launches.len()];
+        for f in det.flights.iter().filter(|f| f.bounce == 0) {
+            v[f.particle as usize] = f.vel;
+        }
+        v
+    };
+    let (v_base, v_with) = (launches(&base), launches(&with));
+    let fill = &base.prepared.fill;
+    let mut depths = Vec::new();
+    for ((l, a), b) in base.prepared.launches.iter().zip(&v_base).zip(&v_with) {
+        let z = fill.depth(*l);
+        depths.push(z);
+        let expected = 1.0 - loss * (-z / decay).exp();
+        let ratio = b[0].hypot(b[1]) / a[0].hypot(a[1]);
+        assert!((ratio - expected).abs() < 1e-12, "depth {z}: speed ratio {ratio}, law {expected}");
+        assert!((b[1].atan2(b[0]) - a[1].atan2(a[0])).abs() < 1e-12, "the direction is kept");
+    }
+    // the law acts across the fill: some grains lose most of L, some almost nothing
+    let factor = |z: f64| loss * (-z / decay).exp();
+    assert!(depths.iter().any(|z| factor(*z) > 0.3) && depths.iter().any(|z| factor(*z) < 0.05));
+    // the grains of the top layer fall short of the deep ones', which the base does not show
+    let mean_end = |det: &sawtooth::engine::Detailed, shallow: bool| {
+        let xs: Vec<f64> = det
+            .particles
+            .iter()
+            .zip(&depths)
+            .filter(|(p, z)| p.end[0].is_finite() && ((**z < decay) == shallow))
+            .map(|(p, _)| p.end[0])
+            .collect();
+        xs.iter().sum::<f64>() / xs.len() as f64
+    };
+    let gap_base = mean_end(&base, false) - mean_end(&base, true);
+    let gap_with = mean_end(&with, false) - mean_end(&with, true);
+    assert!(gap_with > gap_base + 0.003, "deep minus shallow end x: {gap_base} m without, {gap_with} m with");
+    assert!(with.evaluation.sim.advance_m < base.evaluation.sim.advance_m);
+}
+
+#[test]
+fn fill_surface_loss_is_deterministic_carried_by_configs_and_refused_by_the_listing_engine() {
+    let (mut s, d) = rig();
+    s.effects.set_from_cli("fill-surface-loss=0.3,0.0008").unwrap();
+    assert_eq!(sim(&s, &d).distribution, sim(&s, &d).distribution, "deterministic per seed");
+    let c = ConfigFile::parse("[effects.fill_surface_loss]\nspeed_loss = 0.3\ndecay_depth_m = 0.0008\n").unwrap();
+    assert_eq!(c.scenario().unwrap().effects, s.effects);
+    let bin = env!("CARGO_BIN_EXE_sawtooth");
+    let setup = concat!(env!("CARGO_MANIFEST_DIR"), "/data/validation/test3.toml");
+    let o = Command::new(bin)
+        .args(["simulate", "--config", setup, "--effect", "fill-surface-loss=0.3,0.0008", "--engine", "listing"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let o = Command::new(bin)
+        .args(["simulate", "--config", setup, "--effect", "fill-surface-loss=0.3,0"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("effects.fill_surface_loss.decay_depth_m"));
+}

@@ -75,7 +75,7 @@ fn batch_interface_matches_single_design_runs() {
 
 #[test]
 fn gpu_conforms_with_each_effect_switched_on() {
-    use sawtooth::model::effects::{ImpactScatter, LaunchSpread, Polydisperse};
+    use sawtooth::model::effects::{FillSurfaceLoss, ImpactScatter, LaunchSpread, Polydisperse};
     let Some(g) = gpu() else { return };
     let mut cases = Vec::new();
     for (name, e) in [
@@ -100,6 +100,13 @@ fn gpu_conforms_with_each_effect_switched_on() {
                 ..Default::default()
             },
         ),
+        (
+            "fill-surface-loss",
+            sawtooth::model::effects::Effects {
+                fill_surface_loss: Some(FillSurfaceLoss { speed_loss: 0.4, decay_depth_m: 2e-3 }),
+                ..Default::default()
+            },
+        ),
     ] {
         for (env, base) in [("lunar", Scenario::lunar()), ("earth", Scenario::earth())] {
             let mut s = base;
@@ -121,11 +128,12 @@ fn gpu_conforms_with_each_effect_switched_on() {
 /// get k_drag ~100/s and about 4 % of their first impacts differ by a few 1e-3 mm between
 /// the kernel and its f32 twin, whether run alone or merged (tooth and state still agree).
 fn calibration_variants(base: &Scenario) -> Vec<(String, Scenario)> {
-    use sawtooth::model::effects::{Effects, ImpactScatter, LaunchSpread, Polydisperse, SizeForm};
+    use sawtooth::model::effects::{Effects, FillSurfaceLoss, ImpactScatter, LaunchSpread, Polydisperse, SizeForm};
     let scatter = |sigma_deg| Some(ImpactScatter { sigma_deg, form: Default::default() });
     let spread = |speed_spread, angle_sigma_deg| Some(LaunchSpread { speed_spread, angle_sigma_deg });
     let poly = |sigma_ln| Some(Polydisperse { sigma_ln, form: SizeForm::Lognormal });
-    let variants: [(f64, f64, Option<f64>, Effects); 7] = [
+    let surface = |speed_loss, decay_depth_m| Some(FillSurfaceLoss { speed_loss, decay_depth_m });
+    let variants: [(f64, f64, Option<f64>, Effects); 9] = [
         (0.5, 0.1, None, Effects::default()),
         (0.8, 0.3, Some(5.439), Effects { impact_scatter: scatter(8.0), ..Default::default() }),
         (0.65, 0.2, Some(2.0), Effects { launch_spread: spread(0.4, 5.0), ..Default::default() }),
@@ -147,6 +155,13 @@ fn calibration_variants(base: &Scenario) -> Vec<(String, Scenario)> {
             0.25,
             Some(3.0),
             Effects { polydisperse: poly(0.4), launch_spread: spread(0.1, 0.0), ..Default::default() },
+        ),
+        (0.55, 0.1, Some(5.439), Effects { fill_surface_loss: surface(0.3, 1e-3), ..Default::default() }),
+        (
+            0.7,
+            0.2,
+            None,
+            Effects { fill_surface_loss: surface(0.5, 4e-3), impact_scatter: scatter(6.0), ..Default::default() },
         ),
     ];
     variants
@@ -215,7 +230,7 @@ fn one_design_groups_of_a_calibration_run_as_one_dispatch() {
     eprintln!("{} groups: mean L1 to cpu-f32 {mean_l1:.4}, {} distinct distributions", groups.len(), distinct.len());
     // >= 98 % of particles agree per design (see the test above): L1 <= 2 x 2 % on average
     assert!(mean_l1 <= 0.04, "mean L1 {mean_l1}");
-    // the physics did vary: one design under seven physics gives different distributions
+    // the physics did vary: one design under nine physics gives different distributions
     assert!(distinct.len() > designs.len() * 3, "{} distinct of {}", distinct.len(), groups.len());
 }
 
@@ -330,7 +345,7 @@ fn path_switches_change_no_result() {
     use sawtooth::model::sampling::random_valid_designs;
     let Some(g) = gpu() else { return };
     let with_effects = |mut s: Scenario| {
-        for spec in ["launch-spread=0.2,5", "impact-scatter=8", "polydisperse=0.3"] {
+        for spec in ["launch-spread=0.2,5", "impact-scatter=8", "polydisperse=0.3", "fill-surface-loss=0.3,0.002"] {
             s.effects.set_from_cli(spec).unwrap();
         }
         s

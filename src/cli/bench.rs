@@ -53,8 +53,8 @@ pub struct BenchArgs {
     #[arg(long)]
     pub json: bool,
     /// Time one calibration generation instead (`diagnose`'s screen): every setup TOML in
-    /// this folder is a condition (e.g. data/campaign_rig); the baseline and each of the five
-    /// effects contribute `--designs` candidates with random parameters in their search
+    /// this folder is a condition (e.g. data/campaign_rig); the baseline and each of the
+    /// effects (`EffectKind::ALL`) contribute `--designs` candidates with random parameters in their search
     /// bounds, each simulated in every condition at `--particles`, as one
     /// `evaluate_groups` call of one-design groups.
     #[arg(long)]

@@ -105,8 +105,9 @@ impl DemSettings {
 /// Refuse, by name, a scenario a DEM case cannot represent: the listing's compatibility mode
 /// (its geometry forces α = 35° and a 10-point catch arc, erratum 4/20: no real conveyor),
 /// and effects that are the model's stand-ins for what DEM computes itself (impact scatter,
-/// launch spread) or that the case does not carry yet (quadratic drag). The sled's return and
-/// the polydisperse size law (as size classes, `super::sizes`) are carried.
+/// launch spread, the fill-surface loss) or that the case does not carry yet (quadratic drag).
+/// The sled's return and the polydisperse size law (as size classes, `super::sizes`) are
+/// carried.
 pub fn check_representable(s: &Scenario) -> Result<(), String> {
     if s.mode == PhysicsMode::Listing {
         return Err("the listing compatibility mode (--compat listing / mode = \"listing\") has no physical geometry to mesh (erratum 4: it forces alpha 35 deg); use the physical mode".into());
@@ -117,6 +118,9 @@ pub fn check_representable(s: &Scenario) -> Result<(), String> {
             EffectKind::ImpactScatter => "the DEM's grain-grain and grain-wall contacts scatter impacts themselves",
             EffectKind::LaunchSpread => "in the DEM grains leave the fill when the contacts let them, not by a law",
             EffectKind::QuadraticDrag => "the DEM case carries the linear Stokes drag (fix viscous) only",
+            EffectKind::FillSurfaceLoss => {
+                "the DEM's grains leave the fill through their own contacts (the effect was fitted to that)"
+            }
         };
         return Err(format!("effect `{}` is not carried into a DEM case: {why}", kind.name()));
     }

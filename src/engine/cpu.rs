@@ -49,6 +49,12 @@ pub fn kernel_design<T: Real>(prep: &Prepared) -> KDesign<T> {
         launch_sin_cos: T::c(prep.launch_angle).ksin_cos(),
         v0: T::c(prep.design.v0),
         stroke: T::c(prep.design.v0 * prep.design.v0 / (2.0 * prep.design.a)),
+        fill_point: v(prep.fill.p_fill),
+        fill_sin_cos: {
+            // as `Fill::depth` computes it (host side, once per design)
+            let (s, c) = prep.fill.surface_angle.sin_cos();
+            (T::c(s), T::c(c))
+        },
     }
 }
 
@@ -91,6 +97,8 @@ pub fn kernel_physics<T: Real>(ctx: &Context) -> KPhysics<T> {
         } else {
             0.0
         }),
+        surface_loss: T::c(ctx.effects.fill_surface_loss.map_or(0.0, |e| e.speed_loss)),
+        surface_decay: T::c(ctx.effects.fill_surface_loss.map_or(1.0, |e| e.decay_depth_m)),
     }
 }
 

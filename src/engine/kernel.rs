@@ -75,6 +75,12 @@ pub struct KDesign<T> {
     pub v0: T,
     /// Stroke v0²/(2a), m: how far the sled returns (sled-motion effect).
     pub stroke: T,
+    /// A point of the fill's free surface line (p_fill, Figure 4.6) and the sine and cosine of
+    /// its angle: a launch point's depth below the surface (`Fill::depth`) for the
+    /// fill-surface-loss effect. Used by `init_particle` only (on the host for both engines),
+    /// so the GPU's design record does not carry them.
+    pub fill_point: [T; 2],
+    pub fill_sin_cos: (T, T),
 }
 
 /// Scenario-wide constants.
@@ -123,6 +129,12 @@ pub struct KPhysics<T> {
     pub qd_k0: T,
     pub qd_re_per_speed: T,
     pub qd_step: T,
+    /// Fill-surface loss (0 = off): the speed lost at the free surface (fraction) and its
+    /// decay depth (m). Applied in `init_particle`, on the host for both engines: it reaches
+    /// the WGSL kernel as each particle's launch velocity, as the polydisperse size law
+    /// reaches it as each particle's k_drag.
+    pub surface_loss: T,
+    pub surface_decay: T,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -192,13 +204,22 @@ pub fn init_particle<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, launch: [T; 2], 
     } else {
         ph.k_drag
     };
+    // fill-surface loss (DEM evidence, `effects::FillSurfaceLoss`): the launch speed falls
+    // off towards the free surface, depth = distance from its line (`Fill::depth`)
+    let speed = if ph.surface_loss > T::zero() {
+        let (s, c) = d.fill_sin_cos;
+        let depth = ((launch[0] - d.fill_point[0]) * s - (launch[1] - d.fill_point[1]) * c).abs();
+        d.v0 * (T::one() - ph.surface_loss * (-depth / ph.surface_decay).exp())
+    } else {
+        d.v0
+    };
     KParticle {
         k_drag,
         tooth: 0,
         pos: launch,
         vel: {
             let (s, c) = d.launch_sin_cos;
-            [d.v0 * c, d.v0 * s]
+            [speed * c, speed * s]
         },
         surface: SURFACE_NONE,
         state: STATE_FLYING,

@@ -1009,7 +1009,9 @@ mod tests {
     use crate::engine::cpu::{kernel_design, kernel_physics};
     use crate::engine::kernel::{first_hit, fly_particle, init_particle, randomise_launch, STATE_FLYING};
     use crate::engine::Context;
-    use crate::model::effects::{ImpactScatter, LaunchSpread, Polydisperse, SizeForm, TiltForm};
+    use crate::model::effects::{
+        Effects, FillSurfaceLoss, ImpactScatter, LaunchSpread, Polydisperse, SizeForm, TiltForm,
+    };
     use crate::model::sampling::random_valid_designs;
     use crate::model::scenario::LaunchPoints;
     use crate::model::{prepare, Scenario};
@@ -1034,7 +1036,14 @@ mod tests {
             s.effects.launch_spread = Some(LaunchSpread { speed_spread: 0.3, angle_sigma_deg: 8.0 });
             s.effects.polydisperse = Some(Polydisperse { sigma_ln: 0.4, form: SizeForm::default() });
             s.sim.launch_points = LaunchPoints::Random;
-            cases.push(s);
+            cases.push(s.clone());
+            if alpha == 20.0 {
+                // the fill-surface loss alone: slower first launches that the lanes'
+                // randomisation still takes (no launch spread)
+                s.effects = Effects::default();
+                s.effects.fill_surface_loss = Some(FillSurfaceLoss { speed_loss: 0.4, decay_depth_m: 2e-3 });
+                cases.push(s);
+            }
         }
         cases
     }

@@ -177,6 +177,8 @@ impl ParticleEngine for ListingEngine {
             qd_k0: 0.0,
             qd_re_per_speed: 0.0,
             qd_step: 0.0,
+            surface_loss: 0.0,
+            surface_decay: 1.0,
         };
         let mut st: Vec<State> = prep
             .launches

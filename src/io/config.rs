@@ -27,7 +27,9 @@ pub struct ConfigFile {
     pub sim: Option<SimTable>,
     pub performance: Option<PerformanceTable>,
     /// Effects beyond the thesis's model: [effects.impact_scatter] sigma_deg,
-    /// [effects.launch_spread] speed_spread + angle_sigma_deg, [effects.polydisperse] sigma_ln.
+    /// [effects.launch_spread] speed_spread + angle_sigma_deg, [effects.polydisperse] sigma_ln,
+    /// [effects.sled_motion], [effects.quadratic_drag], [effects.fill_surface_loss]
+    /// speed_loss + decay_depth_m (`EffectKind::param_names`).
     pub effects: Option<crate::model::effects::Effects>,
     /// How a validation setup was measured (App. B, 4.3.2); descriptive only, it does not
     /// change the scenario.
