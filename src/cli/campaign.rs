@@ -1,6 +1,7 @@
 //! `sawtooth campaign run|gather|status|slurm DIR`: a campaign folder written by
-//! `gpu-sweep --plan` or `study … --plan` run member by member (one process per member,
-//! e.g. one Slurm array task), or all at once here; summarised by `gather` with the same
+//! `gpu-sweep --plan`, `study … --plan` or `dem check --plan` (whose members are DEM runs,
+//! `crate::dem::check`) run member by member (one process per member, e.g. one Slurm array
+//! task), or all at once here; summarised by `gather` with the same
 //! code and bytes as the one-process commands. A shared filesystem is assumed: every task
 //! reads the plan and writes its member's folder under DIR.
 
@@ -15,6 +16,7 @@ use crate::campaigns::plan::{
     execute, finished_fronts, member_state, read_plan, write_plan, MemberState, Plan, CAMPAIGN_KIND, PLAN_FILE,
 };
 use crate::campaigns::summarise;
+use crate::dem::check::is_check;
 use crate::engine::make_engine_for;
 use crate::io::atomic::write_atomic;
 use crate::io::run_dir::{Access, RunDir};
@@ -128,11 +130,18 @@ fn task_from_env() -> anyhow::Result<Option<usize>> {
 }
 
 fn run_cmd(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    let plan = read_plan(&a.dir)?;
     let task = match a.task {
         Some(t) => Some(t),
         None => task_from_env()?,
     };
+    if is_check(&a.dir) {
+        // a DEM check's plan (`dem check --plan`): its members are DEM runs
+        return match task {
+            Some(i) => super::dem::campaign_task(&a.dir, i, out),
+            None => super::dem::campaign_run_all(&a.dir, out),
+        };
+    }
+    let plan = read_plan(&a.dir)?;
     let Some(i) = task else {
         // Every member here, batched per generation; then the summary.
         let _owned = RunDir::acquire(&a.dir, CAMPAIGN_KIND, Access::Exclusive)?;
@@ -180,6 +189,9 @@ fn run_cmd(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
 }
 
 fn gather(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    if is_check(dir) {
+        return super::dem::campaign_gather(dir, out);
+    }
     let plan = read_plan(dir)?;
     let _owned = RunDir::acquire(dir, CAMPAIGN_KIND, Access::Exclusive)?;
     let fronts = finished_fronts(dir, &plan)?;
@@ -188,6 +200,9 @@ fn gather(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
 }
 
 fn status(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    if is_check(dir) {
+        return super::dem::campaign_status(dir, out);
+    }
     let plan = read_plan(dir)?;
     let (mut finished, mut running, mut stopped, mut fresh) = (0, 0, 0, 0);
     writeln!(out, "{} ({}, {} members)", dir.display(), plan.command, plan.members.len())?;
@@ -229,7 +244,16 @@ fn array_spec(tasks: &[usize]) -> String {
     }
 }
 
-fn scripts(a: &SlurmArgs, plan: &Plan, root: &str, exe: &str, tasks: &[usize]) -> anyhow::Result<(String, String)> {
+/// The array and gather scripts of a plan made by `command` with `members` members (an
+/// optimisation campaign's or a DEM check's: both run `campaign run/gather`).
+fn scripts(
+    a: &SlurmArgs,
+    command: &str,
+    members: usize,
+    root: &str,
+    exe: &str,
+    tasks: &[usize],
+) -> anyhow::Result<(String, String)> {
     let q_root = shell_quote("the campaign folder", root)?;
     let q_exe = shell_quote("the sawtooth executable", exe)?;
     let name =
@@ -255,8 +279,8 @@ fn scripts(a: &SlurmArgs, plan: &Plan, root: &str, exe: &str, tasks: &[usize]) -
          #SBATCH --requeue\n\
          #SBATCH --ntasks=1\n\
          #SBATCH --cpus-per-task={}\n",
-        plan.command,
-        plan.members.len(),
+        command,
+        members,
         array_spec(tasks),
         a.max_parallel.map(|k| format!("%{k}")).unwrap_or_default(),
         a.cpus_per_task
@@ -306,7 +330,15 @@ fn sbatch(args: &[&str]) -> anyhow::Result<String> {
 }
 
 fn slurm(a: SlurmArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    let plan = read_plan(&a.dir)?;
+    // what the scripts need of the plan: its command, its members, which are finished
+    let (command, members, finished): (String, usize, Vec<bool>) = if is_check(&a.dir) {
+        let p = crate::dem::check::read_plan(&a.dir)?;
+        (p.command.clone(), p.members(), (0..p.members()).map(|i| p.member_done(&a.dir, i)).collect())
+    } else {
+        let p = read_plan(&a.dir)?;
+        let done = (0..p.members.len()).map(|i| member_state(&p.member_dir(&a.dir, i)) == MemberState::Finished);
+        (p.command.clone(), p.members.len(), done.collect())
+    };
     if let Some(p) = &a.partition {
         check_token(
             "--partition",
@@ -332,9 +364,7 @@ fn slurm(a: SlurmArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     if a.max_parallel == Some(0) {
         bail!("--max-parallel must be at least 1");
     }
-    let tasks: Vec<usize> = (0..plan.members.len())
-        .filter(|&i| !a.unfinished || member_state(&plan.member_dir(&a.dir, i)) != MemberState::Finished)
-        .collect();
+    let tasks: Vec<usize> = (0..members).filter(|&i| !a.unfinished || !finished[i]).collect();
     if tasks.is_empty() {
         bail!(
             "every member of {} is finished: nothing to submit; summarise with `sawtooth campaign gather {}`",
@@ -345,7 +375,7 @@ fn slurm(a: SlurmArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let root = std::fs::canonicalize(&a.dir).with_context(|| format!("resolving {}", a.dir.display()))?;
     let exe = std::env::current_exe().and_then(std::fs::canonicalize).context("locating the sawtooth executable")?;
     let (root_s, exe_s) = (root.to_string_lossy().into_owned(), exe.to_string_lossy().into_owned());
-    let (array, gather) = scripts(&a, &plan, &root_s, &exe_s, &tasks)?;
+    let (array, gather) = scripts(&a, &command, members, &root_s, &exe_s, &tasks)?;
     let sdir = root.join("slurm");
     std::fs::create_dir_all(&sdir).with_context(|| format!("creating {}", sdir.display()))?;
     std::fs::create_dir_all(root.join("logs")).with_context(|| format!("creating {}", root.join("logs").display()))?;
