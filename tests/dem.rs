@@ -401,7 +401,9 @@ fn a_dem_check_runs_as_a_job_array_of_dem_runs_and_gathers_the_same_report() {
         let reported = design["dem_d_avg_mm"]["mean"].as_f64().unwrap();
         assert!((reported - mean_mm).abs() <= 1e-9 * mean_mm.abs().max(1.0), "{label}: {reported} vs {mean_mm}");
     }
-    assert!(gathered["designs"][0]["dem_compliant"].is_boolean(), "the run's requirements judged again: {gathered}");
+    let first = &gathered["designs"][0];
+    assert!(first["dem_compliant"].is_boolean(), "the run's requirements judged again: {gathered}");
+    assert!(first["dem_m_dot_op_kg_h"].is_number() && first["dem_operating_limit"].is_string(), "{gathered}");
 
     // `dem check` on the same folder: every run is done, nothing runs, the same report
     let mut json_args = check_args.to_vec();

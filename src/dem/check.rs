@@ -25,7 +25,7 @@ use crate::io::atomic::write_atomic;
 use crate::io::run_dir::{kind_of, Access, RunDir};
 use crate::model::performance::performance;
 use crate::model::prepare;
-use crate::model::requirements::Requirements;
+use crate::model::requirements::{Limit, Requirements};
 use crate::optim::front::{picks, read_pareto_csv, FrontPoint};
 use crate::optim::manifest::read_manifest;
 
@@ -57,6 +57,12 @@ pub struct DesignCheck {
     pub model_compliant: Option<bool>,
     pub dem_compliant: Option<bool>,
     pub dem_binding: Option<String>,
+    /// The operating point under the requirements (feed rate at the target, or lower where
+    /// the power limit binds), kg/h and W: the model's from the run, the DEM's judged again.
+    pub model_m_dot_op_kg_h: Option<f64>,
+    pub dem_m_dot_op_kg_h: Option<f64>,
+    pub dem_p_op_w: Option<f64>,
+    pub dem_operating_limit: Option<Limit>,
     pub dem_s_per_run: f64,
 }
 
@@ -77,6 +83,8 @@ pub struct Finalist {
     pub model_m_dot_kg_s: f64,
     pub model_w_spec_j_kg: f64,
     pub model_compliant: Option<bool>,
+    /// The model's operating feed rate under the run's requirements, kg/h.
+    pub model_m_dot_op_kg_h: Option<f64>,
     /// The design's DEM campaign at the slope of its front figures; its runs are members.
     pub campaign: Plan,
 }
@@ -219,6 +227,7 @@ pub fn plan(run_dir: &Path, settings: &DemSettings, seeds: u32, k: usize, comman
             model_m_dot_kg_s: p.m_dot_kg_s,
             model_w_spec_j_kg: p.w_spec_j_kg,
             model_compliant: p.compliance.as_ref().map(|c| c.compliant),
+            model_m_dot_op_kg_h: p.compliance.as_ref().map(|c| c.m_dot_op_kg_h),
             campaign,
         });
     }
@@ -316,6 +325,10 @@ fn design_check(plan: &CheckPlan, f: &Finalist, results: &[RunResult]) -> anyhow
         model_compliant: f.model_compliant,
         dem_compliant: verdict.as_ref().map(|v| v.compliant()),
         dem_binding: verdict.as_ref().and_then(|v| v.binding().map(str::to_string)),
+        model_m_dot_op_kg_h: f.model_m_dot_op_kg_h,
+        dem_m_dot_op_kg_h: verdict.as_ref().map(|v| v.operating_point.m_dot_kg_h),
+        dem_p_op_w: verdict.as_ref().map(|v| v.operating_point.p_avg_w),
+        dem_operating_limit: verdict.as_ref().map(|v| v.operating_point.limit),
         dem_s_per_run: results.iter().map(|r| r.wall_s).sum::<f64>() / results.len() as f64,
     })
 }
@@ -375,16 +388,21 @@ pub fn check(root: &Path, plan: &CheckPlan, jobs: usize, say: &(dyn Fn(String) +
 
 pub fn write_table(out: &mut dyn Write, r: &CheckReport) -> anyhow::Result<()> {
     writeln!(out, "DEM check of {} ({} seeds x {} grains per design)", r.run_dir, r.seeds, r.particles)?;
-    writeln!(out, "design     d_avg mm model / DEM      m_dot kg/h model / DEM   W_spec J/kg model / DEM   lost %  verdict model / DEM")?;
+    writeln!(out, "design     d_avg mm model / DEM      m_dot kg/h model / DEM   W_spec J/kg model / DEM   lost %  verdict model / DEM   operating kg/h model / DEM")?;
     for d in &r.designs {
         let verdict = |v: Option<bool>| match v {
             Some(true) => "meets",
             Some(false) => "fails",
             None => "-",
         };
+        let kg_h = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.1}"));
+        let limit = match (d.dem_operating_limit, d.dem_p_op_w) {
+            (Some(l), Some(p)) => format!(" ({l:?}-limited, {p:.2} W)").to_lowercase(),
+            _ => String::new(),
+        };
         writeln!(
             out,
-            "{:<9} {:>7.2} / {:>6.2} ± {:<5.2} {:>9.2} / {:<9.2} {:>10.1} / {:<10} {:>6.1}  {} / {}{}",
+            "{:<9} {:>7.2} / {:>6.2} ± {:<5.2} {:>9.2} / {:<9.2} {:>10.1} / {:<10} {:>6.1}  {} / {}{}   {} / {}{}",
             d.label,
             d.model_d_avg_mm,
             d.dem_d_avg_mm.mean,
@@ -396,7 +414,10 @@ pub fn write_table(out: &mut dyn Write, r: &CheckReport) -> anyhow::Result<()> {
             d.dem_lost_pct,
             verdict(d.model_compliant),
             verdict(d.dem_compliant),
-            d.dem_binding.as_ref().map_or(String::new(), |b| format!(" ({b})"))
+            d.dem_binding.as_ref().map_or(String::new(), |b| format!(" ({b})")),
+            kg_h(d.model_m_dot_op_kg_h),
+            kg_h(d.dem_m_dot_op_kg_h),
+            limit
         )?;
     }
     Ok(())
@@ -421,6 +442,7 @@ mod tests {
             model_m_dot_kg_s: 0.01,
             model_w_spec_j_kg: 300.0,
             model_compliant: None,
+            model_m_dot_op_kg_h: None,
             campaign: campaign.clone(),
         };
         CheckPlan {
