@@ -2,32 +2,42 @@
 # The fidelity map of docs/dem.md (issue 31): DEM campaigns of the validation rig (Test 3's
 # setup) in several regimes, each compared with the model. Every campaign resumes where it
 # stopped when the script is run again. Usage: bash scripts/dem-fidelity.sh [OUT] [SEEDS]
-# (default runs/dem/fidelity, 2 seeds; one LIGGGHTS process at a time).
+# (default runs/dem/fidelity, 3 seeds; one LIGGGHTS process at a time; SAWTOOTH_BIN picks the
+# executable, default target/release/sawtooth).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-runs/dem/fidelity}
-seeds=${2:-2}
-bin=target/release/sawtooth
+seeds=${2:-3}
+bin=${SAWTOOTH_BIN:-target/release/sawtooth}
 rig=data/validation/test3.toml
 mkdir -p "$out"
 campaign() { # NAME ARGS...
     local name=$1
     shift
-    "$bin" dem run --config "$rig" --runs "$seeds" --jobs 1 --out "$out/$name" "$@" >"$out/$name.txt" 2>"$out/$name.log"
+    "$bin" dem run --config "${config:-$rig}" --runs "$seeds" --jobs 1 --out "$out/$name" "$@" >"$out/$name.txt" 2>"$out/$name.log"
     "$bin" dem compare "$out/$name" --json >"$out/$name.json"
     echo "$name: done"
 }
 # deep fill: 150 grains carrying the model's fill mass (Earth, drag, the rig's 35 deg)
 campaign earth-deep --particles 150
+# lunar vacuum: the same rig under lunar gravity, no drag (early: the slowest regime, 5-30 min
+# a run here, so that it finishes when time is short)
+campaign lunar-deep --particles 150 --env lunar --k-drag 0
 # monolayer: 40 grains of the deep fill's size lining the catch (about a quarter of the mass)
 d_um=$(python3 -c "import json; c=json.load(open('$out/earth-deep/run-001/case.json')); print(c['placement']['diameter_m']*1e6)")
 campaign earth-monolayer --particles 40 --grain-diameter-um "$d_um"
 # v0 across the optimiser's range (0.8-2.0 m/s), and a shallower slope
 campaign earth-v0-0.8 --particles 150 --design 20,15,5,5,60,0,0.8,60
 campaign earth-v0-1.4 --particles 150 --design 20,15,5,5,60,0,1.4,60
+campaign earth-v0-2.0 --particles 150 --design 20,15,5,5,60,0,2.0,60
 campaign earth-alpha-20 --particles 150 --alpha 20
-# lunar vacuum: the same rig under lunar gravity, no drag (last: ~30 min a run here)
-campaign lunar-deep --particles 150 --env lunar --k-drag 0
+# the softened modulus: the deep fill again with half the peak overlap (a stiffer contact,
+# about half the time step), to measure how much the softening itself moves the results
+stiff="$out/rig-overlap-0.05.toml"
+{ cat "$rig"; printf '\n[dem]\nmax_overlap_fraction = 0.05\n'; } >"$stiff"
+config=$stiff
+campaign earth-deep-overlap-0.05 --particles 150
+config=$rig
 python3 - "$out" <<'PY'
 import json, sys, glob, os
 print(f"{'regime':<18}{'tooth err mean/max pp':>24}{'d_avg model':>13}{'d_avg DEM':>18}{'err %':>8}{'lost DEM %':>12}{'s/run DEM':>12}{'s model':>10}")
