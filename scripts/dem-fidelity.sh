@@ -38,14 +38,18 @@ stiff="$out/rig-overlap-0.05.toml"
 config=$stiff
 campaign earth-deep-overlap-0.05 --particles 150
 config=$rig
+# the map's table (docs/dem.md), markdown, from every regime's `dem compare --json`
 python3 - "$out" <<'PY'
 import json, sys, glob, os
-print(f"{'regime':<18}{'tooth err mean/max pp':>24}{'d_avg model':>13}{'d_avg DEM':>18}{'err %':>8}{'lost DEM %':>12}{'s/run DEM':>12}{'s model':>10}")
+print("| regime | seeds | per-tooth error mean / max (pp) | d_avg model (mm) | d_avg DEM (mm, mean ± sd) | d_avg error | centre model / DEM | dispersion model / DEM | lost DEM % | s per run DEM (wall) | model per design |")
+print("|---|---|---|---|---|---|---|---|---|---|---|")
 for f in sorted(glob.glob(os.path.join(sys.argv[1], '*.json'))):
     c = json.load(open(f))
     name = os.path.basename(f)[:-5]
     e = c['d_avg_error_pct']
-    print(f"{name:<18}{c['mean_abs_tooth_error_pp']:>11.2f} / {c['max_abs_tooth_error_pp']:<10.2f}{c['model_d_avg_mm']:>13.2f}"
-          f"{c['dem_d_avg_mm']['mean']:>10.2f} ± {c['dem_d_avg_mm']['sd']:<5.2f}{(e if e is not None else float('nan')):>8.1f}"
-          f"{c['dem_lost_pct']['mean']:>12.1f}{c['dem_s']['mean']:>12.1f}{c['model_s']:>10.4f}")
+    sp = lambda k, fmt: f"{c[k]['mean']:{fmt}} ± {c[k]['sd']:{fmt}}"
+    print(f"| {name} | {c['runs']} | {c['mean_abs_tooth_error_pp']:.1f} / {c['max_abs_tooth_error_pp']:.1f} "
+          f"| {c['model_d_avg_mm']:.1f} | {sp('dem_d_avg_mm', '.1f')} | {'—' if e is None else f'{e:+.1f} %'} "
+          f"| {c['model_centre']:.2f} / {sp('dem_centre', '.2f')} | {c['model_dispersion']:.2f} / {sp('dem_dispersion', '.2f')} "
+          f"| {c['dem_lost_pct']['mean']:.1f} | {sp('dem_s', '.0f')} | {1e3 * c['model_s']:.0f} ms ({c['model_particles']} particles) |")
 PY
