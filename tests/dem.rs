@@ -250,7 +250,7 @@ fn the_same_case_twice_gives_the_same_files_and_the_same_tooth_masses() {
     let write = |name: &str| {
         let dir = d.path().join(name);
         let args =
-            ["dem", "write", "--config", RIG, "--particles", "60", "--seed", "7", "--out", dir.to_str().unwrap()];
+            ["dem", "write", "--config", RIG, "--particles", "40", "--seed", "7", "--out", dir.to_str().unwrap()];
         let (code, _, err) = sawtooth(&args);
         assert_eq!(code, 0, "{err}");
         files_of(&dir)
@@ -277,7 +277,7 @@ fn the_same_case_twice_gives_the_same_files_and_the_same_tooth_masses() {
             "--config",
             config.to_str().unwrap(),
             "--particles",
-            "60",
+            "40",
             "--seed",
             "7",
             "--runs",
