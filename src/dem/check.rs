@@ -397,7 +397,7 @@ pub fn write_table(out: &mut dyn Write, r: &CheckReport) -> anyhow::Result<()> {
         };
         let kg_h = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.1}"));
         let limit = match (d.dem_operating_limit, d.dem_p_op_w) {
-            (Some(l), Some(p)) => format!(" ({l:?}-limited, {p:.2} W)").to_lowercase(),
+            (Some(l), Some(p)) => format!(" ({}-limited, {p:.2} W)", format!("{l:?}").to_lowercase()),
             _ => String::new(),
         };
         writeln!(
