@@ -290,3 +290,196 @@ fn a_polydisperse_fill_runs_as_size_classes_with_their_own_drag() {
     assert!(!setup.contains("[effects"), "{setup}");
     assert!(setup.contains("polydisperse size law"), "{setup}");
 }
+
+/// Every file of a folder, by name (lock and marker left out: they hold the run's id).
+fn files_of(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut out: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap())
+        .filter(|e| e.file_type().unwrap().is_file())
+        .map(|e| (e.file_name().to_string_lossy().into_owned(), std::fs::read(e.path()).unwrap()))
+        .filter(|(n, _)| !n.starts_with(".sawtooth"))
+        .collect();
+    out.sort();
+    out
+}
+
+/// Same inputs and seed, same outputs: `dem write` twice gives the same files byte for
+/// byte, and LIGGGHTS run twice on the same case leaves the same grains in the same teeth
+/// (and the same end positions), so a DEM campaign can be repeated and its seed spread is
+/// the seeds', not the engine's. (Serial LIGGGHTS; an MPI run's domain decomposition may sum
+/// contact forces in another order.)
+#[test]
+fn the_same_case_twice_gives_the_same_files_and_the_same_tooth_masses() {
+    let d = tempfile::tempdir().unwrap();
+    let write = |name: &str| {
+        let dir = d.path().join(name);
+        let args =
+            ["dem", "write", "--config", RIG, "--particles", "40", "--seed", "7", "--out", dir.to_str().unwrap()];
+        let (code, _, err) = sawtooth(&args);
+        assert_eq!(code, 0, "{err}");
+        files_of(&dir)
+    };
+    let (first, second) = (write("case-1"), write("case-2"));
+    let names: Vec<&str> = first.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["case.json", "grains.data", "in.sawtooth", "sled.stl"]);
+    for ((name, a), (_, b)) in first.iter().zip(&second) {
+        assert!(a == b, "{name} differs between two `dem write` of the same inputs");
+    }
+
+    if !liggghts_present() {
+        return;
+    }
+    // CI-sized: the rig's grains have landed 0.5 s after the stroke; stop there
+    let config = d.path().join("rig-short.toml");
+    let rig = read(&Path::new(env!("CARGO_MANIFEST_DIR")).join(RIG));
+    std::fs::write(&config, format!("{rig}\n[dem]\nmax_time_s = 0.5\n")).unwrap();
+    let run = |name: &str| {
+        let dir = d.path().join(name);
+        let args = [
+            "dem",
+            "run",
+            "--config",
+            config.to_str().unwrap(),
+            "--particles",
+            "40",
+            "--seed",
+            "7",
+            "--runs",
+            "1",
+            "--jobs",
+            "1",
+            "--out",
+            dir.to_str().unwrap(),
+        ];
+        let (code, _, err) = sawtooth(&args);
+        assert_eq!(code, 0, "{err}");
+        let result: serde_json::Value = serde_json::from_str(&read(&dir.join("run-001/result.json"))).unwrap();
+        (result["teeth_g"].clone(), result["lost"].clone(), std::fs::read(dir.join("run-001/final.dump")).unwrap())
+    };
+    let (teeth_1, lost_1, dump_1) = run("run-1");
+    let (teeth_2, lost_2, dump_2) = run("run-2");
+    assert!(teeth_1.as_array().is_some_and(|t| !t.is_empty()), "{teeth_1}");
+    assert_eq!(teeth_1, teeth_2, "tooth masses (g) of two runs of one case");
+    assert_eq!(lost_1, lost_2);
+    assert!(dump_1 == dump_2, "the end positions (final.dump) of two runs of one case differ");
+}
+
+/// Many designs on a cluster: `dem check --plan` writes a plan whose members are DEM runs
+/// (design x seed), `campaign slurm` its job array, each array task runs one member through
+/// the script's own command line, and `campaign gather` writes the report `dem check` gives.
+/// No Slurm daemon: the scripts are read and run by bash with the task id Slurm would set.
+#[test]
+fn a_dem_check_runs_as_a_job_array_of_dem_runs_and_gathers_the_same_report() {
+    let d = tempfile::tempdir().unwrap();
+    let (opt, chk) = (d.path().join("opt"), d.path().join("check"));
+    let (opt_s, chk_s) = (opt.to_str().unwrap(), chk.to_str().unwrap());
+    let (code, _, err) = sawtooth(&[
+        "optimize",
+        "--env",
+        "earth",
+        "--pop",
+        "12",
+        "--generations",
+        "2",
+        "--algorithm",
+        "nsga2",
+        "--particles",
+        "20",
+        "--final-particles",
+        "40",
+        "--replicates",
+        "2",
+        "--requirements",
+        "table-2.2",
+        "--quiet",
+        "--out",
+        opt_s,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let check_args = ["dem", "check", opt_s, "--front", "0", "--seeds", "2", "--particles", "30", "--out", chk_s];
+    let mut plan_args = check_args.to_vec();
+    plan_args.push("--plan");
+    let (code, said, err) = sawtooth(&plan_args);
+    assert_eq!(code, 0, "{err}");
+    assert!(said.contains("nothing run yet") && said.contains("campaign slurm"), "{said}");
+    // the same plan again is the same check (read back exactly); another one is refused
+    let (code, _, err) = sawtooth(&plan_args);
+    assert_eq!(code, 0, "the same --plan again: {err}");
+    let mut other = plan_args.clone();
+    other[6] = "3";
+    let (code, _, err) = sawtooth(&other);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("another plan"), "{err}");
+
+    // the plan: every finalist's DEM campaign of 2 seeds; members are finalist x seed
+    let plan: serde_json::Value = serde_json::from_str(&read(&chk.join("plan.json"))).unwrap();
+    let finalists = plan["finalists"].as_array().unwrap();
+    assert!((1..=3).contains(&finalists.len()), "{plan}");
+    assert!(finalists.iter().all(|f| f["campaign"]["runs"] == 2 && f["campaign"]["settings"]["particles"] == 30));
+    assert!(finalists[0]["label"].as_str().unwrap().starts_with('A'), "{plan}");
+    let members = 2 * finalists.len();
+
+    let (code, status, err) = sawtooth(&["campaign", "status", chk_s]);
+    assert_eq!(code, 0, "{err}");
+    assert!(status.contains(&format!("finished 0, not finished {members}")), "{status}");
+    let (code, _, err) = sawtooth(&["campaign", "gather", chk_s]);
+    assert_eq!(code, 2, "a gather before the members ran must refuse: {err}");
+    assert!(err.contains(&format!("{members} of {members} members")) && err.contains("--task"), "{err}");
+
+    // the Slurm scripts: one array task per member, each running `campaign run DIR --task I`
+    let (code, _, err) = sawtooth(&["campaign", "slurm", chk_s, "--time", "30:00"]);
+    assert_eq!(code, 0, "{err}");
+    let array = read(&chk.join("slurm/array.sbatch"));
+    let gather = read(&chk.join("slurm/gather.sbatch"));
+    assert!(array.contains(&format!("#SBATCH --array=0-{}\n", members - 1)), "{array}");
+    assert!(array.contains("#SBATCH --cpus-per-task=1") && array.contains("#SBATCH --time=30:00"), "{array}");
+    assert!(array.contains("campaign run") && array.contains("--task \"$SLURM_ARRAY_TASK_ID\""), "{array}");
+    assert!(gather.contains("campaign gather"), "{gather}");
+
+    if !liggghts_present() {
+        return;
+    }
+    // each task as Slurm would start it: the script under bash with its task id
+    for task in 0..members {
+        let o = Command::new("bash")
+            .arg(chk.join("slurm/array.sbatch"))
+            .env("SLURM_ARRAY_TASK_ID", task.to_string())
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "task {task}: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(String::from_utf8_lossy(&o.stdout).contains(&format!("member {task} (")));
+    }
+    let (code, status, _) = sawtooth(&["campaign", "status", chk_s]);
+    assert_eq!(code, 0);
+    assert!(status.contains(&format!("finished {members}, not finished 0")), "{status}");
+    let o = Command::new("bash").arg(chk.join("slurm/gather.sbatch")).output().unwrap();
+    assert!(o.status.success(), "gather: {}", String::from_utf8_lossy(&o.stderr));
+    let gathered: serde_json::Value = serde_json::from_str(&read(&chk.join("check.json"))).unwrap();
+    assert_eq!(gathered["designs"].as_array().unwrap().len(), finalists.len(), "{gathered}");
+    // each design's DEM d_avg is the mean over its members' own result files
+    for (f, design) in finalists.iter().zip(gathered["designs"].as_array().unwrap()) {
+        let label = f["label"].as_str().unwrap();
+        assert_eq!(design["label"], label);
+        let runs: Vec<f64> = (1..=2)
+            .map(|r| {
+                let path = chk.join(label).join(format!("run-{r:03}/result.json"));
+                serde_json::from_str::<serde_json::Value>(&read(&path)).unwrap()["d_avg_m"].as_f64().unwrap()
+            })
+            .collect();
+        let mean_mm = 1e3 * (runs[0] + runs[1]) / 2.0;
+        let reported = design["dem_d_avg_mm"]["mean"].as_f64().unwrap();
+        assert!((reported - mean_mm).abs() <= 1e-9 * mean_mm.abs().max(1.0), "{label}: {reported} vs {mean_mm}");
+    }
+    let first = &gathered["designs"][0];
+    assert!(first["dem_compliant"].is_boolean(), "the run's requirements judged again: {gathered}");
+    assert!(first["dem_m_dot_op_kg_h"].is_number() && first["dem_operating_limit"].is_string(), "{gathered}");
+
+    // `dem check` on the same folder: every run is done, nothing runs, the same report
+    let mut json_args = check_args.to_vec();
+    json_args.push("--json");
+    let (code, local, err) = sawtooth(&json_args);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("started"), "a finished check ran again: {err}");
+    assert_eq!(serde_json::from_str::<serde_json::Value>(&local).unwrap(), gathered);
+}

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _};
 
-use super::plan::{member_state, read_plan, MemberState, Plan};
+use super::plan::{member_state, read_plan, MemberState};
 use crate::io::atomic::write_atomic;
 
 /// What the array asks of Slurm (`campaign slurm`'s flags).
@@ -98,10 +98,13 @@ pub fn array_spec(tasks: &[usize]) -> String {
 }
 
 /// The array script (one task per member in `tasks`) and the gather script, for the campaign
-/// at `root` (absolute) run by the executable `exe`.
+/// at `root` (absolute) planned by `command` with `members` members (an optimisation
+/// campaign's plan or a DEM check's: both run through `campaign run/gather`), run by the
+/// executable `exe`.
 pub fn scripts(
     a: &SlurmSettings,
-    plan: &Plan,
+    command: &str,
+    members: usize,
     root: &str,
     exe: &str,
     tasks: &[usize],
@@ -131,8 +134,8 @@ pub fn scripts(
          #SBATCH --requeue\n\
          #SBATCH --ntasks=1\n\
          #SBATCH --cpus-per-task={}\n",
-        plan.command,
-        plan.members.len(),
+        command,
+        members,
         array_spec(tasks),
         a.max_parallel.map(|k| format!("%{k}")).unwrap_or_default(),
         a.cpus_per_task
@@ -198,11 +201,17 @@ pub struct Written {
 /// Read the plan in `dir`, check `s`, choose the tasks, and write `dir/slurm/array.sbatch`,
 /// `dir/slurm/gather.sbatch` (run by `exe`) and the `dir/logs` folder the tasks log to.
 pub fn write_scripts(dir: &Path, s: &SlurmSettings, exe: &Path) -> anyhow::Result<Written> {
-    let plan = read_plan(dir)?;
+    // what the scripts need of the plan: its command, its members, which are finished
+    let (command, finished): (String, Vec<bool>) = if crate::dem::check::is_check(dir) {
+        let p = crate::dem::check::read_plan(dir)?;
+        (p.command.clone(), (0..p.members()).map(|i| p.member_done(dir, i)).collect())
+    } else {
+        let p = read_plan(dir)?;
+        let done = (0..p.members.len()).map(|i| member_state(&p.member_dir(dir, i)) == MemberState::Finished);
+        (p.command.clone(), done.collect())
+    };
     s.validate()?;
-    let tasks: Vec<usize> = (0..plan.members.len())
-        .filter(|&i| !s.unfinished || member_state(&plan.member_dir(dir, i)) != MemberState::Finished)
-        .collect();
+    let tasks: Vec<usize> = (0..finished.len()).filter(|&i| !s.unfinished || !finished[i]).collect();
     if tasks.is_empty() {
         bail!(
             "every member of {} is finished: nothing to submit; summarise with `sawtooth campaign gather {}`",
@@ -212,7 +221,7 @@ pub fn write_scripts(dir: &Path, s: &SlurmSettings, exe: &Path) -> anyhow::Resul
     }
     let root = std::fs::canonicalize(dir).with_context(|| format!("resolving {}", dir.display()))?;
     let (root_s, exe_s) = (root.to_string_lossy().into_owned(), exe.to_string_lossy().into_owned());
-    let (array, gather) = scripts(s, &plan, &root_s, &exe_s, &tasks)?;
+    let (array, gather) = scripts(s, &command, finished.len(), &root_s, &exe_s, &tasks)?;
     let sdir = root.join("slurm");
     std::fs::create_dir_all(&sdir).with_context(|| format!("creating {}", sdir.display()))?;
     std::fs::create_dir_all(root.join("logs")).with_context(|| format!("creating {}", root.join("logs").display()))?;
@@ -252,7 +261,7 @@ pub fn submit(w: &Written) -> anyhow::Result<(String, String)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaigns::plan::Study;
+    use crate::campaigns::plan::{Plan, Study};
     use crate::engine::EngineKind;
 
     #[test]
@@ -278,7 +287,9 @@ mod tests {
             max_parallel: Some(2),
             unfinished: false,
         };
-        let (array, gather) = scripts(&s, &plan(), "/scratch/sweep 1", "/opt/bin/sawtooth", &[0, 1, 2]).unwrap();
+        let (array, gather) =
+            scripts(&s, &plan().command, plan().members.len(), "/scratch/sweep 1", "/opt/bin/sawtooth", &[0, 1, 2])
+                .unwrap();
         let lines: Vec<&str> = array.lines().collect();
         assert_eq!(lines[0], "#!/bin/bash");
         for want in [
@@ -306,7 +317,8 @@ mod tests {
 
     #[test]
     fn a_sparse_array_lists_its_tasks_and_defaults_ask_for_one_core() {
-        let (array, _) = scripts(&SlurmSettings::default(), &plan(), "/c", "/s", &[1, 4]).unwrap();
+        let (array, _) =
+            scripts(&SlurmSettings::default(), &plan().command, plan().members.len(), "/c", "/s", &[1, 4]).unwrap();
         assert!(array.contains("#SBATCH --array=1,4\n#SBATCH"), "{array}");
         assert!(array.contains("#SBATCH --cpus-per-task=1\n"), "{array}");
         assert!(!array.contains("--partition") && !array.contains("--time") && !array.contains("--gpus"), "{array}");
@@ -314,7 +326,9 @@ mod tests {
 
     #[test]
     fn paths_that_a_shell_cannot_hold_quoted_are_refused() {
-        let e = scripts(&SlurmSettings::default(), &plan(), "/c/it's", "/s", &[0]).unwrap_err().to_string();
+        let e = scripts(&SlurmSettings::default(), &plan().command, plan().members.len(), "/c/it's", "/s", &[0])
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("the campaign folder") && e.contains("quote"), "{e}");
     }
 

@@ -1,6 +1,7 @@
 //! `sawtooth campaign run|gather|status|slurm DIR`: a campaign folder written by
-//! `gpu-sweep --plan` or `study … --plan` run member by member (one process per member,
-//! e.g. one Slurm array task), or all at once here; summarised by `gather` with the same
+//! `gpu-sweep --plan`, `study … --plan` or `dem check --plan` (whose members are DEM runs,
+//! `crate::dem::check`) run member by member (one process per member, e.g. one Slurm array
+//! task), or all at once here; summarised by `gather` with the same
 //! code and bytes as the one-process commands. A shared filesystem is assumed: every task
 //! reads the plan and writes its member's folder under DIR.
 
@@ -16,6 +17,7 @@ use crate::campaigns::plan::{
 };
 use crate::campaigns::slurm::{array_spec, submit, submit_command, write_scripts, SlurmSettings};
 use crate::campaigns::summarise;
+use crate::dem::check::is_check;
 use crate::engine::make_engine_for;
 use crate::io::run_dir::{Access, RunDir};
 use crate::optim::runner::{run as run_optimisation, RunOptions};
@@ -142,11 +144,18 @@ fn task_from_env() -> anyhow::Result<Option<usize>> {
 }
 
 fn run_cmd(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    let plan = read_plan(&a.dir)?;
     let task = match a.task {
         Some(t) => Some(t),
         None => task_from_env()?,
     };
+    if is_check(&a.dir) {
+        // a DEM check's plan (`dem check --plan`): its members are DEM runs
+        return match task {
+            Some(i) => super::dem::campaign_task(&a.dir, i, out),
+            None => super::dem::campaign_run_all(&a.dir, out),
+        };
+    }
+    let plan = read_plan(&a.dir)?;
     let Some(i) = task else {
         // Every member here, batched per generation; then the summary.
         let _owned = RunDir::acquire(&a.dir, CAMPAIGN_KIND, Access::Exclusive)?;
@@ -194,6 +203,9 @@ fn run_cmd(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
 }
 
 fn gather(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    if is_check(dir) {
+        return super::dem::campaign_gather(dir, out);
+    }
     let plan = read_plan(dir)?;
     let _owned = RunDir::acquire(dir, CAMPAIGN_KIND, Access::Exclusive)?;
     let fronts = finished_fronts(dir, &plan)?;
@@ -202,6 +214,9 @@ fn gather(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
 }
 
 fn status(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    if is_check(dir) {
+        return super::dem::campaign_status(dir, out);
+    }
     let plan = read_plan(dir)?;
     let (mut finished, mut running, mut stopped, mut fresh) = (0, 0, 0, 0);
     writeln!(out, "{} ({}, {} members)", dir.display(), plan.command, plan.members.len())?;

@@ -100,6 +100,11 @@ pub struct CheckArgs {
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Only write the plan (DIR/plan.json: one member per design and seed) and stop: run
+    /// its members with `sawtooth campaign run DIR --task I` or as a Slurm job array
+    /// (`sawtooth campaign slurm DIR`), then `sawtooth campaign gather DIR` writes check.json.
+    #[arg(long)]
+    pub plan: bool,
 }
 
 pub fn run(c: DemCommand, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
@@ -298,15 +303,103 @@ fn check(a: CheckArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         settings.particles = n;
     }
     settings.validate().map_err(anyhow::Error::msg)?;
-    let report = crate::dem::check::check(&a.run_dir, &a.out, &settings, a.seeds, a.front, jobs, &|l| {
-        eprintln!("dem check: {l}")
-    })?;
-    let json = serde_json::to_string_pretty(&report)?;
-    if a.json {
-        writeln!(out, "{json}")?;
-    } else {
-        crate::dem::check::write_table(out, &report)?;
-        writeln!(out, "\nwrote {}/check.json", a.out.display())?;
+    if a.seeds == 0 || a.seeds > 1000 {
+        bail!("--seeds must lie in [1, 1000], got {}", a.seeds);
     }
+    let command = format!(
+        "sawtooth dem check {} --seeds {} --front {} --particles {} --out {}",
+        a.run_dir.display(),
+        a.seeds,
+        a.front,
+        settings.particles,
+        a.out.display()
+    );
+    let plan = crate::dem::check::plan(&a.run_dir, &settings, a.seeds, a.front, &command)?;
+    if a.plan {
+        let _owned = crate::dem::check::write_plan(&a.out, &plan)?;
+        let n = plan.members();
+        let dir = a.out.display();
+        writeln!(
+            out,
+            "wrote {dir}/{} ({} designs x {} seeds = {n} members, one DEM run each); nothing run yet",
+            crate::dem::check::CHECK_PLAN,
+            plan.finalists.len(),
+            plan.seeds
+        )?;
+        writeln!(out, "  one member:      sawtooth campaign run {dir} --task I   (I in 0..{})", n - 1)?;
+        writeln!(out, "  all, here:       sawtooth dem check {} --out {dir} (the same flags)", a.run_dir.display())?;
+        writeln!(out, "  Slurm job array: sawtooth campaign slurm {dir} [--partition P --time T] --submit")?;
+        writeln!(out, "  then:            sawtooth campaign gather {dir}   (writes {dir}/check.json)")?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    let report = crate::dem::check::check(&a.out, &plan, jobs, &|l| eprintln!("dem check: {l}"))?;
+    report_check(&report, &a.out, a.json, out)
+}
+
+fn report_check(
+    report: &crate::dem::check::CheckReport,
+    dir: &Path,
+    json: bool,
+    out: &mut dyn Write,
+) -> anyhow::Result<ExitCode> {
+    if json {
+        writeln!(out, "{}", serde_json::to_string_pretty(report)?)?;
+    } else {
+        crate::dem::check::write_table(out, report)?;
+        writeln!(out, "\nwrote {}/{}", dir.display(), crate::dem::check::CHECK_JSON)?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `sawtooth campaign run DIR --task I` on a DEM check's folder: member I (one DEM run)
+/// alone, the folder shared with the other tasks.
+pub fn campaign_task(dir: &Path, task: usize, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    let plan = crate::dem::check::read_plan(dir)?;
+    let _shared = RunDir::acquire(dir, crate::dem::check::CHECK_KIND, Access::Shared)?;
+    let label = if task < plan.members() { plan.member_label(task) } else { String::new() };
+    let ran = crate::dem::check::run_member(dir, &plan, task, &|l| eprintln!("member {task} ({label}): {l}"))?;
+    if ran {
+        writeln!(out, "member {task} ({label}) finished: {}", plan.member_dir(dir, task).display())?;
+    } else {
+        writeln!(out, "member {task} ({label}) is already finished")?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `sawtooth campaign run DIR` (no task) on a DEM check's folder: every member here, one
+/// design after another, then the report (what `dem check` does).
+pub fn campaign_run_all(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    let plan = crate::dem::check::read_plan(dir)?;
+    let jobs = jobs(None)?;
+    let report = crate::dem::check::check(dir, &plan, jobs, &|l| eprintln!("dem check: {l}"))?;
+    report_check(&report, dir, false, out)
+}
+
+/// `sawtooth campaign gather DIR` on a DEM check's folder: check.json from the members'
+/// results, refused while any is missing.
+pub fn campaign_gather(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    let plan = crate::dem::check::read_plan(dir)?;
+    let _owned = RunDir::acquire(dir, crate::dem::check::CHECK_KIND, Access::Exclusive)?;
+    let report = crate::dem::check::gather(dir, &plan)?;
+    report_check(&report, dir, false, out)
+}
+
+/// `sawtooth campaign status DIR` on a DEM check's folder: each member finished or not.
+pub fn campaign_status(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    let plan = crate::dem::check::read_plan(dir)?;
+    writeln!(out, "{} ({}, {} members)", dir.display(), plan.command, plan.members())?;
+    let mut finished = 0;
+    for i in 0..plan.members() {
+        let state = if plan.member_done(dir, i) {
+            finished += 1;
+            "finished"
+        } else if plan.member_dir(dir, i).is_dir() {
+            "started (running, or stopped: run it again)"
+        } else {
+            "not started"
+        };
+        writeln!(out, "{i:>5}  {:<16} {state}", plan.member_label(i))?;
+    }
+    writeln!(out, "finished {finished}, not finished {}", plan.members() - finished)?;
     Ok(ExitCode::SUCCESS)
 }

@@ -121,7 +121,7 @@ pub fn run(dir: &Path, plan: &Plan, jobs: usize, say: &(dyn Fn(String) + Sync)) 
     if let Some(f) = failures.first() {
         bail!("{} of {} runs failed (rerun the same command to resume); first: {f}", failures.len(), todo.len());
     }
-    let all: Vec<RunResult> = results(dir, plan.runs)?.into_iter().map(|r| r.expect("every run done")).collect();
+    let all = gather(dir, plan)?;
     let lost: usize = all.iter().map(|r| r.lost).sum();
     if lost > 0 {
         let grains: usize = all.iter().map(|r| r.grains).sum();
@@ -130,6 +130,39 @@ pub fn run(dir: &Path, plan: &Plan, jobs: usize, say: &(dyn Fn(String) + Sync)) 
             first.teeth
         ));
     }
+    Ok(all)
+}
+
+/// Run `r` of the campaign alone (one task of a job array, `dem check`'s members): the
+/// plan recorded (or checked against the one there), the run skipped if its result exists.
+/// `Ok(false)` when it was already done. No LIGGGHTS is looked for then, so a finished
+/// member needs no engine.
+pub fn run_one(dir: &Path, plan: &Plan, r: u32, say: &(dyn Fn(String) + Sync)) -> anyhow::Result<bool> {
+    if r >= plan.runs {
+        bail!("run {} of a campaign of {} runs", r + 1, plan.runs);
+    }
+    record_plan(dir, plan)?;
+    if run_dir(dir, r).join(RESULT).is_file() {
+        return Ok(false);
+    }
+    plan.case(r).map_err(anyhow::Error::msg)?;
+    let binary = find_liggghts()?;
+    one_run(dir, plan, r, &binary, say)?;
+    Ok(true)
+}
+
+/// Every run's result, once all are in, and the campaign's `dem.csv` and `setup.toml` written
+/// from them (the same bytes whichever process ran the runs); an error naming the runs
+/// without a result otherwise.
+pub fn gather(dir: &Path, plan: &Plan) -> anyhow::Result<Vec<RunResult>> {
+    let found = results(dir, plan.runs)?;
+    let missing: Vec<String> =
+        found.iter().enumerate().filter(|(_, r)| r.is_none()).map(|(i, _)| format!("run {}", i + 1)).collect();
+    if !missing.is_empty() {
+        bail!("{}: {} of {} runs have no result yet ({})", dir.display(), missing.len(), plan.runs, missing.join(", "));
+    }
+    let all: Vec<RunResult> = found.into_iter().flatten().collect();
+    let first = plan.case(0).map_err(anyhow::Error::msg)?;
     let provenance = vec![
         format!(
             "DEM campaign (LIGGGHTS, `sawtooth dem run`): {} runs, seeds {}..{}; {} grains of {:.1} um in a {:.3} mm periodic slab; {} teeth of the mesh",

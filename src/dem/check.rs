@@ -4,24 +4,41 @@
 //! and, where the run had requirements, the same verdicts.
 //!
 //! Every design is run at the slope its front figures are at (the worst slope of a run over
-//! several). Each design's campaign is a folder of its own under the check's folder, so a
-//! killed check resumes design by design and run by run.
+//! several). A check is a plan ([`CheckPlan`], `plan.json` in the check's folder): its
+//! finalists, each with the DEM campaign of its seeds in a folder of its own, and its members,
+//! one DEM run each (finalist × seed). The members run here one design after another
+//! ([`check`]) or one per process (`sawtooth campaign run DIR --task I`: a Slurm array task,
+//! [`run_member`]); either way [`gather`] builds `check.json` from the runs' result files, so
+//! both give the same report, and a killed check resumes run by run.
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::Context as _;
-use serde::Serialize;
+use anyhow::{bail, Context as _};
+use serde::{Deserialize, Serialize};
 
 use super::campaign::{self, Plan};
 use super::compare::Spread;
+use super::gather::RunResult;
 use super::settings::DemSettings;
 use crate::io::atomic::write_atomic;
-use crate::io::run_dir::{Access, RunDir};
+use crate::io::run_dir::{kind_of, Access, RunDir};
 use crate::model::performance::performance;
 use crate::model::prepare;
+use crate::model::requirements::{Limit, Requirements};
 use crate::optim::front::{picks, read_pareto_csv, FrontPoint};
 use crate::optim::manifest::read_manifest;
+
+/// The `io::run_dir` kind of a check's folder.
+pub const CHECK_KIND: &str = "dem-check";
+/// The plan's file in a check's folder.
+pub const CHECK_PLAN: &str = "plan.json";
+/// The report's file in a check's folder.
+pub const CHECK_JSON: &str = "check.json";
+const CHECK_PLAN_FORMAT: u32 = 1;
+/// Most members a plan may hold: beyond this a plan.json is a typo or an edit, not a check
+/// (a Slurm array of a million tasks is refused by every cluster anyway).
+const MAX_MEMBERS: usize = 100_000;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct DesignCheck {
@@ -40,6 +57,12 @@ pub struct DesignCheck {
     pub model_compliant: Option<bool>,
     pub dem_compliant: Option<bool>,
     pub dem_binding: Option<String>,
+    /// The operating point under the requirements (feed rate at the target, or lower where
+    /// the power limit binds), kg/h and W: the model's from the run, the DEM's judged again.
+    pub model_m_dot_op_kg_h: Option<f64>,
+    pub dem_m_dot_op_kg_h: Option<f64>,
+    pub dem_p_op_w: Option<f64>,
+    pub dem_operating_limit: Option<Limit>,
     pub dem_s_per_run: f64,
 }
 
@@ -49,6 +72,106 @@ pub struct CheckReport {
     pub seeds: u32,
     pub particles: u32,
     pub designs: Vec<DesignCheck>,
+}
+
+/// One design to check: the optimisation's figures for it and its DEM campaign.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Finalist {
+    /// `A`, `B`, `C` (a design picked twice: `A+C`) or `front-K`; also its folder's name.
+    pub label: String,
+    pub model_d_avg_m: f64,
+    pub model_m_dot_kg_s: f64,
+    pub model_w_spec_j_kg: f64,
+    pub model_compliant: Option<bool>,
+    /// The model's operating feed rate under the run's requirements, kg/h.
+    pub model_m_dot_op_kg_h: Option<f64>,
+    /// The design's DEM campaign at the slope of its front figures; its runs are members.
+    pub campaign: Plan,
+}
+
+/// Everything a member needs to run alone and the gather needs to report.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CheckPlan {
+    pub format: u32,
+    /// The command that made it (for people).
+    pub command: String,
+    /// The `optimize` run whose finalists these are.
+    pub run_dir: String,
+    pub seeds: u32,
+    pub particles: u32,
+    /// The run's requirements, judged again with the DEM's figures.
+    pub requirements: Option<Requirements>,
+    pub finalists: Vec<Finalist>,
+}
+
+impl CheckPlan {
+    /// Members: one DEM run per finalist and seed, finalist by finalist.
+    pub fn members(&self) -> usize {
+        self.finalists.len() * self.seeds as usize
+    }
+
+    /// Member `i` as (finalist index, run index within its campaign).
+    pub fn member(&self, i: usize) -> (usize, u32) {
+        (i / self.seeds as usize, (i % self.seeds as usize) as u32)
+    }
+
+    pub fn member_label(&self, i: usize) -> String {
+        let (f, r) = self.member(i);
+        let c = &self.finalists[f].campaign;
+        format!("{} seed {}", self.finalists[f].label, c.first_seed + r as u64)
+    }
+
+    /// The finalist's campaign folder.
+    pub fn finalist_dir(&self, root: &Path, f: usize) -> PathBuf {
+        root.join(&self.finalists[f].label)
+    }
+
+    /// The member's run folder (`LABEL/run-NNN`).
+    pub fn member_dir(&self, root: &Path, i: usize) -> PathBuf {
+        let (f, r) = self.member(i);
+        campaign::run_dir(&self.finalist_dir(root, f), r)
+    }
+
+    pub fn member_done(&self, root: &Path, i: usize) -> bool {
+        self.member_dir(root, i).join(campaign::RESULT).is_file()
+    }
+
+    /// Every rule a plan read back must meet (it is input like any other): the first broken
+    /// one, naming its field.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.format != CHECK_PLAN_FORMAT {
+            return Err(format!("`format` {} (this sawtooth reads format {CHECK_PLAN_FORMAT})", self.format));
+        }
+        if !(1..=1000).contains(&self.seeds) {
+            return Err(format!("`seeds` must lie in [1, 1000], got {}", self.seeds));
+        }
+        if self.finalists.is_empty() || self.members() > MAX_MEMBERS {
+            return Err(format!(
+                "`finalists` ({}) x `seeds` ({}) must give 1 to {MAX_MEMBERS} members",
+                self.finalists.len(),
+                self.seeds
+            ));
+        }
+        let mut labels = std::collections::HashSet::new();
+        for (i, f) in self.finalists.iter().enumerate() {
+            let at = |e: String| format!("finalist {i} ({}): {e}", f.label);
+            let plain = !f.label.is_empty()
+                && f.label.len() <= 64
+                && f.label.chars().all(|c| c.is_ascii_alphanumeric() || "+-_".contains(c));
+            if !plain {
+                return Err(at("`label` must be a plain folder name (letters, digits, `+-_`)".into()));
+            }
+            if !labels.insert(f.label.as_str()) {
+                return Err(at("`label` is another finalist's too; each has its own folder".into()));
+            }
+            if f.campaign.runs != self.seeds {
+                return Err(at(format!("`campaign.runs` {} differs from `seeds` {}", f.campaign.runs, self.seeds)));
+            }
+            f.campaign.settings.validate().map_err(|e| at(format!("`campaign.settings`: {e}")))?;
+            f.campaign.case(0).map_err(|e| at(format!("`campaign`: {e}")))?;
+        }
+        Ok(())
+    }
 }
 
 /// The designs to check: the picks, then `k` front designs evenly spread over the front
@@ -77,82 +200,209 @@ fn chosen(front: &[FrontPoint], k: usize) -> Vec<(String, FrontPoint)> {
     out
 }
 
-pub fn check(
-    run_dir: &Path,
-    out_dir: &Path,
-    settings: &DemSettings,
-    seeds: u32,
-    k: usize,
-    jobs: usize,
-    say: &(dyn Fn(String) + Sync),
-) -> anyhow::Result<CheckReport> {
+/// The plan of a check of `run_dir`'s picks and `k` front designs, `seeds` DEM runs each
+/// (seeds from the run's own seed on). Every case is built once here, so a design the DEM
+/// cannot represent is refused before anything is written.
+pub fn plan(run_dir: &Path, settings: &DemSettings, seeds: u32, k: usize, command: &str) -> anyhow::Result<CheckPlan> {
     let manifest = read_manifest(run_dir)?;
     let front = read_pareto_csv(&run_dir.join("pareto.csv"))
         .with_context(|| format!("{} has no finished front (pareto.csv)", run_dir.display()))?;
     anyhow::ensure!(!front.is_empty(), "{}: the front is empty", run_dir.display());
-    let designs = chosen(&front, k);
-    let _owned = RunDir::acquire(out_dir, "dem-check", Access::Exclusive).context("--out")?;
-    let mut report =
-        CheckReport { run_dir: run_dir.display().to_string(), seeds, particles: settings.particles, designs: vec![] };
-    for (label, p) in designs {
+    let mut finalists = Vec::new();
+    for (label, p) in chosen(&front, k) {
         let mut scenario = manifest.scenario.clone();
         scenario.environment.alpha_deg = p.alpha_deg;
-        let plan = Plan {
-            scenario: scenario.clone(),
+        let campaign = Plan {
+            scenario,
             design: p.design,
             settings: settings.clone(),
             runs: seeds,
             first_seed: manifest.seed,
             known_return: None,
         };
-        let dir = out_dir.join(&label);
-        std::fs::create_dir_all(&dir)?;
-        say(format!("design {label}: {:?}", p.design.to_cli_units()));
-        let results = campaign::run(&dir, &plan, jobs, say)?;
-        let d: Vec<f64> = results.iter().map(|r| r.d_avg_m).collect();
-        let mean_d = d.iter().sum::<f64>() / d.len() as f64;
-        let lost = results.iter().map(|r| r.lost as f64 / r.grains as f64).sum::<f64>() / results.len() as f64;
-        let prep = prepare(&scenario, &p.design).map_err(|e| anyhow::anyhow!("design {label}: {e}"))?;
-        let perf = performance(&scenario, &p.design, mean_d, prep.fill.area);
-        let verdict = manifest.requirements.as_ref().map(|r| r.assess(&perf, &scenario.performance, lost));
-        let sd = if d.len() > 1 {
-            (d.iter().map(|x| (x - mean_d).powi(2)).sum::<f64>() / (d.len() - 1) as f64).sqrt()
-        } else {
-            0.0
-        };
-        report.designs.push(DesignCheck {
+        campaign.case(0).map_err(|e| anyhow::anyhow!("design {label}: {e}"))?;
+        finalists.push(Finalist {
             label,
-            design_cli: p.design.to_cli_units(),
-            alpha_deg: p.alpha_deg,
-            model_d_avg_mm: p.d_avg_m * 1e3,
-            dem_d_avg_mm: Spread { mean: mean_d * 1e3, sd: sd * 1e3 },
-            model_m_dot_kg_h: p.m_dot_kg_s * 3600.0,
-            dem_m_dot_kg_h: perf.m_dot_kg_s * 3600.0,
+            model_d_avg_m: p.d_avg_m,
+            model_m_dot_kg_s: p.m_dot_kg_s,
             model_w_spec_j_kg: p.w_spec_j_kg,
-            dem_w_spec_j_kg: perf.w_spec_j_kg,
-            dem_lost_pct: 100.0 * lost,
             model_compliant: p.compliance.as_ref().map(|c| c.compliant),
-            dem_compliant: verdict.as_ref().map(|v| v.compliant()),
-            dem_binding: verdict.as_ref().and_then(|v| v.binding().map(str::to_string)),
-            dem_s_per_run: results.iter().map(|r| r.wall_s).sum::<f64>() / results.len() as f64,
+            model_m_dot_op_kg_h: p.compliance.as_ref().map(|c| c.m_dot_op_kg_h),
+            campaign,
         });
-        write_atomic(&out_dir.join("check.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
     }
+    let plan = CheckPlan {
+        format: CHECK_PLAN_FORMAT,
+        command: command.to_string(),
+        run_dir: run_dir.display().to_string(),
+        seeds,
+        particles: settings.particles,
+        requirements: manifest.requirements.clone(),
+        finalists,
+    };
+    plan.validate().map_err(anyhow::Error::msg)?;
+    Ok(plan)
+}
+
+/// True when `dir` is a check's folder with a plan (what `campaign run/gather/status/slurm`
+/// dispatch on).
+pub fn is_check(dir: &Path) -> bool {
+    kind_of(dir).as_deref() == Some(CHECK_KIND) && dir.join(CHECK_PLAN).is_file()
+}
+
+/// Own `root` and write `plan` there; a folder holding another plan is refused (the members
+/// of a check must all come from one plan). The plan's `command` is left out of the
+/// comparison: the same check made by `dem check --plan` and resumed by `dem check` is one.
+pub fn write_plan(root: &Path, plan: &CheckPlan) -> anyhow::Result<RunDir> {
+    let owned = RunDir::acquire(root, CHECK_KIND, Access::Exclusive).context("--out")?;
+    let path = root.join(CHECK_PLAN);
+    if path.is_file() {
+        let old = CheckPlan { command: plan.command.clone(), ..read_plan(root)? };
+        if old != *plan {
+            bail!(
+                "{} holds a DEM check of another plan ({}): resuming needs the same run, --seeds, --front and --particles; choose another --out",
+                root.display(),
+                path.display()
+            );
+        }
+        return Ok(owned);
+    }
+    write_atomic(&path, (serde_json::to_string_pretty(plan)? + "\n").as_bytes())?;
+    Ok(owned)
+}
+
+/// Read and check `root/plan.json`.
+pub fn read_plan(root: &Path) -> anyhow::Result<CheckPlan> {
+    let path = root.join(CHECK_PLAN);
+    let text = crate::io::bounded::read_text(&path, &crate::schema::PLAN_FILE)?;
+    let plan: CheckPlan = serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
+    plan.validate().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok(plan)
+}
+
+/// Run member `i` alone (the caller holds `root`, shared with the other members' tasks);
+/// `Ok(false)` when it was done already.
+pub fn run_member(root: &Path, plan: &CheckPlan, i: usize, say: &(dyn Fn(String) + Sync)) -> anyhow::Result<bool> {
+    if i >= plan.members() {
+        bail!(
+            "--task {i}: the DEM check in {} has {} members (tasks 0..={})",
+            root.display(),
+            plan.members(),
+            plan.members() - 1
+        );
+    }
+    let (f, r) = plan.member(i);
+    let dir = plan.finalist_dir(root, f);
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    campaign::run_one(&dir, &plan.finalists[f].campaign, r, say)
+}
+
+/// The model's and the DEM's figures of one finalist from its runs.
+fn design_check(plan: &CheckPlan, f: &Finalist, results: &[RunResult]) -> anyhow::Result<DesignCheck> {
+    let (scenario, design) = (&f.campaign.scenario, &f.campaign.design);
+    let d: Vec<f64> = results.iter().map(|r| r.d_avg_m).collect();
+    let mean_d = d.iter().sum::<f64>() / d.len() as f64;
+    let lost = results.iter().map(|r| r.lost as f64 / r.grains as f64).sum::<f64>() / results.len() as f64;
+    let prep = prepare(scenario, design).map_err(|e| anyhow::anyhow!("design {}: {e}", f.label))?;
+    let perf = performance(scenario, design, mean_d, prep.fill.area);
+    let verdict = plan.requirements.as_ref().map(|r| r.assess(&perf, &scenario.performance, lost));
+    let sd = if d.len() > 1 {
+        (d.iter().map(|x| (x - mean_d).powi(2)).sum::<f64>() / (d.len() - 1) as f64).sqrt()
+    } else {
+        0.0
+    };
+    Ok(DesignCheck {
+        label: f.label.clone(),
+        design_cli: design.to_cli_units(),
+        alpha_deg: scenario.environment.alpha_deg,
+        model_d_avg_mm: f.model_d_avg_m * 1e3,
+        dem_d_avg_mm: Spread { mean: mean_d * 1e3, sd: sd * 1e3 },
+        model_m_dot_kg_h: f.model_m_dot_kg_s * 3600.0,
+        dem_m_dot_kg_h: perf.m_dot_kg_s * 3600.0,
+        model_w_spec_j_kg: f.model_w_spec_j_kg,
+        dem_w_spec_j_kg: perf.w_spec_j_kg,
+        dem_lost_pct: 100.0 * lost,
+        model_compliant: f.model_compliant,
+        dem_compliant: verdict.as_ref().map(|v| v.compliant()),
+        dem_binding: verdict.as_ref().and_then(|v| v.binding().map(str::to_string)),
+        model_m_dot_op_kg_h: f.model_m_dot_op_kg_h,
+        dem_m_dot_op_kg_h: verdict.as_ref().map(|v| v.operating_point.m_dot_kg_h),
+        dem_p_op_w: verdict.as_ref().map(|v| v.operating_point.p_avg_w),
+        dem_operating_limit: verdict.as_ref().map(|v| v.operating_point.limit),
+        dem_s_per_run: results.iter().map(|r| r.wall_s).sum::<f64>() / results.len() as f64,
+    })
+}
+
+fn write_report(root: &Path, report: &CheckReport) -> anyhow::Result<()> {
+    write_atomic(&root.join(CHECK_JSON), serde_json::to_string_pretty(report)?.as_bytes())
+}
+
+fn empty_report(plan: &CheckPlan) -> CheckReport {
+    CheckReport { run_dir: plan.run_dir.clone(), seeds: plan.seeds, particles: plan.particles, designs: vec![] }
+}
+
+/// The report from the members' result files, and `check.json` (and each finalist's
+/// `dem.csv`/`setup.toml`) written; refused, naming every member without a result, while
+/// any is missing. The caller holds `root` exclusively.
+pub fn gather(root: &Path, plan: &CheckPlan) -> anyhow::Result<CheckReport> {
+    let missing: Vec<String> = (0..plan.members())
+        .filter(|&i| !plan.member_done(root, i))
+        .map(|i| format!("  {i:>5}  {}", plan.member_label(i)))
+        .collect();
+    if !missing.is_empty() {
+        bail!(
+            "{} of {} members of the DEM check in {} have no result; no check.json written:\n{}\nrun them (`sawtooth campaign run {} --task I`, or `sawtooth campaign slurm {} --unfinished --submit`) and gather again",
+            missing.len(),
+            plan.members(),
+            root.display(),
+            missing.join("\n"),
+            root.display(),
+            root.display()
+        );
+    }
+    let mut report = empty_report(plan);
+    for (i, f) in plan.finalists.iter().enumerate() {
+        let results = campaign::gather(&plan.finalist_dir(root, i), &f.campaign)?;
+        report.designs.push(design_check(plan, f, &results)?);
+    }
+    write_report(root, &report)?;
     Ok(report)
+}
+
+/// The whole check here: the plan written (or checked), then each finalist's campaign run
+/// with up to `jobs` LIGGGHTS processes, `check.json` rewritten after every design (so a
+/// long check shows its first designs early); the final report is [`gather`]'s.
+pub fn check(root: &Path, plan: &CheckPlan, jobs: usize, say: &(dyn Fn(String) + Sync)) -> anyhow::Result<CheckReport> {
+    let _owned = write_plan(root, plan)?;
+    let mut report = empty_report(plan);
+    for (i, f) in plan.finalists.iter().enumerate() {
+        let dir = plan.finalist_dir(root, i);
+        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        say(format!("design {}: {:?}", f.label, f.campaign.design.to_cli_units()));
+        let results = campaign::run(&dir, &f.campaign, jobs, say)?;
+        report.designs.push(design_check(plan, f, &results)?);
+        write_report(root, &report)?;
+    }
+    gather(root, plan)
 }
 
 pub fn write_table(out: &mut dyn Write, r: &CheckReport) -> anyhow::Result<()> {
     writeln!(out, "DEM check of {} ({} seeds x {} grains per design)", r.run_dir, r.seeds, r.particles)?;
-    writeln!(out, "design     d_avg mm model / DEM      m_dot kg/h model / DEM   W_spec J/kg model / DEM   lost %  verdict model / DEM")?;
+    writeln!(out, "design     d_avg mm model / DEM      m_dot kg/h model / DEM   W_spec J/kg model / DEM   lost %  verdict model / DEM   operating kg/h model / DEM")?;
     for d in &r.designs {
         let verdict = |v: Option<bool>| match v {
             Some(true) => "meets",
             Some(false) => "fails",
             None => "-",
         };
+        let kg_h = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.1}"));
+        let limit = match (d.dem_operating_limit, d.dem_p_op_w) {
+            (Some(l), Some(p)) => format!(" ({}-limited, {p:.2} W)", format!("{l:?}").to_lowercase()),
+            _ => String::new(),
+        };
         writeln!(
             out,
-            "{:<9} {:>7.2} / {:>6.2} ± {:<5.2} {:>9.2} / {:<9.2} {:>10.1} / {:<10} {:>6.1}  {} / {}{}",
+            "{:<9} {:>7.2} / {:>6.2} ± {:<5.2} {:>9.2} / {:<9.2} {:>10.1} / {:<10} {:>6.1}  {} / {}{}   {} / {}{}",
             d.label,
             d.model_d_avg_mm,
             d.dem_d_avg_mm.mean,
@@ -164,7 +414,10 @@ pub fn write_table(out: &mut dyn Write, r: &CheckReport) -> anyhow::Result<()> {
             d.dem_lost_pct,
             verdict(d.model_compliant),
             verdict(d.dem_compliant),
-            d.dem_binding.as_ref().map_or(String::new(), |b| format!(" ({b})"))
+            d.dem_binding.as_ref().map_or(String::new(), |b| format!(" ({b})")),
+            kg_h(d.model_m_dot_op_kg_h),
+            kg_h(d.dem_m_dot_op_kg_h),
+            limit
         )?;
     }
     Ok(())
@@ -173,6 +426,64 @@ pub fn write_table(out: &mut dyn Write, r: &CheckReport) -> anyhow::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn a_plan() -> CheckPlan {
+        let campaign = Plan {
+            scenario: crate::model::Scenario::lunar(),
+            design: crate::model::Design::lunar_solution_c(),
+            settings: DemSettings { particles: 50, ..Default::default() },
+            runs: 2,
+            first_seed: 5,
+            known_return: None,
+        };
+        let finalist = |label: &str| Finalist {
+            label: label.into(),
+            model_d_avg_m: 0.2,
+            model_m_dot_kg_s: 0.01,
+            model_w_spec_j_kg: 300.0,
+            model_compliant: None,
+            model_m_dot_op_kg_h: None,
+            campaign: campaign.clone(),
+        };
+        CheckPlan {
+            format: CHECK_PLAN_FORMAT,
+            command: "test".into(),
+            run_dir: "runs/x".into(),
+            seeds: 2,
+            particles: 50,
+            requirements: None,
+            finalists: vec![finalist("A+C"), finalist("B")],
+        }
+    }
+
+    #[test]
+    fn members_are_each_finalists_seeds_in_its_own_folder() {
+        let p = a_plan();
+        assert_eq!(p.members(), 4);
+        assert_eq!(p.member(3), (1, 1));
+        assert_eq!(p.member_label(2), "B seed 5");
+        assert_eq!(p.member_dir(Path::new("chk"), 1), Path::new("chk/A+C/run-002"));
+        assert!(p.validate().is_ok());
+    }
+
+    #[test]
+    fn a_plan_edited_out_of_its_rules_is_refused_naming_the_field() {
+        let mut p = a_plan();
+        p.finalists[1].label = "../elsewhere".into();
+        assert!(p.validate().unwrap_err().contains("finalist 1 (../elsewhere): `label`"));
+        let mut p = a_plan();
+        p.finalists[1].label = "A+C".into();
+        assert!(p.validate().unwrap_err().contains("another finalist's"));
+        let mut p = a_plan();
+        p.finalists[0].campaign.runs = 3;
+        assert!(p.validate().unwrap_err().contains("`campaign.runs` 3 differs from `seeds` 2"));
+        let mut p = a_plan();
+        p.finalists[0].campaign.settings.max_overlap_fraction = 2.0;
+        assert!(p.validate().unwrap_err().contains("[dem] max_overlap_fraction"));
+        let mut p = a_plan();
+        p.seeds = 0;
+        assert!(p.validate().unwrap_err().contains("`seeds`"));
+    }
 
     #[test]
     fn a_design_picked_twice_is_checked_once_under_both_labels() {
