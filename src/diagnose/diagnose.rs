@@ -523,10 +523,11 @@ fn effect_starts(space: &Space, base_names: &[&'static str], base_x: &[f64], ext
 /// The grid of unstated sled motions the motion screen starts from: delays (s) "at once"
 /// and well into the flights (a longer delay outlasts them: the baseline's own start), and
 /// return speeds (m/s) doubling over the search box (the POC profile's 0.05 m/s to a fast
-/// return). The flights last tens of milliseconds, about as long as the sled takes to
-/// return its stroke at a few tenths of a m/s, so the outcome is steep in the speed: at a
-/// step of 2.7 (0.3 to 0.8 m/s) a 0.05 s, 0.5 m/s motion fell between two points that each
-/// did worse than no motion at all. The fit moves the motion from the best points onward.
+/// return). At a few tenths of a m/s the sled returns its stroke (10 mm on the practice
+/// rig) in tens of milliseconds, while grains fly, and the outcome is steep in the speed:
+/// at a step of 2.7 (0.3 to 0.8 m/s) a 0.05 s, 0.5 m/s motion fell between two points that
+/// each screened worse than no motion at all (docs/diagnosis-report.md). The fit moves the
+/// motion from the best points onward.
 const MOTION_GRID: ([f64; 2], [f64; 6]) = ([0.0, 0.05], [0.03, 0.06, 0.12, 0.25, 0.5, 1.0]);
 /// The differential evolution over the shared parameters at each grid point: population
 /// (about three per parameter, and the baseline's point), generations, and the compass
