@@ -240,10 +240,12 @@ pub fn to_markdown(d: &Diagnosis) -> String {
     let _ = writeln!(
         s,
         "Each model is fitted on all runs and re-simulated on fresh particle streams (not the ones it was fitted \
-         on); the gap is the SSE (%²) summed over conditions, averaged over the streams. Ranked by score = gap + 2 × \
+         on); the gap is the SSE (%²) summed over conditions, averaged over the streams, once each condition may \
+         have lost up to its measured not-recovered share in handling (loss-adjusted). Ranked by score = gap + 2 × \
          (extra parameters) × SE (bootstrap standard error of the gap, runs and streams resampled). Reduction = \
          1 − gap / baseline gap; the improvement interval is the paired bootstrap interval of (baseline − effect). \
-         `best` must also remove at least {:.0} % of the baseline's gap.\n",
+         `best` must also remove at least {:.0} % of the baseline's gap, and the baseline must be well above its \
+         noise floor (see the verdict).\n",
         100.0 * super::diagnose::MIN_REDUCTION
     );
     let _ = writeln!(s, "| rank | model | fitted parameters (all runs) | gap | interval | SE | score | reduction | improvement interval |");
@@ -575,7 +577,7 @@ impl Figure for RankingPlot<'_> {
             .y_labels(n + 1)
             .y_label_formatter(&y_label)
             .x_label_formatter(&plot::tick)
-            .x_desc("held-out gap and score: SSE summed over conditions [%²]")
+            .x_desc("held-out gap and score: loss-adjusted SSE summed over conditions [%²]")
             .label_style(plot::text_style(plot::LABEL_SIZE))
             .axis_desc_style(plot::text_style(plot::LABEL_SIZE))
             .bold_line_style(plot::GRID)
