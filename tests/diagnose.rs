@@ -376,7 +376,10 @@ fn bad_input_is_named_with_exit_2() {
     let vacuum = vacuum.to_str().unwrap().to_string();
     let cases: [(Vec<&str>, &str); 8] = [
         (vec!["--data", &data, "--setup", &bad_motion], "measurement.motion_delay_s must lie in [0, 100]"),
-        (vec!["--data", &data, "--setup", s3, "--rescore-streams", "5000"], "at most"),
+        (
+            vec!["--data", &data, "--setup", s3, "--rescore-streams", "5000"],
+            "--rescore-streams <RESCORE_STREAMS>': it must lie in [1, 1000]",
+        ),
         // good input, but --out holds someone else's file (bad_motion.toml): refused before
         // any simulation
         (vec!["--data", &data, "--setup", s3], "holds files"),
