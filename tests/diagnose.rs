@@ -14,7 +14,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::campaigns::{self, rig_setup, synth, validation_setup, RIG};
+use common::campaigns::{self, rig_setup, summary, synth, validation_setup, RIG};
 use common::{assert_figure, assert_png_beside, sawtooth, scratch, svg_texts};
 
 use serde_json::Value;
@@ -50,34 +50,6 @@ fn diagnose(pairs: &[(&Path, &str)], out: &Path) -> Value {
         assert!(v.get(k).is_some(), "missing {k}");
     }
     v
-}
-
-fn summary(v: &Value) -> String {
-    let r: Vec<String> = v["ranking"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|m| {
-            format!(
-                "{} {:.1} {} ({:.0} %)",
-                m["effect"],
-                m["gap"],
-                m["interval"],
-                100.0 * m["reduction"].as_f64().unwrap()
-            )
-        })
-        .collect();
-    format!(
-        "baseline {:.1} {}; {}; best {}; indistinguishable {}; combined {} {:.1} {}",
-        v["baseline"]["gap"],
-        v["baseline"]["interval"],
-        r.join("; "),
-        v["best"],
-        v["indistinguishable"],
-        v["combined"]["effects"],
-        v["combined"]["gap"],
-        v["combined"]["improvement_over_singles"]
-    )
 }
 
 /// The two best candidates fitted together: present exactly when two beat the baseline, led

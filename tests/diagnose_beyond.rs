@@ -10,42 +10,14 @@
 
 use std::path::Path;
 
-use serde_json::Value;
-
 mod common;
-use common::campaigns::{diagnose, rig_setup, synth, RIG};
+use common::campaigns::{diagnose, rig_setup, summary, synth, RIG};
 use common::scratch;
 
 /// Whether a heavy test runs: each is a three-condition diagnosis with every candidate (the
 /// unstated-motion ones with the motion screen besides), minutes on 2 cores.
 fn heavy(test: &str) -> bool {
     common::full_tier(test, "a three-condition diagnosis with every candidate")
-}
-
-fn summary(v: &Value) -> String {
-    let r: Vec<String> = v["ranking"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|m| {
-            format!(
-                "{} {:.1} ({:.0} %) {}",
-                m["effect"],
-                m["gap"],
-                100.0 * m["reduction"].as_f64().unwrap(),
-                m["params"]
-            )
-        })
-        .collect();
-    format!(
-        "baseline {:.1}; {}; best {}; indistinguishable {}; verdict {}: {}",
-        v["baseline"]["gap"],
-        r.join("; "),
-        v["best"],
-        v["indistinguishable"],
-        v["verdict"],
-        v["verdict_detail"]["text"]
-    )
 }
 
 /// A run's masses with `share` of its loaded mass moved from its modal tooth to tooth 1

@@ -10,19 +10,13 @@
 //! fast and shallow), diagnosed with every candidate at a CI-sized particle budget.
 
 mod common;
-
-use std::path::PathBuf;
+use common::campaigns::{dem_campaign as campaign, ranked, summary};
 
 use serde_json::Value;
 
 /// The default solver budget with fewer particles, so the suite stays CI-sized. The data's
 /// own noise (3 runs of 150 grains) dominates the floor at this budget.
 const CI_BUDGET: [&str; 2] = ["--max-particles", "2000"];
-
-fn campaign(name: &str) -> (PathBuf, PathBuf) {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/dem").join(name);
-    (dir.join("dem.csv"), dir.join("setup.toml"))
-}
 
 /// Whether this heavy test runs (a three-condition diagnosis each, a minute or two on 2 cores).
 fn heavy(test: &str) -> bool {
@@ -43,20 +37,6 @@ fn diagnose(campaigns: &[&str], tag: &str) -> Value {
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     let _ = std::fs::remove_dir_all(&out);
     v
-}
-
-fn summary(v: &Value) -> String {
-    let r: Vec<String> = v["ranking"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|m| format!("{} {:.1} ({:.0} %)", m["effect"], m["gap"], 100.0 * m["reduction"].as_f64().unwrap()))
-        .collect();
-    format!("baseline {:.1}; {}; best {}; verdict {}", v["baseline"]["gap"], r.join("; "), v["best"], v["verdict"])
-}
-
-fn ranked<'a>(v: &'a Value, effect: &str) -> &'a Value {
-    v["ranking"].as_array().unwrap().iter().find(|m| m["effect"] == effect).unwrap()
 }
 
 /// What the tool may say about a DEM campaign that contains the candidate effects `contained`

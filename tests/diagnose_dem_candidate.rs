@@ -4,12 +4,10 @@
 //! layer slower than its body (docs/physics.md); the test states that the candidate made for
 //! that removes more of the baseline's gap than each of the other five.
 
-use std::path::PathBuf;
-use std::process::Command;
-
 use serde_json::Value;
 
 mod common;
+use common::campaigns::{dem_campaign, ranked, summary};
 
 const HEAVY: &str = "two three-condition diagnoses of a DEM campaign, 1-2 min on 2 cores";
 
@@ -17,39 +15,20 @@ const HEAVY: &str = "two three-condition diagnoses of a DEM campaign, 1-2 min on
 const CI_BUDGET: [&str; 2] = ["--max-particles", "6000"];
 const CONDITIONS: [&str; 3] = ["candidate-alpha35", "candidate-alpha20", "candidate-v08"];
 
+fn reduction(v: &Value, effect: &str) -> f64 {
+    ranked(v, effect)["reduction"].as_f64().unwrap()
+}
+
 fn diagnose(extra: &[&str], out: &std::path::Path) -> Value {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_sawtooth"));
+    let mut c = common::sawtooth();
     c.arg("diagnose");
     for n in CONDITIONS {
-        let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/dem").join(n);
-        c.arg("--data").arg(dir.join("dem.csv")).arg("--setup").arg(dir.join("setup.toml"));
+        let (data, setup) = dem_campaign(n);
+        c.arg("--data").arg(data).arg("--setup").arg(setup);
     }
     let o = c.args(CI_BUDGET).args(extra).args(["--json", "--out"]).arg(out).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     serde_json::from_slice(&o.stdout).unwrap()
-}
-
-fn reduction(v: &Value, effect: &str) -> f64 {
-    let m = v["ranking"].as_array().unwrap().iter().find(|m| m["effect"] == effect).expect(effect);
-    m["reduction"].as_f64().unwrap()
-}
-
-fn summary(v: &Value) -> String {
-    let r: Vec<String> = v["ranking"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|m| format!("{} {:.1} ({:.0} %)", m["effect"], m["gap"], 100.0 * m["reduction"].as_f64().unwrap()))
-        .collect();
-    format!(
-        "baseline {:.1}; {}; best {}; indistinguishable {}; verdict {}: {}",
-        v["baseline"]["gap"],
-        r.join("; "),
-        v["best"],
-        v["indistinguishable"],
-        v["verdict"],
-        v["verdict_detail"]["text"]
-    )
 }
 
 /// With the thesis's model and the five older candidates, the DEM campaign is only partly

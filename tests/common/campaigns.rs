@@ -3,7 +3,7 @@
 //! (`data/validation`) or the practice campaigns' rig (`data/campaign_rig`), then
 //! `sawtooth diagnose` with every candidate at a CI-sized budget.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
@@ -58,4 +58,49 @@ pub fn diagnose(pairs: &[(impl AsRef<Path>, impl AsRef<str>)], out: &Path) -> Va
         "report.md states the verdict"
     );
     v
+}
+
+/// A committed DEM campaign of `data/dem` (made by `sawtooth dem run`): its data and setup.
+pub fn dem_campaign(name: &str) -> (PathBuf, PathBuf) {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/dem").join(name);
+    (dir.join("dem.csv"), dir.join("setup.toml"))
+}
+
+/// The ranking entry of `effect` in a diagnosis.json.
+pub fn ranked<'a>(v: &'a Value, effect: &str) -> &'a Value {
+    v["ranking"].as_array().unwrap().iter().find(|m| m["effect"] == effect).expect(effect)
+}
+
+/// A diagnosis.json in one line, for assertion messages: the baseline's gap, each candidate's
+/// gap, interval, reduction and fitted parameters, best, the indistinguishable set, the
+/// combined model and the verdict.
+pub fn summary(v: &Value) -> String {
+    let r: Vec<String> = v["ranking"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| {
+            format!(
+                "{} {:.1} {} ({:.0} %) {}",
+                m["effect"],
+                m["gap"],
+                m["interval"],
+                100.0 * m["reduction"].as_f64().unwrap(),
+                m["params"]
+            )
+        })
+        .collect();
+    format!(
+        "baseline {:.1} {}; {}; best {}; indistinguishable {}; combined {} {:.1} {}; verdict {}: {}",
+        v["baseline"]["gap"],
+        v["baseline"]["interval"],
+        r.join("; "),
+        v["best"],
+        v["indistinguishable"],
+        v["combined"]["effects"],
+        v["combined"]["gap"],
+        v["combined"]["improvement_over_singles"],
+        v["verdict"],
+        v["verdict_detail"]["text"]
+    )
 }
