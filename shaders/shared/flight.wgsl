@@ -4,7 +4,10 @@
 // `Flight` method (`flight_pos` = Flight::pos, `flight_vel` = Flight::vel, `flight_drag` =
 // Flight::drag, `time_at_x`,
 // `y_at_x`, `line_crossings`); `expm1_`/`log1p_` stand in for Rust's exp_m1/ln_1p.
-// `Roots` is Rust's `Roots<T>` = [Option<T>; 2].
+// `Roots` is Rust's `Roots<T>` = [Option<T>; 2]. `kln` is the kernels' own logarithm
+// (shared/klog.wgsl): the builtin's error near 1 is absolute.
+
+#import shared/klog.wgsl
 
 struct Flight {
     p0: vec2<f32>,
@@ -27,12 +30,16 @@ fn expm1_(x: f32) -> f32 {
     return exp(x) - 1.0;
 }
 
-// ln(1 + x) without cancellation near 0 (WGSL has no log1p).
+// ln(1 + x) without cancellation near 0 (WGSL has no log1p): a series near 0, else the
+// kernels' own `kln` with the rounding of 1 + x repaired (Goldberg's ln u · x / (u - 1)).
+// Twin: src/model/real.rs `klog::ln_1p`.
 fn log1p_(x: f32) -> f32 {
     if (abs(x) < 0.01) {
         return x * (1.0 - x * (0.5 - x * (1.0 / 3.0 - x * (0.25 - x * 0.2))));
     }
-    return log(1.0 + x);
+    let u = 1.0 + x;
+    if (u > 16777216.0) { return kln(u); }
+    return kln(u) * (x / (u - 1.0));
 }
 
 // Whether a flight has Stokes drag. The path switches (shared/constants.wgsl) answer without
@@ -76,7 +83,7 @@ fn time_at_x(f: Flight, x: f32) -> f32 {
     if (flight_drag(f)) {
         let q = 1.0 - f.k * dx / vx;
         if (q <= 0.0) { return INF; }
-        return -log(q) / f.k;
+        return -kln(q) / f.k;
     }
     return dx / vx;
 }
@@ -90,7 +97,7 @@ fn y_at_x(f: Flight, x: f32) -> vec2<f32> {
     if (flight_drag(f)) {
         let q = 1.0 - f.k * e;
         if (q <= 0.0) { return vec2<f32>(0.0, 0.0); }
-        let t = -log(q) / f.k;
+        let t = -kln(q) / f.k;
         let vinf = -f.g / f.k;
         return vec2<f32>(f.p0.y + vinf * t + (f.v0.y - vinf) * e, 1.0);
     }

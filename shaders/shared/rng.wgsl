@@ -1,6 +1,8 @@
 // Counter-based random numbers keyed by (seed, particle, bounce, draw): pcg4d
 // (Jarzynski & Olano, JCGT 2020). Twin of src/model/rng.rs; both must give identical bits.
 
+#import shared/klog.wgsl
+
 fn pcg4d(v_in: vec4<u32>) -> vec4<u32> {
     var v = v_in * 1664525u + 1013904223u;
     v.x += v.y * v.w;
@@ -25,5 +27,5 @@ fn uniform01(seed: u32, particle: u32, bounce: u32, draw: u32) -> f32 {
 fn normal01(seed: u32, particle: u32, bounce: u32, draw: u32) -> f32 {
     let u1 = 1.0 - uniform01(seed, particle, bounce, draw);
     let u2 = uniform01(seed, particle, bounce, draw + 1u);
-    return sqrt(-2.0 * log(u1)) * ksin_cos(2.0 * PI * u2).y;
+    return sqrt(-2.0 * kln(u1)) * ksin_cos(2.0 * PI * u2).y;
 }

@@ -45,11 +45,11 @@ impl Real for f32 {
     }
     #[inline(always)]
     fn kln(self) -> Self {
-        self.ln()
+        klog::ln(self)
     }
     #[inline(always)]
     fn kln_1p(self) -> Self {
-        self.ln_1p()
+        klog::ln_1p(self)
     }
 }
 
@@ -152,6 +152,110 @@ pub mod ktrig {
                 worst = worst.max((a - (yy as f64).atan2(xx as f64)).abs());
             }
             assert!(worst < 1e-6, "{worst}");
+        }
+    }
+}
+
+/// The f32 kernels' natural logarithm, written out: Vulkan promises `log` only to 2^-21
+/// absolute on [0.5, 2], which near 1 is no relative accuracy at all, and NVIDIA's driver
+/// gives no more (on an H200, Box-Muller radii and Stokes flight times went wrong where their
+/// argument is close to 1; docs/math.md). ln x = e ln 2 + 2 atanh(s) with x = m 2^e,
+/// m in [√½, √2), s = (m − 1)/(m + 1), |s| ≤ 0.1716: the atanh series to s⁹ is within 2e-9
+/// relative, so the error is the rounding of s and of the sum, a few ulp, relative also near 1.
+/// ln 2 in two pieces (the high one has 16 significant bits, so e·ln2_hi is exact).
+/// Twin: shaders/shared/klog.wgsl (`kln`) and flight.wgsl (`log1p_`).
+pub mod klog {
+    const LN2_HI: f32 = 0.693_145_75;
+    const LN2_LO: f32 = 1.428_606_8e-6;
+
+    /// ln x for x > 0; x ≤ 0 (the kernels pass none) gives −f32::MAX, +∞ itself.
+    #[inline(always)]
+    pub fn ln(x: f32) -> f32 {
+        // `!(x > 0)` also catches NaN
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        if !(x > 0.0) {
+            return -f32::MAX;
+        }
+        if x > f32::MAX {
+            return x;
+        }
+        let (mut x, mut e) = (x, 0i32);
+        if x < f32::MIN_POSITIVE {
+            // subnormal: scale by 2^23 into the normal range first
+            x *= 8_388_608.0;
+            e = -23;
+        }
+        let bits = x.to_bits();
+        e += ((bits >> 23) & 0xff) as i32 - 127;
+        let mut m = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000);
+        if m > 1.414_213_5 {
+            m *= 0.5;
+            e += 1;
+        }
+        let s = (m - 1.0) / (m + 1.0);
+        let z = s * s;
+        let p = 2.0 * s + 2.0 * s * z * (0.333_333_34 + z * (0.2 + z * (0.142_857_15 + z * 0.111_111_11)));
+        let ef = e as f32;
+        ef * LN2_HI + (ef * LN2_LO + p)
+    }
+
+    /// ln(1 + x) for x > −1: a series near 0, else `ln(1 + x)` with the rounding of 1 + x
+    /// repaired (ln u · x / (u − 1), u = 1 + x; Goldberg's form).
+    #[inline(always)]
+    pub fn ln_1p(x: f32) -> f32 {
+        if x.abs() < 0.01 {
+            return x * (1.0 - x * (0.5 - x * (1.0 / 3.0 - x * (0.25 - x * 0.2))));
+        }
+        let u = 1.0 + x;
+        if u > 16_777_216.0 {
+            return ln(u);
+        }
+        ln(u) * (x / (u - 1.0))
+    }
+
+    #[cfg(test)]
+    mod tests {
+        fn ulps(a: f32, exact: f64) -> f64 {
+            let e = exact as f32;
+            let ulp = (f32::from_bits(e.abs().to_bits() + 1) - e.abs()) as f64;
+            (a as f64 - exact).abs() / ulp
+        }
+
+        #[test]
+        fn ln_is_within_a_few_ulp_everywhere_and_relative_near_one() {
+            let mut worst: f64 = 0.0;
+            // a sweep over 2^-140 .. 2^120 (subnormals included) ...
+            for i in 0..200_000 {
+                let x = 2f64.powf(-140.0 + 260.0 * i as f64 / 200_000.0) as f32;
+                if x == 1.0 {
+                    continue;
+                }
+                worst = worst.max(ulps(super::ln(x), (x as f64).ln()));
+            }
+            // ... and the arguments Vulkan's builtin gets wrong: 1 ± a few ulp to 1 ± 0.1
+            for i in 1..200_000 {
+                for x in [1.0 + i as f32 * 5e-7, 1.0 - i as f32 * 2.5e-7] {
+                    if x != 1.0 {
+                        worst = worst.max(ulps(super::ln(x), (x as f64).ln()));
+                    }
+                }
+            }
+            assert!(worst <= 4.0, "worst {worst} ulp");
+            assert_eq!(super::ln(1.0), 0.0);
+            assert_eq!(super::ln(f32::INFINITY), f32::INFINITY);
+            assert_eq!(super::ln(0.0), -f32::MAX);
+            assert_eq!(super::ln(-1.0), -f32::MAX);
+        }
+
+        #[test]
+        fn ln_1p_is_relative_over_the_kernels_range() {
+            let mut worst: f64 = 0.0;
+            for i in 1..400_000 {
+                let x = -0.99 + 1.0e4 * (i as f64 / 400_000.0).powi(4);
+                let x = x as f32;
+                worst = worst.max(ulps(super::ln_1p(x), (x as f64).ln_1p()));
+            }
+            assert!(worst <= 4.0, "worst {worst} ulp");
         }
     }
 }

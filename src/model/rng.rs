@@ -59,7 +59,8 @@ pub use crate::kernel_codes::{
 };
 
 /// Standard normal deviate from two keyed uniforms (Box-Muller). WGSL twin: `normal01`, which
-/// is this in f32 with the kernel's `ksin_cos` for the cosine (so equal to rounding, not bits).
+/// is this in f32 with the kernel's `ksin_cos` for the cosine and `kln` for the logarithm (so
+/// equal to rounding, not bits).
 pub fn normal01(seed_word: u32, particle: u32, bounce: u32, draw: u32) -> f64 {
     let u1 = 1.0 - uniform01(seed_word, particle, bounce, draw); // (0, 1]
     let u2 = uniform01(seed_word, particle, bounce, draw + 1);

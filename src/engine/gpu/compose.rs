@@ -14,6 +14,7 @@ pub const FILES: &[&str] = &[
     "shared/rng.wgsl",
     "shared/flight.wgsl",
     "shared/trig.wgsl",
+    "shared/klog.wgsl",
 ];
 
 /// The generated file (not in shaders/).

@@ -12,6 +12,7 @@ pub const FILES: &[(&str, &str)] = &[
     ("shared/rng.wgsl", include_str!("../../../shaders/shared/rng.wgsl")),
     ("shared/flight.wgsl", include_str!("../../../shaders/shared/flight.wgsl")),
     ("shared/trig.wgsl", include_str!("../../../shaders/shared/trig.wgsl")),
+    ("shared/klog.wgsl", include_str!("../../../shaders/shared/klog.wgsl")),
 ];
 
 fn file(path: &str) -> Option<&'static str> {
