@@ -468,6 +468,64 @@ fn the_gpu_table_script_prints_every_batch() {
     }
 }
 
+/// `scripts/gpu-hardware.sh`, the command BENCHMARKS.md's hardware-GPU section was made with,
+/// runs every step to the end and records each one's exit status and time, here in its quick
+/// mode on whatever adapter the suite has (the H200 run is the full mode).
+#[test]
+fn the_hardware_gpu_script_runs_every_step() {
+    if !common::full_tier(
+        "gpu_conformance::the_hardware_gpu_script_runs_every_step",
+        "conformance, the GPU table, the moonshot batches, every lane level and two gpu-sweeps, small",
+    ) || gpu().is_none()
+    {
+        return;
+    }
+    let out_dir = common::scratch("gpu-hardware");
+    let out = std::process::Command::new("bash")
+        .args([concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/gpu-hardware.sh"), out_dir.to_str().unwrap(), "1"])
+        .env("SAWTOOTH_BIN", env!("CARGO_BIN_EXE_sawtooth"))
+        .env("SAWTOOTH_QUICK", "1")
+        .output()
+        .expect("run bash");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    let steps = std::fs::read_to_string(out_dir.join("steps.txt")).unwrap();
+    let mut names = Vec::new();
+    for line in steps.lines() {
+        let cells: Vec<&str> = line.split_whitespace().collect();
+        assert_eq!(
+            cells[1..3],
+            ["rc", "0"],
+            "{line}\n{}",
+            std::fs::read_to_string(out_dir.join(format!("{}.txt", cells[0]))).unwrap_or_default()
+        );
+        names.push(cells[0].to_string());
+    }
+    let mut expected: Vec<String> =
+        ["conformance", "gpu-table", "pop-lunar-200p", "pop-earth-200p"].map(String::from).to_vec();
+    for threads in ["2", "all"] {
+        for level in ["default", "x86-64-v3", "baseline"] {
+            for env in ["lunar", "earth"] {
+                expected.push(format!("levels-{threads}-{level}-{env}"));
+            }
+        }
+    }
+    expected.extend(["sweep-gpu".to_string(), "sweep-cpu".to_string()]);
+    assert_eq!(names, expected);
+    assert!(std::fs::read_to_string(out_dir.join("conformance.txt")).unwrap().contains("conformance: PASS"));
+    assert!(std::fs::read_to_string(out_dir.join("machine.txt")).unwrap().contains("AVX-512F: "));
+    for engine in ["gpu", "cpu"] {
+        let summary = std::fs::read_to_string(out_dir.join(format!("sweep-{engine}-summary.csv"))).unwrap();
+        assert_eq!(summary.lines().count(), 1 + 41 * 3, "41 angles, picks A, B and C: {summary}");
+    }
+    // a repeat count that is not a whole number of at least one is refused before anything runs
+    let refused = std::process::Command::new("bash")
+        .args([concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/gpu-hardware.sh"), out_dir.to_str().unwrap(), "0"])
+        .output()
+        .unwrap();
+    assert_eq!(refused.status.code(), Some(2));
+}
+
 /// A batch in slices (the host prepares one while the device runs the one before) gives what
 /// the whole batch at once gives, design by design and in the batch's order, with an invalid
 /// design's error kept in its place; a slice is one dispatch, a slice of invalid designs none.
