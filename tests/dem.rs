@@ -1,7 +1,10 @@
 //! `sawtooth dem` (issue 31) against the model it bridges to, and with the real engine:
-//! LIGGGHTS 3.8 (Debian package `liggghts`, installed by scripts/test.sh). Where LIGGGHTS is
-//! missing, the real-engine tests skip, except with CI=true, where they FAIL (as
-//! tests/gpu_conformance.rs does for a missing Vulkan adapter).
+//! LIGGGHTS 3.8 (Debian package `liggghts`, installed by scripts/test.sh). The real-engine
+//! tests need a package, so they are the full tier's (plain `cargo test` skips them and says
+//! so, also where LIGGGHTS is installed); where LIGGGHTS is missing they skip, except with
+//! CI=true, where they FAIL (as tests/gpu_conformance.rs does for a missing Vulkan adapter).
+
+mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -32,8 +35,12 @@ fn sawtooth(args: &[&str]) -> (i32, String, String) {
     sawtooth_env(args, &[])
 }
 
-/// True when LIGGGHTS can run here; with CI=true its absence fails the test instead.
-fn liggghts_present() -> bool {
+/// True when the full tier runs and LIGGGHTS can run here; with CI=true its absence fails the
+/// test instead.
+fn liggghts_present(test: &str) -> bool {
+    if !common::full_tier(test, "runs LIGGGHTS, a Debian package") {
+        return false;
+    }
     match sawtooth::dem::run::find_liggghts() {
         Ok(_) => true,
         Err(e) => {
@@ -156,7 +163,7 @@ fn a_missing_engine_names_the_package_and_dem_write() {
 /// A LIGGGHTS error comes back as its log's ERROR line, and the case folder stays.
 #[test]
 fn an_engine_error_is_its_error_line_and_the_case_is_kept() {
-    if !liggghts_present() {
+    if !liggghts_present("dem::an_engine_error_is_its_error_line_and_the_case_is_kept") {
         return;
     }
     let (_d, dir) = tmp("case");
@@ -177,7 +184,7 @@ fn an_engine_error_is_its_error_line_and_the_case_is_kept() {
 /// data `fit` reads; `compare` draws it; the same command again resumes (nothing to do).
 #[test]
 fn a_real_stroke_lands_grains_in_later_teeth_as_the_model_does() {
-    if !liggghts_present() {
+    if !liggghts_present("dem::a_real_stroke_lands_grains_in_later_teeth_as_the_model_does") {
         return;
     }
     let (_d, dir) = tmp("campaign");
@@ -232,7 +239,7 @@ fn a_real_stroke_lands_grains_in_later_teeth_as_the_model_does() {
 /// setup describes the rig without switching the size law on (what `diagnose` must find).
 #[test]
 fn a_polydisperse_fill_runs_as_size_classes_with_their_own_drag() {
-    if !liggghts_present() {
+    if !liggghts_present("dem::a_polydisperse_fill_runs_as_size_classes_with_their_own_drag") {
         return;
     }
     let (_d, dir) = tmp("poly");
@@ -327,7 +334,7 @@ fn the_same_case_twice_gives_the_same_files_and_the_same_tooth_masses() {
         assert!(a == b, "{name} differs between two `dem write` of the same inputs");
     }
 
-    if !liggghts_present() {
+    if !liggghts_present("dem::the_same_case_twice_gives_the_same_files_and_the_same_tooth_masses") {
         return;
     }
     // CI-sized: the rig's grains have landed 0.5 s after the stroke; stop there
@@ -437,7 +444,7 @@ fn a_dem_check_runs_as_a_job_array_of_dem_runs_and_gathers_the_same_report() {
     assert!(array.contains("campaign run") && array.contains("--task \"$SLURM_ARRAY_TASK_ID\""), "{array}");
     assert!(gather.contains("campaign gather"), "{gather}");
 
-    if !liggghts_present() {
+    if !liggghts_present("dem::a_dem_check_runs_as_a_job_array_of_dem_runs_and_gathers_the_same_report") {
         return;
     }
     // each task as Slurm would start it: the script under bash with its task id
