@@ -189,15 +189,6 @@ impl DesignRow {
         format!("{:.3},{:.3},{:.3},{:.3},{:.2},{:.2},{:.3},{:.2}", v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7])
     }
 
-    /// One readable line with the units, for reports.
-    pub fn describe(&self) -> String {
-        let v = self.values();
-        format!(
-            "l_c {:.3} l_a {:.3} l_b {:.3} r {:.3} mm, omega {:.2} delta {:.2} deg, v0 {:.3} m/s, a {:.2} m/s2",
-            v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]
-        )
-    }
-
     /// A config file's `[design]` table with every value exact (`{}` is the shortest form
     /// that reads back to the same f64), one key per line.
     pub fn config_table(&self) -> String {
@@ -219,6 +210,18 @@ impl DesignRow {
             st.serialize_field(name, &row.map(|r| r.values()[i]))?;
         }
         st.end()
+    }
+}
+
+/// One readable line with the units, for reports, progress lines and figure titles:
+/// `l_c 20.000 l_a 15.000 l_b 5.000 r 5.000 mm, omega 60.00 delta 0.00 deg, v0 1.000 m/s, a 60.00 m/s2`.
+impl std::fmt::Display for DesignRow {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [l_c, l_a, l_b, r, omega, delta, v0, a] = self.values();
+        write!(
+            f,
+            "l_c {l_c:.3} l_a {l_a:.3} l_b {l_b:.3} r {r:.3} mm, omega {omega:.2} delta {delta:.2} deg, v0 {v0:.3} m/s, a {a:.2} m/s2"
+        )
     }
 }
 
@@ -264,6 +267,15 @@ mod tests {
         }
         let back: File = toml::from_str(&text).unwrap();
         assert_eq!(back.design, c);
+    }
+
+    #[test]
+    fn a_design_row_reads_as_one_line_with_its_units() {
+        let row = DesignRow::of(&Design::validation_rig());
+        assert_eq!(
+            row.to_string(),
+            "l_c 20.000 l_a 15.000 l_b 5.000 r 5.000 mm, omega 60.00 delta 0.00 deg, v0 1.000 m/s, a 60.00 m/s2"
+        );
     }
 
     #[test]

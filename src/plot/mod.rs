@@ -229,11 +229,15 @@ pub fn wrapped_height(width: u32, text: &str, size: f64) -> u32 {
     (wrapped_rows(width, text, size) as f64 * size * 1.25 + 6.0).ceil() as u32
 }
 
+/// Height in pixels of the line [`title`] takes.
+pub fn title_height() -> u32 {
+    (TITLE_SIZE * 1.6) as u32
+}
+
 /// A title line centred at the top of `area`; returns the area below it.
 pub fn title<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, text: &str) -> anyhow::Result<DrawingArea<DB, Shift>> {
     let (w, _) = area.dim_in_pixel();
-    let height = (TITLE_SIZE * 1.6) as u32;
-    let (top, rest) = area.split_vertically(height);
+    let (top, rest) = area.split_vertically(title_height());
     // a long title (a design's eight parameters) shrinks to fit rather than run off the edge
     let (tw, _) = top.estimate_text_size(text, &text_style(TITLE_SIZE)).drawn()?;
     let size = if tw + 20 > w { (TITLE_SIZE * (w - 20) as f64 / tw as f64).max(9.0) } else { TITLE_SIZE };
