@@ -132,7 +132,8 @@ impl Design {
 /// of every CSV (pareto.csv, evaluations.csv, the sweep and study tables), the keys of a
 /// config's `[design]` table and of the JSON reports, and the column names the Python
 /// package documents. A table row takes it with `#[serde(flatten)]` (`io::table` writes
-/// such rows), so the eight names, their order and their units are written down once, here.
+/// such rows; `io::table::optional_columns` an optional one), so the eight names, their
+/// order and their units are written down once, here.
 ///
 /// Values are [`Design::to_cli_units`]' exactly (mm = m × 1e3), so a file written from a
 /// design and read back gives the same bits.
@@ -197,19 +198,6 @@ impl DesignRow {
             t.push_str(&format!("{name} = {v}\n"));
         }
         t
-    }
-
-    /// Serialize an optional design as its eight columns, empty where there is none (a
-    /// study run whose front holds no design). serde leaves a flattened `None` out of the
-    /// row, which would shift the columns after it; read back, `Option<DesignRow>` with
-    /// `#[serde(flatten)]` is `None` when the cells are empty.
-    pub fn serialize_optional<S: serde::Serializer>(row: &Option<DesignRow>, s: S) -> Result<S::Ok, S::Error> {
-        use serde::ser::SerializeStruct as _;
-        let mut st = s.serialize_struct("DesignRow", 8)?;
-        for (i, name) in Self::COLUMNS.iter().enumerate() {
-            st.serialize_field(name, &row.map(|r| r.values()[i]))?;
-        }
-        st.end()
     }
 }
 
