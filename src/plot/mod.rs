@@ -331,8 +331,8 @@ pub fn category_label(labels: &[String]) -> impl Fn(&f64) -> String + '_ {
     }
 }
 
-/// A chart of categories along x (teeth, bins) and values up y, as the diagnosis and the
-/// DEM comparison draw them: the categories' labels under their bars, no vertical grid
+/// A chart of categories along x (teeth, bins) and values up y, as the diagnosis, the fit
+/// and the DEM comparison draw them: the categories' labels under their bars, no vertical grid
 /// lines, `tick` numbers up the side, small text, the light grid; `caption` above the plot
 /// area, if any.
 pub fn category_chart<'a, DB: DrawingBackend>(
