@@ -480,6 +480,8 @@ fn a_dem_check_runs_as_a_job_array_of_dem_runs_and_gathers_the_same_report() {
     }
     let first = &gathered["designs"][0];
     assert!(first["dem_compliant"].is_boolean(), "the run's requirements judged again: {gathered}");
+    // the design as every file spells it: its eight named columns with their units
+    assert!(first["design"]["l_c_mm"].is_number() && first["design"]["a_m_s2"].is_number(), "{gathered}");
     assert!(first["dem_m_dot_op_kg_h"].is_number() && first["dem_operating_limit"].is_string(), "{gathered}");
 
     // `dem check` on the same folder: every run is done, nothing runs, the same report

@@ -166,38 +166,87 @@ fn every_command_in_the_docs_pages_parses() {
     assert!(total >= 30, "the docs pages hold only {total} commands");
 }
 
-/// The relative link targets of a Markdown file (`[text](target)`, without `#anchor`;
-/// web addresses and pure anchors left out).
-fn relative_links(text: &str) -> Vec<String> {
+/// The relative links of a Markdown file (`[text](target)` and `[text](target#anchor)`) as
+/// (target, anchor): web addresses left out; a link within the page has an empty target.
+fn relative_links(text: &str) -> Vec<(String, Option<String>)> {
     let mut links = Vec::new();
     for (at, _) in text.match_indices("](") {
         let rest = &text[at + 2..];
         let Some(end) = rest.find(')') else { continue };
-        let target = rest[..end].split('#').next().unwrap();
-        if !target.is_empty() && !target.contains("://") && !target.starts_with("mailto:") {
-            links.push(target.to_string());
+        let (target, anchor) = match rest[..end].split_once('#') {
+            Some((t, a)) => (t, Some(a.to_string())),
+            None => (&rest[..end], None),
+        };
+        if (target.is_empty() && anchor.is_none()) || target.contains("://") || target.starts_with("mailto:") {
+            continue;
         }
+        links.push((target.to_string(), anchor));
     }
     links
 }
 
+/// The anchors GitHub gives a Markdown page's headings: the heading's text in lower case,
+/// every character but letters, digits, `-` and `_` dropped and each space made a `-`
+/// (`## Effects beyond the thesis's model` is `#effects-beyond-the-thesiss-model`); a
+/// heading repeated gets `-1`, `-2`, ... Lines in code blocks are not headings.
+fn heading_anchors(text: &str) -> Vec<String> {
+    let mut anchors = Vec::new();
+    let mut seen = std::collections::HashMap::<String, usize>::new();
+    let mut in_code = false;
+    for line in text.lines() {
+        if line.trim_start().starts_with("```") {
+            in_code = !in_code;
+            continue;
+        }
+        let Some(title) = line.strip_prefix('#').map(|t| t.trim_start_matches('#')) else { continue };
+        if in_code || !title.starts_with(' ') {
+            continue;
+        }
+        let slug: String = title
+            .trim()
+            .to_lowercase()
+            .chars()
+            .filter_map(|c| match c {
+                ' ' => Some('-'),
+                c if c.is_alphanumeric() || c == '-' || c == '_' => Some(c),
+                _ => None,
+            })
+            .collect();
+        let n = seen.entry(slug.clone()).or_insert(0);
+        anchors.push(if *n == 0 { slug } else { format!("{slug}-{n}") });
+        *n += 1;
+    }
+    anchors
+}
+
 #[test]
-fn every_relative_link_leads_to_a_file() {
+fn every_relative_link_leads_to_a_file_and_its_anchor_to_a_heading() {
     let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let mut broken = Vec::new();
-    let mut seen = 0;
+    let (mut seen, mut anchored) = (0, 0);
     for page in ["README.md".to_string(), "BENCHMARKS.md".to_string()].into_iter().chain(docs_pages()) {
         let path = root.join(&page);
         let text = std::fs::read_to_string(&path).unwrap();
-        for link in relative_links(&text) {
+        for (target, anchor) in relative_links(&text) {
             seen += 1;
-            if !path.parent().unwrap().join(&link).exists() {
-                broken.push(format!("{page}: {link}"));
+            let file = if target.is_empty() { path.clone() } else { path.parent().unwrap().join(&target) };
+            if !file.exists() {
+                broken.push(format!("{page}: {target} (no such file)"));
+                continue;
+            }
+            let Some(anchor) = anchor else { continue };
+            anchored += 1;
+            let headings = heading_anchors(&std::fs::read_to_string(&file).unwrap_or_default());
+            if !headings.contains(&anchor) {
+                broken.push(format!("{page}: {target}#{anchor} (no such heading; {target} has {headings:?})"));
             }
         }
     }
-    assert!(seen >= 20, "only {seen} relative links found: the extraction is broken");
-    assert!(broken.is_empty(), "links to files that do not exist:\n{}", broken.join("\n"));
+    assert!(
+        seen >= 20 && anchored >= 3,
+        "only {seen} relative links ({anchored} with an anchor) found: the extraction is broken"
+    );
+    assert!(broken.is_empty(), "links that lead nowhere:\n{}", broken.join("\n"));
 }
 
 #[test]
@@ -210,10 +259,13 @@ fn the_extraction_sees_continuations_comments_and_quotes() {
     assert_eq!(strip_comment("a --b 'x # y' # note"), "a --b 'x # y' ");
     assert_eq!(words("simulate --plot 'a b.svg' --env $env"), ["simulate", "--plot", "a b.svg", "--env", "lunar"]);
     assert!(is_env_name("SAWTOOTH_PROFILE") && !is_env_name("--flag") && !is_env_name("1X"));
+    let some = |t: &str, a: Option<&str>| (t.to_string(), a.map(str::to_string));
     assert_eq!(
         relative_links("[a](docs/x.md#y), [b](https://e.org), [c](#z), ![f](figures/p.png)"),
-        ["docs/x.md", "figures/p.png"]
+        [some("docs/x.md", Some("y")), some("", Some("z")), some("figures/p.png", None)]
     );
+    let page = "# Top\n## Effects beyond the thesis's model, and `synth`\n```sh\n# not a heading\n```\n## Top\n#tag\n";
+    assert_eq!(heading_anchors(page), ["top", "effects-beyond-the-thesiss-model-and-synth", "top-1"]);
     // and a refused flag is caught: the check can fail
     let bad = Cli::try_parse_from(["sawtooth", "simulate", "--no-such-flag"]);
     assert!(bad.is_err_and(|e| e.use_stderr()));

@@ -89,7 +89,7 @@ fn repeatability_and_sensitivity_write_their_tables() {
     let stats: Vec<SummaryRow> =
         csv::Reader::from_reader(summary.as_bytes()).deserialize().collect::<Result<_, _>>().unwrap();
     let w = stats.iter().find(|s| s.metric == "w_spec_j_kg").expect("w_spec_j_kg row");
-    let ws: Vec<f64> = typed.iter().filter_map(|r| r.w_spec_j_kg).collect();
+    let ws: Vec<f64> = typed.iter().filter_map(|r| r.figures.map(|f| f.w_spec_j_kg)).collect();
     assert_eq!(w.n, ws.len());
     assert!((w.mean - ws.iter().sum::<f64>() / ws.len() as f64).abs() <= 1e-9 * w.mean, "{w:?} vs {ws:?}");
     // each run's distance from the target is in the table, and the report calls the runs
@@ -127,7 +127,7 @@ fn repeatability_and_sensitivity_write_their_tables() {
         csv::Reader::from_path(sens.join("grid.csv")).unwrap().deserialize().collect::<Result<_, _>>().unwrap();
     assert!(grid
         .iter()
-        .all(|g| g.k_drag_per_s == 0.0 && g.w_spec_within_repeatability_ci.is_some() == g.w_spec_j_kg.is_some()));
+        .all(|g| g.k_drag_per_s == 0.0 && g.w_spec_within_repeatability_ci.is_some() == g.figures.is_some()));
     assert_png_beside(&sens.join("sensitivity.svg"));
     let _ = std::fs::remove_dir_all(&rep);
     let _ = std::fs::remove_dir_all(&sens);

@@ -90,13 +90,8 @@ impl PanelsPlot {
             .build_cartesian_2d(x, plot::padded(lo, hi, 0.08))
             .drawn()?;
         let category_label = self.x_categories.as_deref().map(plot::category_label);
-        let mut mesh = chart.configure_mesh();
-        mesh.y_desc(panel.y_desc.as_str())
-            .y_label_formatter(&plot::tick)
-            .label_style(plot::text_style(plot::SMALL_SIZE))
-            .axis_desc_style(plot::text_style(plot::SMALL_SIZE))
-            .bold_line_style(plot::GRID)
-            .max_light_lines(1);
+        let mut mesh = plot::styled_mesh(&mut chart, plot::SMALL_SIZE);
+        mesh.y_desc(panel.y_desc.as_str()).y_label_formatter(&plot::tick);
         match (&category_label, &self.x_categories) {
             (Some(f), Some(labels)) => {
                 mesh.disable_x_mesh().x_labels(labels.len() + 1).x_label_formatter(f);

@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use super::panels::{Panel, PanelsPlot, Series};
 use super::plan::Plan;
-use crate::io::table::write_table;
+use crate::io::table::{optional_columns, write_table};
 use crate::model::design::DesignRow;
 use crate::optim::front::{closest_to_mass_flow, FrontPoint};
 use crate::plot;
@@ -25,30 +25,25 @@ fn stats(v: &[f64]) -> (f64, f64, f64, f64) {
     (m, sd, sd / m, 1.96 * sd / n.sqrt())
 }
 
-/// The front point a run is compared at (its design and figures); empty when its front
-/// holds no design.
-#[derive(Debug, Default, Clone, Copy)]
-struct Point {
-    f_stroke_hz: Option<f64>,
-    w_spec_j_kg: Option<f64>,
-    m_dot_kg_s: Option<f64>,
-    d_avg_m: Option<f64>,
-    n_wire: Option<u32>,
-    design: Option<DesignRow>,
+/// The figures of the front point a run is compared at: the columns runs.csv and grid.csv
+/// share, in place in each (empty, with the design's, where the run's front holds no design).
+#[derive(Debug, Default, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PointFigures {
+    pub f_stroke_hz: f64,
+    pub w_spec_j_kg: f64,
+    pub m_dot_kg_s: f64,
+    pub d_avg_m: f64,
+    pub n_wire: u32,
 }
 
-impl Point {
-    fn of(p: Option<&FrontPoint>) -> Self {
-        match p {
-            None => Point::default(),
-            Some(p) => Point {
-                f_stroke_hz: Some(p.f_stroke_hz),
-                w_spec_j_kg: Some(p.w_spec_j_kg),
-                m_dot_kg_s: Some(p.m_dot_kg_s),
-                d_avg_m: Some(p.d_avg_m),
-                n_wire: Some(p.n_wire),
-                design: Some(DesignRow::of(&p.design)),
-            },
+impl PointFigures {
+    fn of(p: &FrontPoint) -> Self {
+        PointFigures {
+            f_stroke_hz: p.f_stroke_hz,
+            w_spec_j_kg: p.w_spec_j_kg,
+            m_dot_kg_s: p.m_dot_kg_s,
+            d_avg_m: p.d_avg_m,
+            n_wire: p.n_wire,
         }
     }
 }
@@ -58,13 +53,9 @@ impl Point {
 pub struct RunRow {
     pub run: usize,
     pub seed: u64,
-    pub f_stroke_hz: Option<f64>,
-    pub w_spec_j_kg: Option<f64>,
-    pub m_dot_kg_s: Option<f64>,
-    pub d_avg_m: Option<f64>,
-    pub n_wire: Option<u32>,
-    /// The design, empty where the front holds none.
-    #[serde(flatten, serialize_with = "DesignRow::serialize_optional")]
+    #[serde(flatten, serialize_with = "optional_columns")]
+    pub figures: Option<PointFigures>,
+    #[serde(flatten, serialize_with = "optional_columns")]
     pub design: Option<DesignRow>,
     /// (m_dot - target) / target, -.
     pub m_dot_from_target_rel: Option<f64>,
@@ -80,13 +71,9 @@ pub struct GridRow {
     pub mu_friction: f64,
     /// Stokes drag, 1/s (0 = vacuum).
     pub k_drag_per_s: f64,
-    pub f_stroke_hz: Option<f64>,
-    pub w_spec_j_kg: Option<f64>,
-    pub m_dot_kg_s: Option<f64>,
-    pub d_avg_m: Option<f64>,
-    pub n_wire: Option<u32>,
-    /// The design, empty where the front holds none.
-    #[serde(flatten, serialize_with = "DesignRow::serialize_optional")]
+    #[serde(flatten, serialize_with = "optional_columns")]
+    pub figures: Option<PointFigures>,
+    #[serde(flatten, serialize_with = "optional_columns")]
     pub design: Option<DesignRow>,
     /// W_spec inside the repeatability study's 95 % interval (with --repeatability).
     pub w_spec_within_repeatability_ci: Option<bool>,
@@ -129,16 +116,11 @@ pub fn summarise_repeatability(
         if let (Some(p), Some(false)) = (p, at_target) {
             far.push(format!("run {i} at {:.4} kg/s", p.m_dot_kg_s));
         }
-        let q = Point::of(p);
         rows.push(RunRow {
             run: i,
             seed: member.manifest.scenario.sim.seed,
-            f_stroke_hz: q.f_stroke_hz,
-            w_spec_j_kg: q.w_spec_j_kg,
-            m_dot_kg_s: q.m_dot_kg_s,
-            d_avg_m: q.d_avg_m,
-            n_wire: q.n_wire,
-            design: q.design,
+            figures: p.map(PointFigures::of),
+            design: p.map(|p| DesignRow::of(&p.design)),
             m_dot_from_target_rel: distance,
             at_target,
         });
@@ -254,18 +236,13 @@ pub fn summarise_sensitivity(
             (Some((mean, half)), Some(p)) => Some((p.w_spec_j_kg - mean).abs() <= half),
             _ => None,
         };
-        let q = Point::of(p);
         rows.push(GridRow {
             point: i,
             k_elastic: s.collision.k_elastic,
             mu_friction: s.collision.mu_friction,
             k_drag_per_s: s.environment.k_drag.unwrap_or(0.0),
-            f_stroke_hz: q.f_stroke_hz,
-            w_spec_j_kg: q.w_spec_j_kg,
-            m_dot_kg_s: q.m_dot_kg_s,
-            d_avg_m: q.d_avg_m,
-            n_wire: q.n_wire,
-            design: q.design,
+            figures: p.map(PointFigures::of),
+            design: p.map(|p| DesignRow::of(&p.design)),
             w_spec_within_repeatability_ci: within,
         });
         let wv = p.map_or(f64::NAN, |p| p.w_spec_j_kg);
@@ -303,25 +280,51 @@ mod tests {
     use crate::io::table::table_text;
     use crate::model::Design;
 
-    /// A run whose front holds no design keeps its eight design cells, empty, so the columns
-    /// after them stay in place; both rows read back as written.
+    /// A run whose front holds no design keeps its figure and design cells, empty, so the
+    /// columns after them stay in place; both rows read back as written.
     #[test]
-    fn a_run_without_a_design_has_empty_design_cells_and_reads_back() {
+    fn a_run_without_a_design_has_empty_figure_and_design_cells_and_reads_back() {
         let design = DesignRow::of(&Design::lunar_solution_c());
+        let figures =
+            PointFigures { f_stroke_hz: 0.03, w_spec_j_kg: 350.5, m_dot_kg_s: 0.0133, d_avg_m: 0.25, n_wire: 20 };
         let rows = [
             RunRow { run: 0, seed: 7, at_target: None, ..Default::default() },
-            RunRow { run: 1, seed: 8, design: Some(design), at_target: Some(true), ..Default::default() },
+            RunRow {
+                run: 1,
+                seed: 8,
+                figures: Some(figures),
+                design: Some(design),
+                m_dot_from_target_rel: Some(-0.25),
+                at_target: Some(false),
+            },
         ];
         let text = table_text(&rows).unwrap();
         let lines: Vec<&str> = text.lines().collect();
-        assert_eq!(lines[0].split(',').count(), 17, "{text}");
+        assert_eq!(
+            lines[0],
+            "run,seed,f_stroke_hz,w_spec_j_kg,m_dot_kg_s,d_avg_m,n_wire,\
+             l_c_mm,l_a_mm,l_b_mm,r_mm,omega_deg,delta_deg,v0_m_s,a_m_s2,m_dot_from_target_rel,at_target"
+        );
         assert_eq!(lines[1], "0,7,,,,,,,,,,,,,,,");
-        assert!(lines[2].starts_with("1,8,,,,,,47.346,46.898,32.183,43.687,"), "{text}");
-        assert!(lines[2].ends_with(",32.051,,true"), "{text}");
+        assert!(lines[2].starts_with("1,8,0.03,350.5,0.0133,0.25,20,47.346,46.898,32.183,43.687,"), "{text}");
+        assert!(lines[2].ends_with(",32.051,-0.25,false"), "{text}");
         let back: Vec<RunRow> =
             csv::Reader::from_reader(text.as_bytes()).deserialize().collect::<Result<_, _>>().unwrap();
-        assert_eq!(back[0].design, None);
-        assert_eq!(back[1].design, Some(design));
-        assert_eq!(back[1].at_target, Some(true));
+        assert_eq!((back[0].figures, back[0].design), (None, None));
+        assert_eq!((back[1].figures, back[1].design), (Some(figures), Some(design)));
+        assert_eq!(back[1].at_target, Some(false));
+    }
+
+    /// grid.csv holds the same figure columns in its own place, after the grid's parameters.
+    #[test]
+    fn a_grid_row_puts_the_shared_figures_after_its_parameters() {
+        let header = crate::io::table::csv_header::<GridRow>().unwrap();
+        assert!(
+            header.starts_with(
+                "point,k_elastic,mu_friction,k_drag_per_s,f_stroke_hz,w_spec_j_kg,m_dot_kg_s,d_avg_m,n_wire,l_c_mm,"
+            ),
+            "{header}"
+        );
+        assert!(header.ends_with(",a_m_s2,w_spec_within_repeatability_ci\n"), "{header}");
     }
 }

@@ -8,7 +8,6 @@ use clap::Args;
 
 use crate::engine::conformance::{run, scenarios, Tolerances};
 use crate::engine::gpu::{AdapterChoice, GpuEngine};
-use crate::model::design::DesignRow;
 use crate::model::scenario::EnvPreset;
 use crate::model::Scenario;
 
@@ -98,7 +97,7 @@ pub fn run_cli(a: ConformanceArgs, out: &mut dyn Write) -> anyhow::Result<ExitCo
         if !report.worst.is_empty() {
             writeln!(out, "worst cases:")?;
             for m in &report.worst {
-                let design = DesignRow::from_values(m.design).cli_argument();
+                let design = m.design.cli_argument();
                 writeln!(out, "  [{}] design {design} particle {}: {}", m.scenario, m.particle, m.what)?;
             }
         }

@@ -241,15 +241,8 @@ fn compare_cmd(a: CompareArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> 
     let _owned = RunDir::acquire(&a.dir, "dem", Access::Exclusive).context("DIR")?;
     let json = serde_json::to_string_pretty(&c)?;
     write_atomic(&a.dir.join("compare.json"), json.as_bytes())?;
-    let title = format!(
-        "Model vs DEM: {:?} | alpha {} deg, g {} m/s^2{} | {} seeds",
-        plan.design.to_cli_units().map(|v| (v * 1000.0).round() / 1000.0),
-        plan.scenario.environment.alpha_deg,
-        plan.scenario.environment.g,
-        plan.scenario.environment.k_drag.map_or(String::new(), |k| format!(", k_drag {k} 1/s")),
-        results.len()
-    );
-    crate::plot::write_figure_files(&a.dir, "compare", &ComparisonPlot { c: &c, title })?;
+    let figure = ComparisonPlot::new(&c, &plan.scenario, &plan.design, results.len());
+    crate::plot::write_figure_files(&a.dir, "compare", &figure)?;
     if a.json {
         writeln!(out, "{json}")?;
     } else {

@@ -327,7 +327,7 @@ fn design_json(d: &Design) -> serde_json::Value {
 }
 
 fn describe(d: &Design) -> String {
-    DesignRow::of(d).describe()
+    DesignRow::of(d).to_string()
 }
 
 fn write_table(out: &mut dyn Write, s: &Scenario, d: &Design, engine: &str, det: &Detailed) -> std::io::Result<()> {

@@ -23,6 +23,7 @@ use super::gather::RunResult;
 use super::settings::DemSettings;
 use crate::io::atomic::write_atomic;
 use crate::io::run_dir::{kind_of, Access, RunDir};
+use crate::model::design::DesignRow;
 use crate::model::performance::performance;
 use crate::model::prepare;
 use crate::model::requirements::{Limit, Requirements};
@@ -43,8 +44,8 @@ const MAX_MEMBERS: usize = 100_000;
 #[derive(Clone, Debug, Serialize)]
 pub struct DesignCheck {
     pub label: String,
-    /// l_c, l_a, l_b, r, ω, δ, v0, a in mm, mm, mm, mm, deg, deg, m/s, m/s².
-    pub design_cli: [f64; 8],
+    /// The design's eight variables, named with their units as in every file (`l_c_mm` … `a_m_s2`).
+    pub design: DesignRow,
     pub alpha_deg: f64,
     pub model_d_avg_mm: f64,
     pub dem_d_avg_mm: Spread,
@@ -313,7 +314,7 @@ fn design_check(plan: &CheckPlan, f: &Finalist, results: &[RunResult]) -> anyhow
     };
     Ok(DesignCheck {
         label: f.label.clone(),
-        design_cli: design.to_cli_units(),
+        design: DesignRow::of(design),
         alpha_deg: scenario.environment.alpha_deg,
         model_d_avg_mm: f.model_d_avg_m * 1e3,
         dem_d_avg_mm: Spread { mean: mean_d * 1e3, sd: sd * 1e3 },
@@ -378,7 +379,7 @@ pub fn check(root: &Path, plan: &CheckPlan, jobs: usize, say: &(dyn Fn(String) +
     for (i, f) in plan.finalists.iter().enumerate() {
         let dir = plan.finalist_dir(root, i);
         std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-        say(format!("design {}: {:?}", f.label, f.campaign.design.to_cli_units()));
+        say(format!("design {}: {}", f.label, DesignRow::of(&f.campaign.design)));
         let results = campaign::run(&dir, &f.campaign, jobs, say)?;
         report.designs.push(design_check(plan, f, &results)?);
         write_report(root, &report)?;
@@ -483,6 +484,30 @@ mod tests {
         let mut p = a_plan();
         p.seeds = 0;
         assert!(p.validate().unwrap_err().contains("`seeds`"));
+    }
+
+    /// check.json spells a design as every other file does: the eight named columns with
+    /// their units, not a bare array whose order the reader must know.
+    #[test]
+    fn a_checked_design_is_reported_with_its_named_columns() {
+        let p = a_plan();
+        let run = |seed: u64, d_avg_m: f64| RunResult {
+            seed,
+            teeth_g: vec![1.0, 2.0],
+            input_mass_g: 3.0,
+            grains: 50,
+            lost: 0,
+            left_box: 0,
+            moving: 0,
+            d_avg_m,
+            wall_s: 10.0,
+        };
+        let c = design_check(&p, &p.finalists[0], &[run(5, 0.04), run(6, 0.06)]).unwrap();
+        let json = serde_json::to_value(&c).unwrap();
+        assert_eq!(json["design"]["l_c_mm"], 47.346, "{json}");
+        assert_eq!(json["design"]["a_m_s2"], 32.051, "{json}");
+        assert!(json.get("design_cli").is_none(), "{json}");
+        assert!((c.dem_d_avg_mm.mean - 50.0).abs() < 1e-9, "{:?}", c.dem_d_avg_mm);
     }
 
     #[test]

@@ -11,6 +11,7 @@ use serde::Serialize;
 
 use super::gather::RunResult;
 use crate::engine::{evaluate_detailed, make_engine_for, EngineKind};
+use crate::model::design::DesignRow;
 use crate::model::outcome::centre_and_dispersion;
 use crate::model::{Design, Scenario};
 use crate::plot::{self, Drawn, Figure, Mark};
@@ -122,14 +123,30 @@ pub fn shown_teeth(c: &Comparison) -> usize {
 
 /// Bars per tooth: model and DEM (mean, with ±1 sd over the seeds), and the lost mass.
 pub struct ComparisonPlot<'a> {
-    pub c: &'a Comparison,
-    pub title: String,
+    c: &'a Comparison,
+    /// The environment and the number of seeds.
+    title: String,
+    /// The design, one line with its units under the title (a title that held it too would
+    /// shrink to fit and be hard to read).
+    design: String,
 }
 
 const WIDTH_PX: u32 = 900;
 const PANEL_PX: u32 = 420;
 
-impl ComparisonPlot<'_> {
+impl<'a> ComparisonPlot<'a> {
+    /// The figure of `c`, the comparison of `design` in `scenario` over `seeds` DEM runs.
+    pub fn new(c: &'a Comparison, scenario: &Scenario, design: &Design, seeds: usize) -> Self {
+        let env = &scenario.environment;
+        let title = format!(
+            "Model vs DEM: alpha {} deg, g {} m/s^2{} | {seeds} seeds",
+            env.alpha_deg,
+            env.g,
+            env.k_drag.map_or(String::new(), |k| format!(", k_drag {k} 1/s")),
+        );
+        ComparisonPlot { c, title, design: DesignRow::of(design).to_string() }
+    }
+
     fn legend() -> [(Mark, &'static str); 3] {
         [
             (Mark::Block(plot::PALETTE[0]), "model (cpu engine)"),
@@ -141,13 +158,15 @@ impl ComparisonPlot<'_> {
 
 impl Figure for ComparisonPlot<'_> {
     fn size(&self) -> (u32, u32) {
-        let title = plot::wrapped_height(WIDTH_PX, &self.title, plot::TITLE_SIZE);
-        (WIDTH_PX, title + PANEL_PX + plot::legend_height(WIDTH_PX, &Self::legend()))
+        let heading = plot::title_height() + plot::wrapped_height(WIDTH_PX, &self.design, plot::SMALL_SIZE);
+        (WIDTH_PX, heading + PANEL_PX + plot::legend_height(WIDTH_PX, &Self::legend()))
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
         let c = self.c;
         let area = plot::title(root, &self.title)?;
+        let (line, area) = area.split_vertically(plot::wrapped_height(WIDTH_PX, &self.design, plot::SMALL_SIZE));
+        plot::draw_wrapped(&line, &self.design, plot::SMALL_SIZE)?;
         let (panel, key) = area.split_vertically(PANEL_PX);
         let n = shown_teeth(c);
         let mut labels: Vec<String> = (1..=n).map(|j| j.to_string()).collect();

@@ -13,6 +13,7 @@ use serde::Serialize;
 use super::cpu::{CpuEngine, Precision};
 use super::gpu::GpuEngine;
 use super::{Context, ParticleEngine};
+use crate::model::design::DesignRow;
 use crate::model::outcome::{end_tooth, summarise, ParticleEnd};
 use crate::model::sampling::random_valid_designs;
 use crate::model::{prepare, ParticleState, Prepared, Scenario};
@@ -49,7 +50,8 @@ impl Default for Tolerances {
 #[derive(Clone, Debug, Serialize)]
 pub struct Mismatch {
     pub scenario: String,
-    pub design: [f64; 8],
+    /// The design, in user units with the columns' names (`l_c_mm` … `a_m_s2`).
+    pub design: DesignRow,
     pub particle: usize,
     pub what: String,
 }
@@ -214,7 +216,7 @@ fn run_cases(
                     );
                     worst.push((
                         if diff.is_finite() { diff } else { 1.0 },
-                        Mismatch { scenario: name.clone(), design: prep.design.to_cli_units(), particle: i, what },
+                        Mismatch { scenario: name.clone(), design: DesignRow::of(&prep.design), particle: i, what },
                     ));
                 }
             }

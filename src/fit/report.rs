@@ -386,28 +386,8 @@ impl Figure for FitPlot {
             .map(|c| c.4.max(c.5).max(c.1 + if c.2.is_finite() { c.2 } else { 0.0 }))
             .fold(0.0, f64::max);
         let labels: Vec<String> = self.categories.iter().map(|c| c.0.clone()).collect();
-        let n = labels.len();
-        let mut chart = ChartBuilder::on(&chart_area)
-            .margin(15)
-            .x_label_area_size(50)
-            .y_label_area_size(70)
-            .build_cartesian_2d(plot::category_range(n), 0.0..(100.0 * top * 1.08).max(1.0))
-            .drawn()?;
-        let x_label = plot::category_label(&labels);
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .x_labels(n + 1)
-            .x_label_formatter(&x_label)
-            .y_label_formatter(&plot::tick)
-            .x_desc("tooth")
-            .y_desc("particle fraction [%]")
-            .label_style(plot::text_style(plot::SMALL_SIZE))
-            .axis_desc_style(plot::text_style(plot::LABEL_SIZE))
-            .bold_line_style(plot::GRID)
-            .max_light_lines(1)
-            .draw()
-            .drawn()?;
+        let y = 0.0..(100.0 * top * 1.08).max(1.0);
+        let mut chart = plot::category_chart(&chart_area, None, &labels, y, "tooth", "particle fraction [%]")?;
         let pct = |v: f64| 100.0 * v;
         let at = |i: usize| i as f64;
         chart

@@ -347,6 +347,30 @@ impl ser::Serializer for CellText {
     }
 }
 
+/// Serializes an optional group of columns that a row flattens into its place
+/// (`#[serde(flatten, serialize_with = "optional_columns")]` on an `Option<T>`): the group's
+/// columns, each cell empty where there is no group (a study run whose front holds no design).
+/// serde leaves a flattened `None` out of the row, which would shift the columns after it;
+/// the names come from `T::default()`. Read back, the flattened `Option<T>` is `None` when
+/// the cells are empty.
+pub fn optional_columns<T: Serialize + Default, S: ser::Serializer>(
+    group: &Option<T>,
+    s: S,
+) -> Result<S::Ok, S::Error> {
+    use ser::{Error as _, SerializeMap as _};
+    match group {
+        Some(g) => g.serialize(s),
+        None => {
+            let names = Cells::of(&T::default()).map_err(|e| S::Error::custom(e.0))?.names;
+            let mut columns = s.serialize_map(Some(names.len()))?;
+            for name in &names {
+                columns.serialize_entry(name, &None::<()>)?;
+            }
+            columns.end()
+        }
+    }
+}
+
 /// The header line of `T`'s table (from a default row, whose values are dropped).
 pub fn csv_header<T: Serialize + Default>() -> anyhow::Result<String> {
     let text = csv_text(&[T::default()], true)?;

@@ -132,7 +132,8 @@ impl Design {
 /// of every CSV (pareto.csv, evaluations.csv, the sweep and study tables), the keys of a
 /// config's `[design]` table and of the JSON reports, and the column names the Python
 /// package documents. A table row takes it with `#[serde(flatten)]` (`io::table` writes
-/// such rows), so the eight names, their order and their units are written down once, here.
+/// such rows; `io::table::optional_columns` an optional one), so the eight names, their
+/// order and their units are written down once, here.
 ///
 /// Values are [`Design::to_cli_units`]' exactly (mm = m × 1e3), so a file written from a
 /// design and read back gives the same bits.
@@ -189,15 +190,6 @@ impl DesignRow {
         format!("{:.3},{:.3},{:.3},{:.3},{:.2},{:.2},{:.3},{:.2}", v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7])
     }
 
-    /// One readable line with the units, for reports.
-    pub fn describe(&self) -> String {
-        let v = self.values();
-        format!(
-            "l_c {:.3} l_a {:.3} l_b {:.3} r {:.3} mm, omega {:.2} delta {:.2} deg, v0 {:.3} m/s, a {:.2} m/s2",
-            v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]
-        )
-    }
-
     /// A config file's `[design]` table with every value exact (`{}` is the shortest form
     /// that reads back to the same f64), one key per line.
     pub fn config_table(&self) -> String {
@@ -207,18 +199,17 @@ impl DesignRow {
         }
         t
     }
+}
 
-    /// Serialize an optional design as its eight columns, empty where there is none (a
-    /// study run whose front holds no design). serde leaves a flattened `None` out of the
-    /// row, which would shift the columns after it; read back, `Option<DesignRow>` with
-    /// `#[serde(flatten)]` is `None` when the cells are empty.
-    pub fn serialize_optional<S: serde::Serializer>(row: &Option<DesignRow>, s: S) -> Result<S::Ok, S::Error> {
-        use serde::ser::SerializeStruct as _;
-        let mut st = s.serialize_struct("DesignRow", 8)?;
-        for (i, name) in Self::COLUMNS.iter().enumerate() {
-            st.serialize_field(name, &row.map(|r| r.values()[i]))?;
-        }
-        st.end()
+/// One readable line with the units, for reports, progress lines and figure titles:
+/// `l_c 20.000 l_a 15.000 l_b 5.000 r 5.000 mm, omega 60.00 delta 0.00 deg, v0 1.000 m/s, a 60.00 m/s2`.
+impl std::fmt::Display for DesignRow {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [l_c, l_a, l_b, r, omega, delta, v0, a] = self.values();
+        write!(
+            f,
+            "l_c {l_c:.3} l_a {l_a:.3} l_b {l_b:.3} r {r:.3} mm, omega {omega:.2} delta {delta:.2} deg, v0 {v0:.3} m/s, a {a:.2} m/s2"
+        )
     }
 }
 
@@ -264,6 +255,15 @@ mod tests {
         }
         let back: File = toml::from_str(&text).unwrap();
         assert_eq!(back.design, c);
+    }
+
+    #[test]
+    fn a_design_row_reads_as_one_line_with_its_units() {
+        let row = DesignRow::of(&Design::validation_rig());
+        assert_eq!(
+            row.to_string(),
+            "l_c 20.000 l_a 15.000 l_b 5.000 r 5.000 mm, omega 60.00 delta 0.00 deg, v0 1.000 m/s, a 60.00 m/s2"
+        );
     }
 
     #[test]

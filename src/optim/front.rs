@@ -376,18 +376,8 @@ impl<'a> ParetoPlot<'a> {
             .y_label_area_size(80)
             .build_cartesian_2d(self.x.clone(), y)
             .drawn()?;
-        chart
-            .configure_mesh()
-            .x_desc("stroke frequency f_stroke [Hz]")
-            .y_desc(if self.log_y { "specific work W_spec [J/kg] (log)" } else { "specific work W_spec [J/kg]" })
-            .x_label_formatter(&plot::tick)
-            .y_label_formatter(&plot::tick)
-            .label_style(plot::text_style(plot::SMALL_SIZE))
-            .axis_desc_style(plot::text_style(plot::LABEL_SIZE))
-            .bold_line_style(plot::GRID)
-            .max_light_lines(1)
-            .draw()
-            .drawn()?;
+        let y_desc = if self.log_y { "specific work W_spec [J/kg] (log)" } else { "specific work W_spec [J/kg]" };
+        plot::draw_numeric_axes(&mut chart, "stroke frequency f_stroke [Hz]", y_desc)?;
         let inside = |p: &(f64, f64)| self.x.contains(&p.0) && self.y.contains(&p.1);
         let cloud = self.cloud.iter().map(|p| (p[0], p[1])).filter(inside);
         chart.draw_series(cloud.map(|p| Circle::new(p, 2, CLOUD_COLOUR.filled()))).drawn()?;

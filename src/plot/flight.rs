@@ -162,18 +162,7 @@ impl Figure for FlightPlot<'_> {
             .y_label_area_size(Y_LABELS_PX)
             .build_cartesian_2d(self.x.clone(), self.y.clone())
             .drawn()?;
-        chart
-            .configure_mesh()
-            .x_desc("x [mm]")
-            .y_desc("y [mm]")
-            .x_label_formatter(&plot::tick)
-            .y_label_formatter(&plot::tick)
-            .label_style(plot::text_style(plot::SMALL_SIZE))
-            .axis_desc_style(plot::text_style(plot::LABEL_SIZE))
-            .bold_line_style(plot::GRID)
-            .max_light_lines(1)
-            .draw()
-            .drawn()?;
+        plot::draw_numeric_axes(&mut chart, "x [mm]", "y [mm]")?;
         let fill: Vec<(f64, f64)> = self.det.prepared.fill.polygon.iter().map(|&p| mm(p)).collect();
         chart.draw_series(std::iter::once(Polygon::new(fill, FILL_COLOUR.filled()))).drawn()?;
         chart.draw_series(std::iter::once(PathElement::new(self.profile.clone(), BLACK.stroke_width(2)))).drawn()?;

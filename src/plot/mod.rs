@@ -21,6 +21,8 @@ use std::path::Path;
 use std::sync::Once;
 
 use anyhow::{anyhow, bail, Context as _};
+use plotters::chart::MeshStyle;
+use plotters::coord::ranged1d::ValueFormatter;
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -229,11 +231,15 @@ pub fn wrapped_height(width: u32, text: &str, size: f64) -> u32 {
     (wrapped_rows(width, text, size) as f64 * size * 1.25 + 6.0).ceil() as u32
 }
 
+/// Height in pixels of the line [`title`] takes.
+pub fn title_height() -> u32 {
+    (TITLE_SIZE * 1.6) as u32
+}
+
 /// A title line centred at the top of `area`; returns the area below it.
 pub fn title<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, text: &str) -> anyhow::Result<DrawingArea<DB, Shift>> {
     let (w, _) = area.dim_in_pixel();
-    let height = (TITLE_SIZE * 1.6) as u32;
-    let (top, rest) = area.split_vertically(height);
+    let (top, rest) = area.split_vertically(title_height());
     // a long title (a design's eight parameters) shrinks to fit rather than run off the edge
     let (tw, _) = top.estimate_text_size(text, &text_style(TITLE_SIZE)).drawn()?;
     let size = if tw + 20 > w { (TITLE_SIZE * (w - 20) as f64 / tw as f64).max(9.0) } else { TITLE_SIZE };
@@ -314,6 +320,47 @@ fn draw_mark<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, mark: Mark, (x, 
     .drawn()
 }
 
+/// The mesh of `chart` in the style every figure shares: tick labels in the small size,
+/// axis titles in `axis_title_size`, the light grid with one light line between bold ones.
+/// The caller adds its axis titles and label formatters, and draws it.
+pub fn styled_mesh<'a, 'b, DB, X, Y, XT, YT>(
+    chart: &'b mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+    axis_title_size: f64,
+) -> MeshStyle<'a, 'b, X, Y, DB>
+where
+    DB: DrawingBackend,
+    X: Ranged<ValueType = XT> + ValueFormatter<XT>,
+    Y: Ranged<ValueType = YT> + ValueFormatter<YT>,
+{
+    let mut mesh = chart.configure_mesh();
+    mesh.label_style(text_style(SMALL_SIZE))
+        .axis_desc_style(text_style(axis_title_size))
+        .bold_line_style(GRID)
+        .max_light_lines(1);
+    mesh
+}
+
+/// The axes of a chart with numbers along both (the Pareto plot, the flights): [`tick`]
+/// numbers, the axis titles `x_desc` and `y_desc` in the label size, drawn.
+pub fn draw_numeric_axes<DB, X, Y>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
+    x_desc: &str,
+    y_desc: &str,
+) -> anyhow::Result<()>
+where
+    DB: DrawingBackend,
+    X: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    styled_mesh(chart, LABEL_SIZE)
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick)
+        .draw()
+        .drawn()
+}
+
 /// Tick labels of a category axis: categories sit at 0, 1, 2, ... on an f64 axis spanning
 /// `-0.5..n - 0.5` (see [`category_range`]); ticks between them stay unlabelled.
 pub fn category_label(labels: &[String]) -> impl Fn(&f64) -> String + '_ {
@@ -327,8 +374,8 @@ pub fn category_label(labels: &[String]) -> impl Fn(&f64) -> String + '_ {
     }
 }
 
-/// A chart of categories along x (teeth, bins) and values up y, as the diagnosis and the
-/// DEM comparison draw them: the categories' labels under their bars, no vertical grid
+/// A chart of categories along x (teeth, bins) and values up y, as the diagnosis, the fit
+/// and the DEM comparison draw them: the categories' labels under their bars, no vertical grid
 /// lines, `tick` numbers up the side, small text, the light grid; `caption` above the plot
 /// area, if any.
 pub fn category_chart<'a, DB: DrawingBackend>(
@@ -350,18 +397,13 @@ pub fn category_chart<'a, DB: DrawingBackend>(
         .build_cartesian_2d(category_range(labels.len()), y)
         .drawn()?;
     let x_label = category_label(labels);
-    chart
-        .configure_mesh()
+    styled_mesh(&mut chart, SMALL_SIZE)
         .disable_x_mesh()
         .x_labels(labels.len() + 1)
         .x_label_formatter(&x_label)
         .y_label_formatter(&tick)
         .x_desc(x_desc)
         .y_desc(y_desc)
-        .label_style(text_style(SMALL_SIZE))
-        .axis_desc_style(text_style(SMALL_SIZE))
-        .bold_line_style(GRID)
-        .max_light_lines(1)
         .draw()
         .drawn()?;
     Ok(chart)
@@ -450,13 +492,7 @@ pub mod tests {
                 .y_label_area_size(50)
                 .build_cartesian_2d(0.0..10.0, 0.0..1.0)
                 .drawn()?;
-            chart
-                .configure_mesh()
-                .x_desc("x [mm]")
-                .y_desc("y [-]")
-                .label_style(text_style(SMALL_SIZE))
-                .draw()
-                .drawn()?;
+            draw_numeric_axes(&mut chart, "x [mm]", "y [-]")?;
             chart
                 .draw_series(LineSeries::new((0..=10).map(|i| (i as f64, (i as f64 / 10.0).powi(2))), PALETTE[0]))
                 .drawn()?;
