@@ -173,11 +173,10 @@ fn assert_the_resting_sled_closes_nothing(v: &Value) {
 }
 
 /// The lunar deep fill (150 grains carrying the model's fill mass): in vacuum every bounce
-/// keeps its speed, so the DEM's grains land 10-35 % further than the model's and the gap is
-/// well above the data's noise. The deep fill's grains land on one another in the catch, so
-/// an impact scatter closes a large part of it (in the monolayer, where few grains land on
-/// grains, it closes nothing: the next test); whatever is named is one of the effects the
-/// DEM's contacts make, never drag or the resting sled.
+/// keeps its speed, so the DEM's grains end 10-35 % further than the model's (d_avg) and the
+/// gap is well above the data's noise. Whatever is named is one of the effects the DEM's own
+/// contacts make (scattered landings on grains, grains leaving the fill at different speeds),
+/// never drag or the resting sled.
 #[test]
 fn a_lunar_deep_dem_fill_names_only_what_grain_contacts_make() {
     if !heavy("diagnose_dem::a_lunar_deep_dem_fill_names_only_what_grain_contacts_make") {
@@ -190,16 +189,13 @@ fn a_lunar_deep_dem_fill_names_only_what_grain_contacts_make() {
     let over = v["verdict_detail"]["baseline"]["gap_over_floor"].as_f64().unwrap();
     assert!(over > 3.0, "the DEM's gap is well above the data's noise: {over}x; {s}");
     assert_names_only_what_the_dem_contains(&v, &MADE_BY_CONTACTS);
-    let scatter = ranked(&v, "impact-scatter")["reduction"].as_f64().unwrap();
-    assert!(scatter > 0.25, "grains landing on grains scatter the impacts: {scatter}; {s}");
 }
 
 /// The lunar monolayer (40 grains of the deep fill's size lining the catch): the DEM's grains
-/// end elsewhere than the model's at every calibration (at the slow stroke 54 % rest in tooth
-/// 5, where the model puts at most 44 %, calibrated or at the DEM's own contact values; at
-/// 15° they stop short of the model's), and no
-/// candidate is that: "none of these", no candidate named as the cause, and an impact scatter
-/// closes nothing where grains land on the mesh rather than on each other.
+/// end elsewhere than the model's (at the slow stroke 54 % rest in tooth 5, where the
+/// calibrated model puts 37 % and the model at the DEM's own contact values 44 %; at 15° they
+/// stop short of the model's, 19 % in tooth 3), and no candidate shapes that: "none of
+/// these", no candidate named as the cause.
 #[test]
 fn a_lunar_dem_monolayer_is_none_of_these() {
     if !heavy("diagnose_dem::a_lunar_dem_monolayer_is_none_of_these") {
@@ -212,6 +208,4 @@ fn a_lunar_dem_monolayer_is_none_of_these() {
     let over = v["verdict_detail"]["baseline"]["gap_over_floor"].as_f64().unwrap();
     assert!(over > 3.0, "the DEM's gap is well above the data's noise: {over}x; {s}");
     assert_names_only_what_the_dem_contains(&v, &[]);
-    let scatter = ranked(&v, "impact-scatter")["reduction"].as_f64().unwrap();
-    assert!(scatter < 0.1, "few grains land on grains in a monolayer: {scatter}; {s}");
 }
