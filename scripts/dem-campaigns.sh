@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The DEM campaigns of data/dem/ (issue 32, item 1): LIGGGHTS campaigns of the campaign rig
-# (data/campaign_rig/{slow,fast,shallow}.toml: glass beads, Earth with Stokes drag) that
-# `diagnose` reads as it reads a rig's. Each campaign runs in OUT/NAME (dumps and logs stay
+# (data/campaign_rig/{slow,fast,shallow}.toml: glass beads, Earth with Stokes drag), and the
+# same rig on the Moon at slower strokes (data/dem/configs/lunar-*.toml: lunar gravity in
+# vacuum), that `diagnose` reads as it reads a rig's. Each campaign runs in OUT/NAME (dumps and logs stay
 # there); its measured-data CSV and setup TOML are copied to data/dem/NAME/. A campaign that
 # was killed resumes where it stopped when the script is run again; a finished one is skipped.
 #
@@ -53,4 +54,15 @@ done
 # classes), at each condition
 for c in slow fast shallow; do
     campaign "earth-poly-$c" "$rig/$c.toml" --particles 150 --effect polydisperse=0.3
+done
+# lunar gravity in vacuum (no drag): the rig's design at strokes the DEM carries in minutes
+# (data/dem/configs/lunar-*.toml: v0 0.5 m/s at 30 deg, 0.65 m/s at 30 deg, 0.5 m/s at 15 deg;
+# at the rig's own 1.1 m/s the grains fly for seconds over ~20 teeth); deep fill, then the
+# monolayer of the deep fill's grain size
+for c in slow fast shallow; do
+    campaign "lunar-deep-$c" "data/dem/configs/lunar-$c.toml" --particles 150
+done
+for c in slow fast shallow; do
+    wanted "lunar-mono-$c" || continue
+    campaign "lunar-mono-$c" "data/dem/configs/lunar-$c.toml" --particles 40 --grain-diameter-um "$(diameter_um "lunar-deep-$c")"
 done
