@@ -5,23 +5,14 @@
 //! `cargo test` skips them.
 
 use sawtooth::engine::conformance::{run, run_merged, scenarios, Tolerances};
-use sawtooth::engine::gpu::{AdapterChoice, GpuEngine};
+use sawtooth::engine::gpu::GpuEngine;
 use sawtooth::engine::{BatchEvaluator, ParticleEngine};
 use sawtooth::model::{Design, Scenario};
 
 mod common;
 
 fn gpu() -> Option<GpuEngine> {
-    match GpuEngine::new(AdapterChoice::Any) {
-        Ok(g) => Some(g),
-        Err(e) => {
-            if std::env::var("CI").is_ok_and(|v| v == "true") {
-                panic!("CI=true but no Vulkan adapter: {e:#}");
-            }
-            eprintln!("skipping GPU test (no Vulkan adapter; scripts/test.sh installs lavapipe): {e:#}");
-            None
-        }
-    }
+    common::gpu_engine()
 }
 
 #[test]

@@ -235,6 +235,9 @@ fn optimize_constrains_by_the_requirements_over_the_slopes_and_resumes_exactly()
 #[test]
 fn optimize_over_slopes_runs_on_the_gpu_engine() {
     // lavapipe in CI; every slope of a generation in one GPU job
+    if common::gpu_engine().is_none() {
+        return;
+    }
     let out = fresh_dir("gpu");
     let o = sawtooth()
         .args(OPTIMIZE)

@@ -99,3 +99,20 @@ pub fn full_tier(test: &str, why_heavy: &str) -> bool {
     }
     full
 }
+
+/// The GPU engine on whatever Vulkan adapter the machine has (lavapipe in the full tier), or
+/// None where there is none: the GPU tests then skip and say so, except with CI=true, where
+/// a missing adapter fails them (scripts/test.sh installs lavapipe first).
+pub fn gpu_engine() -> Option<sawtooth::engine::gpu::GpuEngine> {
+    use sawtooth::engine::gpu::{AdapterChoice, GpuEngine};
+    match GpuEngine::new(AdapterChoice::Any) {
+        Ok(g) => Some(g),
+        Err(e) => {
+            if std::env::var("CI").is_ok_and(|v| v == "true") {
+                panic!("CI=true but no Vulkan adapter: {e:#}");
+            }
+            eprintln!("skipping GPU test (no Vulkan adapter; scripts/test.sh installs lavapipe): {e:#}");
+            None
+        }
+    }
+}
