@@ -352,7 +352,7 @@ mod tests {
     fn falling_grains_cross<T: Real>() -> (usize, usize) {
         let (mut tried, mut missed) = (0, 0);
         for i in 0..4000 {
-            let u = |j: u32| T::c(crate::model::rng::uniform01(7, i, 0, j) as f64);
+            let u = |j: u32| T::c(crate::model::rng::uniform01(7, i, 0, j));
             let k = T::c(20.0) + T::c(480.0) * u(0); // 1/s
             let g = if i % 2 == 0 { T::c(1.625) } else { T::c(9.81) };
             let height = T::c(1e-4) + T::c(0.05) * u(1); // m above the line

@@ -188,7 +188,7 @@ pub mod klog {
         let bits = x.to_bits();
         e += ((bits >> 23) & 0xff) as i32 - 127;
         let mut m = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000);
-        if m > 1.414_213_5 {
+        if m > std::f32::consts::SQRT_2 {
             m *= 0.5;
             e += 1;
         }
