@@ -60,7 +60,7 @@ done
 python3 - "$out" <<'EOF' | tee "$out/table.md"
 import json, os, sys
 out = sys.argv[1]
-times = {l.split()[0]: l.split(maxsplit=2) for l in open(os.path.join(out, "times.txt"))}
+times = {l.split()[0]: l.strip().split(maxsplit=2) for l in open(os.path.join(out, "times.txt"))}
 print("| campaign | withheld | baseline gap | top three: gap (reduction) | best | indistinguishable | verdict | named / narrowed | wall time |")
 print("|---|---|---|---|---|---|---|---|---|")
 for name, (_, truth, wall) in times.items():
@@ -73,7 +73,8 @@ for name, (_, truth, wall) in times.items():
         grade = "narrowed"
     else:
         grade = "NOT FOUND"
-    detail = d["verdict_detail"]["text"].split(":")[0]
+    left = d["verdict_detail"]["remaining"]
     print(f"| {name} | {truth} | {d['baseline']['gap']:.1f} | {top} | {d['best']} | {', '.join(together) or '–'} "
-          f"| {d['verdict']} ({detail}) | {grade} | {wall} |")
+          f"| {d['verdict']} ({left['model']} leaves {left['gap']:.1f}, {left['gap_over_floor']:.1f}× its floor) "
+          f"| {grade} | {wall} |")
 EOF
