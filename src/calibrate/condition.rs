@@ -136,17 +136,25 @@ impl Condition {
         runs.runs.iter().all(|r| r.input_mass_g.is_some_and(|m| m > 0.0))
     }
 
-    /// Variance of the measured mean fraction per bin (teeth, then lost): the run-to-run
-    /// variance over the number of runs, floored by the scale's quantisation
-    /// (resolution²/12 relative to the mean recovered mass², per run, over the runs).
+    /// Variance of the measured mean fraction per bin (teeth, then the last bin): the
+    /// run-to-run variance of [`Self::run_fractions`] — the bins as the fits compare them,
+    /// the "not recovered" share included — over the number of runs, plus the scale's
+    /// quantisation (resolution²/12 relative to the mean recovered mass², per run, over the
+    /// runs). Why the compared bins and not the teeth's fractions of the recovered mass: under
+    /// `Normalise::Loaded` each run spills a different share in handling, which moves every
+    /// tooth's fraction of the loaded mass and the last bin itself; a floor that saw only the
+    /// teeth's recovered fractions gave that bin the scale's quantisation alone and flagged
+    /// a DEM campaign's lost grains at z −6 to −10 (docs/diagnosis-report.md).
     pub fn mean_variance(&self) -> Vec<f64> {
-        let n = self.runs.runs.len().max(1) as f64;
-        let sd = self.runs.std_fractions();
+        let fractions = self.run_fractions();
+        let n = fractions.len().max(1) as f64;
         let recovered = self.runs.runs.iter().map(|r| r.recovered_g()).sum::<f64>() / n;
         let scale = (self.resolution_g / recovered).powi(2) / 12.0 / n;
         (0..=self.teeth())
             .map(|j| {
-                let s = sd.get(j).copied().filter(|s| s.is_finite()).unwrap_or(0.0);
+                let column: Vec<f64> = fractions.iter().map(|f| f[j]).collect();
+                // one run has no spread: the scale's quantisation alone
+                let s = Some(sample_sd(&column)).filter(|s| s.is_finite()).unwrap_or(0.0);
                 s * s / n + scale
             })
             .collect()
@@ -163,5 +171,70 @@ impl Condition {
             .filter(|(p, _)| **p >= 0.02)
             .map(|(p, v)| p * (1.0 - p) / (ratio * v.max(1e-12)))
             .fold(0.0, f64::max)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+
+    /// Test 3's setup with `csv`'s runs.
+    fn test3_with(csv: &str) -> Condition {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/validation");
+        let mut c = crate::calibrate::measured::load(
+            &dir.join("test3.csv"),
+            &dir.join("test3.toml"),
+            "test3".into(),
+            None,
+            Some(0),
+            crate::calibrate::Spelling::Flags,
+        )
+        .unwrap();
+        c.runs = crate::io::measured::parse(csv, "runs").unwrap();
+        c
+    }
+
+    /// Two runs that put the same shares of what they recovered in the same teeth but spill
+    /// 0 % and 10 % of their loaded mass: the "not recovered" bin (and every tooth's share
+    /// of the loaded mass) varies from run to run, and the noise floor of each bin counts
+    /// that variance, not the scale's quantisation alone.
+    #[test]
+    fn the_noise_floor_counts_the_run_to_run_variance_of_every_compared_bin() {
+        let c = test3_with(
+            "run,tooth_1,tooth_2,tooth_3,tooth_4,input_mass\n1,1.00,0.50,0.40,0.10,2.00\n2,0.90,0.45,0.36,0.09,2.00\n",
+        );
+        assert_eq!(c.normalise, Normalise::Loaded);
+        let var = c.mean_variance();
+        let fractions = c.run_fractions();
+        let scale = (c.resolution_g / 1.9).powi(2) / 12.0 / 2.0;
+        for (j, v) in var.iter().enumerate() {
+            let column: Vec<f64> = fractions.iter().map(|f| f[j]).collect();
+            let want = sample_sd(&column).powi(2) / 2.0 + scale;
+            assert!((v - want).abs() < 1e-15, "bin {j}: {v} against {want}");
+        }
+        let last = var[c.teeth()];
+        assert!(
+            last > 100.0 * scale,
+            "the not-recovered bin (0 % and 10 %) varies: {last} against the scale's {scale}"
+        );
+    }
+
+    /// With the recovered mass as the denominator (D.4) the last bin is 0 in every run and
+    /// keeps the scale's floor; a single run has no spread and keeps it in every bin.
+    #[test]
+    fn a_bin_that_never_varies_keeps_the_scale_floor() {
+        let mut c = test3_with(
+            "run,tooth_1,tooth_2,tooth_3,tooth_4,input_mass\n1,1.00,0.50,0.40,0.10,2.00\n2,0.90,0.45,0.36,0.09,2.00\n",
+        );
+        c.normalise = Normalise::Recovered;
+        let scale = (c.resolution_g / 1.9).powi(2) / 12.0 / 2.0;
+        let var = c.mean_variance();
+        assert!((var[c.teeth()] - scale).abs() < 1e-18, "{var:?}");
+        assert!((var[0] - scale).abs() < 1e-18, "tooth 1 holds 50 % of what both runs recovered: {var:?}");
+        let one = test3_with("run,tooth_1,tooth_2,tooth_3,tooth_4,input_mass\n1,1.00,0.50,0.40,0.10,2.00\n");
+        let scale_one = (one.resolution_g / 2.0).powi(2) / 12.0;
+        assert!(one.mean_variance().iter().all(|v| (v - scale_one).abs() < 1e-18));
     }
 }

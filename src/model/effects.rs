@@ -396,21 +396,30 @@ impl Effects {
         if values.len() != n {
             return Err(format!("effect {name} takes {n} value(s) ({}), got {}", kind.cli_form(), values.len()));
         }
+        // checked before it is applied: a refused spec leaves the effects as they were
+        check_values(kind, &values)?;
         kind.apply(self, &values);
-        self.validate()
+        Ok(())
     }
 
     pub fn validate(&self) -> Result<(), String> {
         for kind in EffectKind::ALL {
-            let Some(values) = kind.values(self) else { continue };
-            for ((v, (lo, hi)), name) in values.iter().zip(kind.valid_bounds()).zip(kind.param_names()) {
-                if !(v.is_finite() && v >= lo && v <= hi) {
-                    return Err(format!("`effects.{}.{name}` must lie in [{lo}, {hi}], got {v}", kind.key()));
-                }
+            if let Some(values) = kind.values(self) {
+                check_values(kind, &values)?;
             }
         }
         Ok(())
     }
+}
+
+/// Whether `values` lie in `kind`'s valid bounds; the error names the config key.
+fn check_values(kind: EffectKind, values: &[f64]) -> Result<(), String> {
+    for ((v, (lo, hi)), name) in values.iter().zip(kind.valid_bounds()).zip(kind.param_names()) {
+        if !(v.is_finite() && v >= lo && v <= hi) {
+            return Err(format!("`effects.{}.{name}` must lie in [{lo}, {hi}], got {v}", kind.key()));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -428,7 +437,6 @@ mod tests {
         assert!(e.set_from_cli("launch-spread=0.3").unwrap_err().contains("takes 2"));
         assert!(e.set_from_cli("polydisperse=-0.1").unwrap_err().contains("effects.polydisperse.sigma_ln"));
         assert!(e.set_from_cli("impact-scatter=90").unwrap_err().contains("sigma_deg"));
-        // a fresh set: a refused spec is left in `e` (the caller reports and stops)
         let mut e = Effects::default();
         e.set_from_cli("fill-surface-loss=0.2,0.0005").unwrap();
         assert_eq!(e.fill_surface_loss, Some(FillSurfaceLoss { speed_loss: 0.2, decay_depth_m: 0.0005 }));
@@ -437,5 +445,21 @@ mod tests {
             .unwrap_err()
             .contains("effects.fill_surface_loss.decay_depth_m"));
         assert!(e.set_from_cli("fill-surface-loss=1.2,0.001").unwrap_err().contains("speed_loss"));
+    }
+
+    /// A value outside its effect's bounds is refused before it is applied: the effects
+    /// keep what they held (an effect already on keeps its values, one that was off stays
+    /// off), so a caller that reports the error and goes on holds no invalid effect.
+    #[test]
+    fn a_refused_spec_leaves_the_effects_unchanged() {
+        let mut e = Effects::default();
+        e.set_from_cli("impact-scatter=5").unwrap();
+        let before = e;
+        assert!(e.set_from_cli("impact-scatter=90").unwrap_err().contains("effects.impact_scatter.sigma_deg"));
+        assert!(e.set_from_cli("polydisperse=-0.1").unwrap_err().contains("effects.polydisperse.sigma_ln"));
+        assert!(e.set_from_cli("fill-surface-loss=0.2,0").unwrap_err().contains("decay_depth_m"));
+        assert!(e.set_from_cli("sled-motion=0,NaN").is_err());
+        assert_eq!(e, before);
+        assert!(e.validate().is_ok());
     }
 }
