@@ -811,7 +811,8 @@ pub fn diagnose(
     // is the gap there, and does the best effect explain it (or only a part of it)?
     let shown: Vec<usize> = where_.iter().map(|w| w.shown_teeth).collect();
     let layers: Vec<Vec<DepthLayer>> = where_.iter().map(|w| w.launch_depth.clone()).collect();
-    let verdict = verdict::verdict(&conditions, &baseline, &ranking, best, &shown, &layers, particles);
+    let verdict =
+        verdict::verdict(&conditions, &baseline, &ranking, best, &indistinguishable, &shown, &layers, particles);
     log(format!("diagnose: verdict {}: {}", verdict.kind.name(), verdict.text));
     let best = best.filter(|e| verdict.demoted != Some(*e));
 

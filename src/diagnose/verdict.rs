@@ -337,14 +337,17 @@ fn persistent(
 }
 
 /// The verdict of a diagnosis: `baseline` and `ranking` with their fresh streams and
-/// bootstrap filled, `best` as the ranking chose it; `shown` teeth and depth layers per
-/// condition from the baseline's "where". Returns the verdict; its `demoted` effect, if
-/// any, is no longer `best`.
+/// bootstrap filled, `best` as the ranking chose it and the effects `indistinguishable` from
+/// it (the top one first; empty when none is); `shown` teeth and depth layers per condition
+/// from the baseline's "where". Returns the verdict; its `demoted` effect, if any, is no
+/// longer `best`.
+#[allow(clippy::too_many_arguments)]
 pub fn verdict(
     conds: &[Condition],
     baseline: &ModelResult,
     ranking: &[ModelResult],
     best: Option<EffectKind>,
+    indistinguishable: &[EffectKind],
     shown: &[usize],
     layers: &[Vec<DepthLayer>],
     particles: u32,
@@ -400,8 +403,29 @@ pub fn verdict(
     let mut models: Vec<&ModelResult> = vec![baseline];
     models.extend(ranking.iter());
     let persistent = persistent(conds, &models, shown, layers, particles);
-    let text = describe(kind, &base, &remaining, &partial, demoted, &persistent, conds);
+    let mut text = describe(kind, &base, &remaining, &partial, demoted, &persistent, conds);
+    if let (Some(e), VerdictKind::Explained | VerdictKind::PartlyExplained) = (best, kind) {
+        text.push_str(&alike_clause(e, indistinguishable));
+    }
     Verdict { kind, baseline: base, remaining, partial, demoted, persistent, text }
+}
+
+/// "explained by X" where the data cannot tell X from Y names a set, not a cause: the clause
+/// that says so (empty when `best` stands alone).
+fn alike_clause(best: EffectKind, indistinguishable: &[EffectKind]) -> String {
+    let alike: Vec<String> =
+        indistinguishable.iter().filter(|o| **o != best).map(|o| format!("`{}`", o.name())).collect();
+    if alike.is_empty() {
+        return String::new();
+    }
+    format!(
+        "; the data do not tell `{}` from {} (indistinguishable in the paired comparison): the cause is one of \
+         these {}, not `{}` alone",
+        best.name(),
+        alike.join(", "),
+        alike.len() + 1,
+        best.name()
+    )
 }
 
 fn describe(
@@ -529,6 +553,20 @@ impl Verdict {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_explained_verdict_names_the_set_the_data_cannot_split() {
+        use EffectKind::{FillSurfaceLoss, ImpactScatter, LaunchSpread};
+        let clause = alike_clause(ImpactScatter, &[ImpactScatter, LaunchSpread, FillSurfaceLoss]);
+        assert!(
+            clause.contains("do not tell `impact-scatter` from `launch-spread`, `fill-surface-loss`")
+                && clause.contains("one of these 3, not `impact-scatter` alone"),
+            "{clause}"
+        );
+        // a best that stands alone keeps the verdict as it was
+        assert_eq!(alike_clause(ImpactScatter, &[]), "");
+        assert_eq!(alike_clause(ImpactScatter, &[ImpactScatter]), "");
+    }
 
     #[test]
     fn handling_loss_removes_a_uniform_spill_and_no_more_than_the_data_show() {
