@@ -3,8 +3,9 @@
 //! noise explain — "none of these"?
 //!
 //! - **Noise floor.** The gap a model right in every respect would leave: per bin the
-//!   variance of the measured mean (run-to-run variance / runs, floored by the scale's
-//!   quantisation, [`Condition::mean_variance`]) plus the Monte-Carlo variance of the
+//!   variance of the measured mean (the run-to-run variance of the bin as compared, the
+//!   "not recovered" share's included, over the runs, plus the scale's quantisation:
+//!   [`Condition::mean_variance`]) plus the Monte-Carlo variance of the
 //!   simulated bins p(1−p)/(N·streams) (the model is judged on the mean of its fresh
 //!   streams), summed over bins and conditions, %².
 //! - **Handling loss.** Every measured run loses some mass in handling (Table 4.4: Test 3
