@@ -174,24 +174,28 @@ impl Condition {
     }
 }
 
+/// The thesis's Test 3 as a condition (data/validation), for the calibration's unit tests.
+#[cfg(test)]
+pub(crate) fn test3() -> Condition {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/validation");
+    crate::calibrate::measured::load(
+        &dir.join("test3.csv"),
+        &dir.join("test3.toml"),
+        "test3".into(),
+        None,
+        Some(0),
+        crate::calibrate::Spelling::Flags,
+    )
+    .unwrap()
+}
+
 #[cfg(test)]
 mod tests {
-    use std::path::Path;
-
     use super::*;
 
     /// Test 3's setup with `csv`'s runs.
     fn test3_with(csv: &str) -> Condition {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/validation");
-        let mut c = crate::calibrate::measured::load(
-            &dir.join("test3.csv"),
-            &dir.join("test3.toml"),
-            "test3".into(),
-            None,
-            Some(0),
-            crate::calibrate::Spelling::Flags,
-        )
-        .unwrap();
+        let mut c = test3();
         c.runs = crate::io::measured::parse(csv, "runs").unwrap();
         c
     }

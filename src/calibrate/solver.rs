@@ -371,7 +371,6 @@ impl Member {
 
 #[cfg(test)]
 mod tests {
-    use std::path::Path;
     use std::sync::Mutex;
 
     use super::*;
@@ -400,16 +399,7 @@ mod tests {
     }
 
     fn test3() -> Condition {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/validation");
-        crate::calibrate::measured::load(
-            &dir.join("test3.csv"),
-            &dir.join("test3.toml"),
-            "test3".into(),
-            None,
-            Some(0),
-            crate::calibrate::Spelling::Flags,
-        )
-        .unwrap()
+        crate::calibrate::condition::test3()
     }
 
     #[test]
