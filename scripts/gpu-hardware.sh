@@ -22,6 +22,7 @@ if ! [[ $repeats =~ ^[0-9]+$ ]] || ((repeats < 1)); then
 fi
 st=${SAWTOOTH_BIN:-target/release/sawtooth}
 mkdir -p "$out"
+: >"$out/steps.txt" # this run's steps only, also where OUT is used again
 quick=${SAWTOOTH_QUICK:-0}
 pop=1000 big=10000 gens=30 final=1000
 if [[ $quick == 1 ]]; then pop=50 big=200 gens=3 final=100; fi

@@ -1,11 +1,12 @@
 // f32 natural logarithm written out: Vulkan promises `log` only to 2^-21 ABSOLUTE on [0.5, 2],
-// which near 1 is no relative accuracy at all (NVIDIA's driver gives that: on an H200 a
-// Box-Muller radius sqrt(-2 log u) and the Stokes flight time -log(1 - k x / vx) / k came out
-// wrong where u or 1 - k x / vx is close to 1; docs/math.md). ln x = e ln 2 + 2 atanh(s) with
-// x = m 2^e, m in [sqrt(1/2), sqrt(2)), s = (m - 1)/(m + 1), |s| <= 0.1716: the atanh series
-// to s^9 is within 2e-9 relative, so the error is the rounding of s and of the sum, a few ulp,
-// relative also near 1. ln 2 in two pieces (the high one has 16 significant bits, so e ln2_hi
-// is exact). For x > 0; x <= 0 (the kernels pass none) gives -3.4028235e38, +inf itself.
+// which near 1 is no relative accuracy at all: a Box-Muller radius sqrt(-2 log u) may come out
+// NaN and the Stokes flight time -log(1 - k x / vx) / k far off where u or 1 - k x / vx is close
+// to 1 (the H200's own log was accurate enough on the conformance cases; docs/math.md).
+// ln x = e ln 2 + 2 atanh(s) with x = m 2^e, m in [sqrt(1/2), sqrt(2)), s = (m - 1)/(m + 1),
+// |s| <= 0.1716: the atanh series to s^9 is within 2e-9 relative, so the error is the rounding
+// of s and of the sum, a few ulp, relative also near 1. ln 2 in two pieces (the high one has
+// 16 significant bits, so e ln2_hi is exact). For x > 0; x <= 0 (the kernels pass none) gives
+// -3.4028235e38, +inf itself.
 // Twin: src/model/real.rs `klog`.
 
 const LN2_HI: f32 = 0.69314575;

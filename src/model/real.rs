@@ -157,9 +157,10 @@ pub mod ktrig {
 }
 
 /// The f32 kernels' natural logarithm, written out: Vulkan promises `log` only to 2^-21
-/// absolute on [0.5, 2], which near 1 is no relative accuracy at all, and NVIDIA's driver
-/// gives no more (on an H200, Box-Muller radii and Stokes flight times went wrong where their
-/// argument is close to 1; docs/math.md). ln x = e ln 2 + 2 atanh(s) with x = m 2^e,
+/// absolute on [0.5, 2], which near 1 is no relative accuracy at all (a Box-Muller radius
+/// sqrt(-2 ln u) may come out NaN, a short Stokes flight time far off), so the kernels do not
+/// rely on the builtin (the H200's own was accurate enough on the conformance cases;
+/// docs/math.md). ln x = e ln 2 + 2 atanh(s) with x = m 2^e,
 /// m in [√½, √2), s = (m − 1)/(m + 1), |s| ≤ 0.1716: the atanh series to s⁹ is within 2e-9
 /// relative, so the error is the rounding of s and of the sum, a few ulp, relative also near 1.
 /// ln 2 in two pieces (the high one has 16 significant bits, so e·ln2_hi is exact).
