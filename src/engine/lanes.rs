@@ -543,6 +543,14 @@ mod avx512 {
         sel(lt(a, zero), falling, sel(gt(a, zero), rising, div(sp(40.0), k)))
     }
 
+    /// `final_sign_at_horizon` (flight.rs): f at the horizon with the sign the bound gives it.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    fn final_sign_at_horizon(f: V, a: V) -> V {
+        let zero = sp(0.0);
+        sel(lt(a, zero), min(f, zero), sel(gt(a, zero), max(f, sp(f64::MIN_POSITIVE)), f))
+    }
+
     /// The first root `quadratic_roots` (flight.rs) keeps in (0, ∞) ∩ [t_min, t_max], and
     /// the lanes that have one.
     #[target_feature(enable = "avx512f")]
@@ -654,10 +662,7 @@ mod avx512 {
             }
             let hi = min(hi, t_end);
             let f_hi = stokes_f(f, go, coef, hi);
-            // at the horizon f takes the sign the bound gives it (`final_sign_at_horizon`)
-            let final_sign =
-                sel(lt(ca, zero), min(f_hi, zero), sel(gt(ca, zero), max(f_hi, sp(f64::MIN_POSITIVE)), f_hi));
-            let f_hi = sel(eq(hi, horizon), final_sign, f_hi);
+            let f_hi = sel(eq(hi, horizon), final_sign_at_horizon(f_hi, ca), f_hi);
             let starts_on_line = eq(lo, zero) & (departing | eq(f_lo, zero));
             // lift-off below rounding: the flight is back on its surface at t*
             let lift_off = go & departing & gt(lo, zero) & le(f_lo, zero) & eq(r.n, zero);
