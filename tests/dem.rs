@@ -4,7 +4,7 @@
 //! so, also where LIGGGHTS is installed); where LIGGGHTS is missing they skip, except with
 //! CI=true, where they FAIL (as tests/gpu_conformance.rs does for a missing Vulkan adapter).
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

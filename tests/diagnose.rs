@@ -13,7 +13,7 @@
 
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common;
 use common::campaigns::{self, rig_setup, summary, synth, validation_setup, RIG};
 use common::{assert_figure, assert_png_beside, sawtooth, scratch, svg_texts};
 

@@ -10,7 +10,7 @@
 
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::campaigns::{diagnose, rig_setup, summary, synth, RIG};
 use common::scratch;
 

@@ -10,7 +10,7 @@
 //! fast and shallow on Earth; the same rig on the Moon at slower strokes), diagnosed with
 //! every candidate at a CI-sized particle budget.
 
-mod common;
+use crate::common;
 use common::campaigns::{dem_campaign as campaign, ranked, summary};
 
 use serde_json::Value;

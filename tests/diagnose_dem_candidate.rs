@@ -6,7 +6,7 @@
 
 use serde_json::Value;
 
-mod common;
+use crate::common;
 use common::campaigns::{dem_campaign, ranked, summary};
 
 const HEAVY: &str = "two three-condition diagnoses of a DEM campaign, 1-2 min on 2 cores";

@@ -1,11 +1,11 @@
 //! `sawtooth fit`: recovery of known parameters from synthetic data, the documented JSON, the
 //! output files, and bad input answered with a named field, exit status 2 and no panic.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-mod common;
-use common::{assert_figure, assert_png_beside};
+use crate::common;
+use common::{assert_figure, assert_png_beside, scratch};
 
 use sawtooth::calibrate::objective::simulated_bins;
 use sawtooth::engine::{make_engine, EngineKind};
@@ -22,13 +22,6 @@ fn sawtooth(args: &[&str]) -> (i32, String, String) {
 
 fn data(name: &str) -> String {
     format!("{}/data/validation/{name}", env!("CARGO_MANIFEST_DIR"))
-}
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("sawtooth-fit-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 /// The simulated bins (teeth, lost) of the Test 3 setup at `k_drag`, `particles`, seed 0.
@@ -68,7 +61,7 @@ fn recovers_a_known_drag_parameter() {
     const PARTICLES: &str = "400";
     let bins = simulate_test3(TRUTH, 400);
     assert!(bins[bins.len() - 1] == 0.0, "the truth should lose no particles: {bins:?}");
-    let dir = temp_dir("recovery");
+    let dir = scratch("recovery");
     let csv = dir.join("synthetic.csv");
     std::fs::write(&csv, synthetic_csv(&bins, 6)).unwrap();
     let (code, out, err) = sawtooth(&[
@@ -115,7 +108,7 @@ fn recovers_two_parameters_with_the_likelihood() {
     // k_drag and mu_fric at once, likelihood objective: the fitted point must reproduce the
     // synthetic distribution even if the two parameters trade off against each other.
     let bins = simulate_test3(4.0, 300);
-    let dir = temp_dir("likelihood");
+    let dir = scratch("likelihood");
     let csv = dir.join("synthetic.csv");
     std::fs::write(&csv, synthetic_csv(&bins, 6)).unwrap();
     let (code, out, err) = sawtooth(&[
@@ -153,7 +146,7 @@ fn recovers_two_parameters_with_the_likelihood() {
 
 #[test]
 fn json_on_test3_has_the_documented_keys_and_files_are_written() {
-    let dir = temp_dir("json");
+    let dir = scratch("json");
     let (code, out, err) = sawtooth(&[
         "fit",
         "--data",
@@ -294,7 +287,7 @@ fn assert_bad_input(args: &[&str], needles: &[&str]) {
 
 #[test]
 fn bad_input_exits_2_naming_the_field() {
-    let dir = temp_dir("bad");
+    let dir = scratch("bad");
     let (csv3, toml3) = (data("test3.csv"), data("test3.toml"));
     let base = |extra: &[&str]| -> Vec<String> {
         let mut v: Vec<String> = ["fit", "--data", &csv3, "--setup", &toml3, "--generations", "0", "--bootstrap", "0"]

@@ -9,7 +9,7 @@ use sawtooth::engine::gpu::GpuEngine;
 use sawtooth::engine::{BatchEvaluator, ParticleEngine};
 use sawtooth::model::{Design, Scenario};
 
-mod common;
+use crate::common;
 
 fn gpu() -> Option<GpuEngine> {
     common::gpu_engine()

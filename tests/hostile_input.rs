@@ -7,7 +7,7 @@ use std::path::Path;
 use std::process::Stdio;
 use std::time::{Duration, Instant};
 
-mod common;
+use crate::common;
 use common::repo;
 
 /// Address space granted to one probe: far below what any refused input would allocate.

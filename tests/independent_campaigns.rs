@@ -11,7 +11,7 @@ use std::process::Command;
 
 use serde_json::Value;
 
-mod common;
+use crate::common;
 
 /// The default solver budget with fewer particles (the defaults take 2-3 min a campaign),
 /// so the suite stays CI-sized.

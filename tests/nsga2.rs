@@ -1,6 +1,6 @@
 //! NSGA-II on standard benchmarks (Deb et al. 2002) and constraint handling (Deb 2000):
 //! front quality by hypervolume, determinism and exact checkpoint/resume.
-//! Run with `cargo test --release --test nsga2 -- --nocapture` to see the measured figures.
+//! Run with `cargo test --release --test suite nsga2:: -- --nocapture` to see the measured figures.
 
 use sawtooth::optim::nsga2::{self, pareto_front};
 use sawtooth::optim::test_problems::{Bnh, Zdt1, Zdt2};

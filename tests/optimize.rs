@@ -6,7 +6,7 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-mod common;
+use crate::common;
 use common::{fresh_dir, sawtooth};
 
 use sawtooth::optim::runner::{EvaluationRow, GenerationRow};

@@ -5,7 +5,7 @@ use std::path::Path;
 use std::process::Stdio;
 use std::time::{Duration, Instant};
 
-mod common;
+use crate::common;
 use common::{fresh_dir, run, sawtooth};
 
 /// Lunar solution C (Table C.6), in the CLI's units.

@@ -1,7 +1,7 @@
 //! gpu-sweep and the studies end to end with tiny settings: outputs, and a rerun that
 //! reads finished runs back instead of recomputing them.
 
-mod common;
+use crate::common;
 use common::{assert_figure, assert_png_beside, fresh_dir, run};
 use sawtooth::campaigns::study::{GridRow, RunRow, SummaryRow};
 use sawtooth::campaigns::sweep::SweepRow;

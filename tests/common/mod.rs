@@ -33,15 +33,20 @@ pub fn run(args: &[&str]) -> (i32, String, String) {
 }
 
 /// A path under the temporary directory for a folder the test's command makes itself,
-/// named after the test binary, `tag` and this process (test binaries run side by side);
-/// whatever an earlier run left there is removed.
+/// named after the calling test file, `tag` and this process; whatever an earlier run left
+/// there is removed. Every file of `tests/` is a module of one test binary, so two files
+/// may use the same tag at the same time: the file's name keeps their folders apart.
+#[track_caller]
 pub fn fresh_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("sawtooth-{}-{tag}-{}", env!("CARGO_CRATE_NAME"), std::process::id()));
+    let file = Path::new(std::panic::Location::caller().file());
+    let module = file.file_stem().and_then(|s| s.to_str()).unwrap_or("test");
+    let d = std::env::temp_dir().join(format!("sawtooth-{module}-{tag}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     d
 }
 
 /// [`fresh_dir`], made: an empty scratch folder for the test's own files.
+#[track_caller]
 pub fn scratch(tag: &str) -> PathBuf {
     let d = fresh_dir(tag);
     std::fs::create_dir_all(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display()));
@@ -94,7 +99,7 @@ pub fn full_tier(test: &str, why_heavy: &str) -> bool {
         let _ = writeln!(
             std::io::stderr(),
             "SKIPPED {test} (fast tier; {why_heavy}): runs in the full tier, `bash scripts/test.sh`, \
-             or with SAWTOOTH_TEST_TIER=full cargo test --release --test <target>"
+             or with SAWTOOTH_TEST_TIER=full cargo test --release --test suite {test}"
         );
     }
     full
