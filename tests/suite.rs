@@ -34,3 +34,27 @@ mod studies;
 mod synth;
 mod thesis_figures;
 mod twins;
+
+/// With `autotests = false`, a file added to `tests/` and not named above would be compiled
+/// by nobody and its tests would silently never run.
+#[test]
+fn every_file_of_tests_is_a_module_of_the_suite() {
+    let dir = common::repo().join("tests");
+    let suite = std::fs::read_to_string(dir.join("suite.rs")).unwrap();
+    let mut missing = Vec::new();
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let Some(stem) = path.file_stem().and_then(|s| s.to_str()) else { continue };
+        if path.extension().is_some_and(|e| e == "rs")
+            && stem != "suite"
+            && !suite.contains(&format!("\nmod {stem};\n"))
+        {
+            missing.push(format!("tests/{stem}.rs"));
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "tests/{{{}}}.rs: not a module of tests/suite.rs, so never compiled",
+        missing.join(",")
+    );
+}
