@@ -337,8 +337,10 @@ fn rescore(sim: &Simulator, spaces: &[&Space], models: &mut [ModelResult], parti
     }
 }
 
-/// The second rescore's stream count, as a multiple of `--rescore-streams`.
+/// The second rescore's stream count, as a multiple of `--rescore-streams`, and at most
+/// this many streams (a user who asked for that many already has a precise re-scoring).
 pub const SECOND_RESCORE_FACTOR: usize = 4;
+pub const SECOND_RESCORE_MAX_STREAMS: usize = 64;
 
 /// Whether `best` hinges on the simulation's noise: the top-ranked effect (by score, of
 /// `models[1..]`; `models[0]` is the baseline) passes every other test for `best` — the
@@ -862,8 +864,9 @@ pub fn diagnose(
     // noise widens, every model gets more streams (all of them, so that every paired
     // comparison keeps its common random numbers), and everything after is on those
     let mut streams = settings.rescore_streams;
-    if let Some(why) = best_hinges_on_streams(&conditions, &all, particles) {
-        streams = SECOND_RESCORE_FACTOR * settings.rescore_streams;
+    let more = (SECOND_RESCORE_FACTOR * streams).min(SECOND_RESCORE_MAX_STREAMS);
+    if let Some(why) = best_hinges_on_streams(&conditions, &all, particles).filter(|_| more > streams) {
+        streams = more;
         log(format!("diagnose: {why}; every model re-scored on {streams} streams"));
         notes.push(format!(
             "second rescore: {why}; every model was re-scored on {streams} fresh streams (common random numbers), \
@@ -1136,6 +1139,55 @@ pub fn to_json(d: &Diagnosis) -> Value {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A fitted model as the ranking sees it: its fresh streams' bins (one stream), gap,
+    /// score and paired bootstrap replicates.
+    fn ranked(effects: &[EffectKind], bins: Vec<f64>, gap: f64, replicates: Vec<f64>) -> ModelResult {
+        let fit = Fit { x: Vec::new(), value: gap, bins: vec![bins.clone()], evaluations: 0, archive: Vec::new() };
+        let mut m = new_result(&Space::new(Vec::new(), effects, &[]), fit, 0);
+        m.fresh = vec![vec![bins]];
+        m.gap = gap;
+        m.score = gap;
+        m.replicates_runs = replicates.clone();
+        m.replicates_streams = replicates.clone();
+        m.replicates = replicates;
+        m
+    }
+
+    /// The second rescore runs only where `best` waits on nothing but an improvement
+    /// interval that holds 0: the baseline well above its floor, the top effect removing
+    /// at least a quarter of its gap.
+    #[test]
+    fn more_streams_only_where_best_hinges_on_an_interval_holding_zero() {
+        let conds = vec![crate::calibrate::condition::test3()];
+        let measured = conds[0].target_all().bins;
+        // the baseline moves 10 pp of the modal tooth's mass one tooth on: far above the floor
+        let modal = (0..measured.len() - 1).max_by(|a, b| measured[*a].total_cmp(&measured[*b])).unwrap();
+        let mut off = measured.clone();
+        off[modal] -= 0.10;
+        off[modal + 1] += 0.10;
+        let base = |reps: Vec<f64>| ranked(&[], off.clone(), 200.0, reps);
+        let top = |gap: f64, reps: Vec<f64>| ranked(&[EffectKind::ImpactScatter], measured.clone(), gap, reps);
+        // the improvement's replicates straddle 0
+        let open = [base(vec![10.0, 20.0, 30.0, 40.0]), top(50.0, vec![30.0, 10.0, 35.0, 20.0])];
+        let why = best_hinges_on_streams(&conds, &open, 12_000).expect("hinges");
+        assert!(
+            why.starts_with("`impact-scatter`'s paired improvement over the baseline held 0 on 1 fresh streams"),
+            "{why}"
+        );
+        // beyond the uncertainty: nothing to re-score
+        let clear = [base(vec![10.0, 20.0, 30.0, 40.0]), top(50.0, vec![5.0, 10.0, 15.0, 20.0])];
+        assert_eq!(best_hinges_on_streams(&conds, &clear, 12_000), None);
+        // a reduction under a quarter: `best` is refused whatever the interval says
+        let small = [base(vec![10.0, 20.0, 30.0, 40.0]), top(170.0, vec![30.0, 10.0, 35.0, 20.0])];
+        assert_eq!(best_hinges_on_streams(&conds, &small, 12_000), None);
+        // a baseline within its floor needs no cause
+        let quiet = [
+            ranked(&[], measured.clone(), 200.0, vec![10.0, 20.0, 30.0, 40.0]),
+            top(50.0, vec![30.0, 10.0, 35.0, 20.0]),
+        ];
+        assert_eq!(best_hinges_on_streams(&conds, &quiet, 12_000), None);
+    }
 
     #[test]
     fn depth_layers_split_by_depth_and_count_each_third() {
