@@ -41,7 +41,10 @@
 //!   replicates' sd. Each candidate's improvement over the baseline also has its sd with one
 //!   source at a time (`improvement_sd`: the runs alone, the simulation alone), which says
 //!   whether more particles would sharpen it (on 300 µm quadratic drag at the defaults:
-//!   runs 2.1 %², simulation 0.8 %²; docs/diagnosis-report.md).
+//!   runs 2.1 %², simulation 0.8 %²; docs/diagnosis-report.md). Where `best` waits on
+//!   nothing but an improvement interval that holds 0, every model is re-scored on 4× the
+//!   streams before anything is decided ([`SECOND_RESCORE_FACTOR`]): which side of 0 an
+//!   effect at the edge falls on should not depend on which few streams were drawn.
 //! - **Ranking.** By the penalised score `gap + 2 × (extra parameters) × SE` (the parameters
 //!   beyond the baseline's: the effect's own, less k_drag for quadratic drag, which replaces
 //!   the linear law and is fitted without it). `best` is the top-ranked effect only when it
