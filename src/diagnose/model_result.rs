@@ -22,19 +22,28 @@ pub struct ModelResult {
     pub full: Fit,
     /// `[stream][condition]` bins at the fitted parameters with fresh particle streams.
     pub fresh: Vec<Vec<Vec<f64>>>,
-    /// The gap: the joint SSE (%², all runs) of the fitted model on fresh streams, averaged
-    /// over the streams. Fresh streams remove the fit's adaptation to its own Monte-Carlo
-    /// noise, which flatters a model with more parameters.
+    /// The gap: the joint SSE (%², all runs, loss-adjusted) of the fitted model's mean bins
+    /// over its fresh streams. Fresh streams remove the fit's adaptation to its own
+    /// Monte-Carlo noise, which flatters a model with more parameters; their mean has 1/streams
+    /// of one stream's Monte-Carlo variance, which an SSE adds to every model's gap.
     pub gap: f64,
     pub gap_by_condition: Vec<f64>,
-    /// Bootstrap replicates of the gap (runs resampled within conditions, one fresh stream
-    /// drawn; paired across models).
+    /// Bootstrap replicates of the gap: the runs resampled within conditions and the fresh
+    /// streams resampled (their mean's Monte-Carlo spread), paired across models.
     pub replicates: Vec<f64>,
+    /// The same replicates with one source of noise at a time: the runs resampled, the
+    /// streams' mean held; the streams resampled, all runs held. What part of an interval's
+    /// width is the data's and what part the simulation's.
+    pub replicates_runs: Vec<f64>,
+    pub replicates_streams: Vec<f64>,
     pub interval: [f64; 2],
     /// Bootstrap standard error of the gap.
     pub se: f64,
     /// Paired bootstrap interval of (baseline − this model)'s gap.
     pub improvement_interval: [f64; 2],
+    /// The bootstrap sd of (baseline − this model)'s gap with both sources of noise, with
+    /// the runs' alone and with the simulation's (the fresh streams') alone, %².
+    pub improvement_sd: [f64; 3],
     /// Extra parameters over the baseline.
     pub extra_params: usize,
     /// The ranking score (see the module's doc).
@@ -61,6 +70,19 @@ impl ModelResult {
             [e] => Some(e),
             _ => None,
         }
+    }
+    /// The fresh streams' mean bins per condition (the fit's own bins before any re-scoring).
+    pub fn mean_fresh_bins(&self) -> Vec<Vec<f64>> {
+        if self.fresh.is_empty() {
+            return self.full.bins.clone();
+        }
+        let streams = self.fresh.len() as f64;
+        (0..self.full.bins.len())
+            .map(|c| {
+                let n = self.fresh[0][c].len();
+                (0..n).map(|j| self.fresh.iter().map(|f| f[c][j]).sum::<f64>() / streams).collect()
+            })
+            .collect()
     }
     pub fn params_object(&self) -> Value {
         let mut m = Map::new();

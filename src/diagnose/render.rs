@@ -116,25 +116,39 @@ pub fn to_markdown(d: &Diagnosis) -> String {
         "Judged on each model's mean bins over its fresh streams, after letting each condition lose in handling up to \
          the share of its loaded mass the runs did not recover (fitted; Table 4.4: Test 3 recovered 97.7 %). Noise \
          floor = Σ over bins of the measured mean's variance (run-to-run / runs, floored by the scale) and the \
-         simulation's Monte-Carlo variance; \"well above\" is more than {}× the floor.\n",
+         simulation's Monte-Carlo variance; \"well above\" is more than {}× the floor, pooled or in one condition \
+         against that condition's own floor.\n",
         super::verdict::FLOOR_FACTOR
     );
-    let _ = writeln!(s, "| model | condition | gap (%², loss-adjusted) | floor (%²) | gap / floor | handling loss % |");
-    let _ = writeln!(s, "|---|---|---|---|---|---|");
+    let _ = writeln!(
+        s,
+        "| model | condition | gap (%², loss-adjusted) | floor (%²) | gap / floor | well above | handling loss % |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    let above = |gap: f64, floor: f64| if gap > super::verdict::FLOOR_FACTOR * floor { "yes" } else { "no" };
     for j in [&v.baseline, &v.remaining] {
         for (c, cond) in d.conditions.iter().enumerate() {
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} |",
                 j.model,
                 cond.name,
                 f(j.gap_by_condition[c], 1),
                 f(j.floor_by_condition[c], 2),
                 f(j.gap_by_condition[c] / j.floor_by_condition[c], 1),
+                above(j.gap_by_condition[c], j.floor_by_condition[c]),
                 f(100.0 * j.handling_loss[c], 2)
             );
         }
-        let _ = writeln!(s, "| {} | all | {} | {} | {} | |", j.model, f(j.gap, 1), f(j.floor, 2), f(j.ratio(), 1));
+        let _ = writeln!(
+            s,
+            "| {} | all | {} | {} | {} | {} | |",
+            j.model,
+            f(j.gap, 1),
+            f(j.floor, 2),
+            f(j.ratio(), 1),
+            above(j.gap, j.floor)
+        );
     }
     let _ = writeln!(
         s,
@@ -240,10 +254,11 @@ pub fn to_markdown(d: &Diagnosis) -> String {
     let _ = writeln!(
         s,
         "Each model is fitted on all runs and re-simulated on fresh particle streams (not the ones it was fitted \
-         on); the gap is the SSE (%²) summed over conditions, averaged over the streams, once each condition may \
+         on); the gap is the SSE (%²) of the streams' mean bins summed over conditions, once each condition may \
          have lost up to its measured not-recovered share in handling (loss-adjusted). Ranked by score = gap + 2 × \
          (extra parameters) × SE (bootstrap standard error of the gap, runs and streams resampled). Reduction = \
-         1 − gap / baseline gap; the improvement interval is the paired bootstrap interval of (baseline − effect). \
+         1 − gap / baseline gap; the improvement interval is the paired bootstrap interval of (baseline − effect) \
+         (diagnosis.json's `improvement_sd` splits its spread into the runs' part and the simulation's). \
          `best` must also remove at least {:.0} % of the baseline's gap, and the baseline must be well above its \
          noise floor (see the verdict).\n",
         100.0 * super::diagnose::MIN_REDUCTION

@@ -114,6 +114,7 @@ impl Judged {
                 "name": n,
                 "gap": num(self.gap_by_condition[c]),
                 "floor": num(self.floor_by_condition[c]),
+                "gap_over_floor": num(self.gap_by_condition[c] / self.floor_by_condition[c]),
                 "handling_loss_percent": num(100.0 * self.handling_loss[c]),
             })).collect::<Vec<_>>(),
         })
@@ -163,6 +164,78 @@ pub struct PersistentCondition {
     pub floor: f64,
 }
 
+/// One condition's judged gap against that condition's own floor: a pooled floor is mostly
+/// the noisiest condition's, and a quiet condition can sit well above its own floor while
+/// the campaign as a whole is within its runs' scatter (the Earth DEM monolayer: `no-gap`
+/// at 2.2× pooled, its slow condition at 9×; docs/diagnosis-report.md).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConditionVerdict {
+    pub name: String,
+    /// The model judged: the baseline for `no-gap`, else the verdict's remaining model.
+    pub model: String,
+    /// Loss-adjusted gap and noise floor in this condition, %².
+    pub gap: f64,
+    pub floor: f64,
+}
+
+impl ConditionVerdict {
+    pub fn ratio(&self) -> f64 {
+        self.gap / self.floor
+    }
+    /// Beyond [`FLOOR_FACTOR`] times its own floor (the pooled rule, applied to one
+    /// condition: with several conditions one of them passes it by chance more often than
+    /// their sum does, so this points at a condition; it does not change the verdict).
+    pub fn well_above(&self) -> bool {
+        self.gap > FLOOR_FACTOR * self.floor
+    }
+}
+
+/// Each condition of `judged` against its own floor.
+pub fn per_condition(names: &[String], judged: &Judged) -> Vec<ConditionVerdict> {
+    names
+        .iter()
+        .enumerate()
+        .map(|(c, n)| ConditionVerdict {
+            name: n.clone(),
+            model: judged.model.clone(),
+            gap: judged.gap_by_condition[c],
+            floor: judged.floor_by_condition[c],
+        })
+        .collect()
+}
+
+/// What the pooled verdict would hide: where it says the gap is within the noise (`no-gap`)
+/// or within the noise once a candidate is switched on (`explained`, `undecided`), the
+/// conditions that are still well above their own floor, in words ("; but `slow` is left at
+/// 9.0× its own floor …"); empty when none is, and for the verdicts that already say a gap is
+/// left and where most of it is (`partly-explained`, `unexplained`).
+pub fn condition_clause(kind: VerdictKind, conditions: &[ConditionVerdict]) -> String {
+    if matches!(kind, VerdictKind::PartlyExplained | VerdictKind::Unexplained) {
+        return String::new();
+    }
+    let above: Vec<String> = conditions
+        .iter()
+        .filter(|c| c.well_above())
+        .map(|c| format!("`{}` at {:.1}× its own floor ({:.1} %² against {:.1} %²)", c.name, c.ratio(), c.gap, c.floor))
+        .collect();
+    let Some(model) = conditions.first().map(|c| &c.model) else { return String::new() };
+    if above.is_empty() {
+        return String::new();
+    }
+    let (verb, pooled) = match kind {
+        VerdictKind::NoGap => ("is", "the campaign as a whole is within its runs' scatter"),
+        VerdictKind::Undecided => ("would be", "pooled, it would be within the noise"),
+        _ => ("is", "pooled, it is within the noise"),
+    };
+    format!(
+        "; but `{model}` {verb} left well above the noise in {} condition{}: {} — {pooled}, {} not",
+        above.len(),
+        if above.len() == 1 { "" } else { "s" },
+        above.join(", "),
+        if above.len() == 1 { "that condition is" } else { "those conditions are" }
+    )
+}
+
 /// The verdict with what it rests on.
 #[derive(Clone, Debug)]
 pub struct Verdict {
@@ -177,22 +250,9 @@ pub struct Verdict {
     /// its floor).
     pub demoted: Option<EffectKind>,
     pub persistent: Vec<PersistentCondition>,
+    /// Each condition against its own floor (the baseline for `no-gap`, else `remaining`).
+    pub conditions: Vec<ConditionVerdict>,
     pub text: String,
-}
-
-/// The fresh streams' mean bins per condition.
-fn mean_bins(m: &ModelResult) -> Vec<Vec<f64>> {
-    let streams = m.fresh.len().max(1) as f64;
-    let conditions = m.full.bins.len();
-    (0..conditions)
-        .map(|c| {
-            if m.fresh.is_empty() {
-                return m.full.bins[c].clone();
-            }
-            let n = m.fresh[0][c].len();
-            (0..n).map(|j| m.fresh.iter().map(|f| f[c][j]).sum::<f64>() / streams).collect()
-        })
-        .collect()
 }
 
 /// The handling loss s in [0, max_loss] that brings `sim` (teeth, then the not-recovered
@@ -243,7 +303,7 @@ pub fn loss_adjusted_sse(cond: &Condition, measured: &[f64], sim: &[f64]) -> f64
 fn adjusted_bins(conds: &[Condition], m: &ModelResult) -> Vec<(f64, Vec<f64>)> {
     conds
         .iter()
-        .zip(mean_bins(m))
+        .zip(m.mean_fresh_bins())
         .map(|(cond, sim)| {
             let measured = cond.target_all().bins;
             handling_loss(&sim, &measured, max_handling_loss(cond, &measured))
@@ -408,7 +468,10 @@ pub fn verdict(
     if let (Some(e), VerdictKind::Explained | VerdictKind::PartlyExplained) = (best, kind) {
         text.push_str(&alike_clause(e, indistinguishable));
     }
-    Verdict { kind, baseline: base, remaining, partial, demoted, persistent, text }
+    let names: Vec<String> = conds.iter().map(|c| c.name.clone()).collect();
+    let conditions = per_condition(&names, if kind == VerdictKind::NoGap { &base } else { &remaining });
+    text.push_str(&condition_clause(kind, &conditions));
+    Verdict { kind, baseline: base, remaining, partial, demoted, persistent, conditions, text }
 }
 
 /// "explained by X" where the data cannot tell X from Y names a set, not a cause: the clause
@@ -527,6 +590,15 @@ impl Verdict {
             "cause_share": CAUSE_SHARE,
             "baseline": self.baseline.json(&names),
             "remaining": self.remaining.json(&names),
+            "by_condition": self.conditions.iter().map(|c| json!({
+                "name": c.name,
+                "model": c.model,
+                "gap": num(c.gap),
+                "floor": num(c.floor),
+                "gap_over_floor": num(c.ratio()),
+                "well_above": c.well_above(),
+            })).collect::<Vec<_>>(),
+            "conditions_well_above": self.conditions.iter().filter(|c| c.well_above()).map(|c| c.name.clone()).collect::<Vec<_>>(),
             "demoted": self.demoted.map(|e| e.name()),
             "partial": self.partial.iter().map(|p| json!({
                 "effect": p.effect.name(),
@@ -567,6 +639,56 @@ mod tests {
         // a best that stands alone keeps the verdict as it was
         assert_eq!(alike_clause(ImpactScatter, &[]), "");
         assert_eq!(alike_clause(ImpactScatter, &[ImpactScatter]), "");
+    }
+
+    fn judged(model: &str, gaps: &[f64], floors: &[f64]) -> Judged {
+        Judged {
+            model: model.into(),
+            gap: gaps.iter().sum(),
+            gap_by_condition: gaps.to_vec(),
+            floor: floors.iter().sum(),
+            floor_by_condition: floors.to_vec(),
+            handling_loss: vec![0.0; gaps.len()],
+        }
+    }
+
+    /// The Earth DEM monolayer's numbers (docs/diagnosis-report.md): pooled 2.2× its floor, a
+    /// `no-gap`, but the slow condition alone at 9× its own floor, which the pooled floor (three
+    /// quarters of it the shallow condition's) hides. The verdict says so, per condition.
+    #[test]
+    fn a_condition_well_above_its_own_floor_is_named_though_the_pooled_verdict_is_no_gap() {
+        let names: Vec<String> = ["slow", "fast", "shallow"].iter().map(|n| n.to_string()).collect();
+        let base = judged("baseline", &[46.6, 25.0, 27.7], &[5.2, 13.6, 26.9]);
+        assert!(!base.well_above(), "pooled: {:.1}×", base.ratio());
+        let c = per_condition(&names, &base);
+        assert_eq!(c.iter().map(ConditionVerdict::well_above).collect::<Vec<_>>(), [true, false, false]);
+        assert!((c[0].ratio() - 46.6 / 5.2).abs() < 1e-12);
+        let words = condition_clause(VerdictKind::NoGap, &c);
+        assert!(
+            words.contains("`baseline` is left well above the noise in 1 condition: `slow` at 9.0× its own floor (46.6 %² against 5.2 %²)")
+                && words.contains("the campaign as a whole is within its runs' scatter, that condition is not"),
+            "{words}"
+        );
+        // an explained or undecided verdict hides it as well; one that says a gap is left and
+        // where most of it is needs no second clause
+        assert!(condition_clause(VerdictKind::Explained, &c).contains("`slow` at 9.0×"));
+        assert!(condition_clause(VerdictKind::Undecided, &c).contains("`baseline` would be left"));
+        assert_eq!(condition_clause(VerdictKind::Unexplained, &c), "");
+        assert_eq!(condition_clause(VerdictKind::PartlyExplained, &c), "");
+    }
+
+    #[test]
+    fn no_condition_above_its_floor_adds_no_words_and_two_are_both_named() {
+        let names: Vec<String> = ["a", "b"].iter().map(|n| n.to_string()).collect();
+        // 3× exactly is not beyond 3×
+        let quiet = per_condition(&names, &judged("impact-scatter", &[3.0, 1.0], &[1.0, 1.0]));
+        assert!(quiet.iter().all(|c| !c.well_above()));
+        assert_eq!(condition_clause(VerdictKind::Explained, &quiet), "");
+        let both = per_condition(&names, &judged("impact-scatter", &[4.0, 10.0], &[1.0, 2.0]));
+        let words = condition_clause(VerdictKind::Explained, &both);
+        assert!(words.contains("in 2 conditions: `a` at 4.0×") && words.contains("`b` at 5.0×"), "{words}");
+        assert!(words.contains("those conditions are not"), "{words}");
+        assert_eq!(condition_clause(VerdictKind::NoGap, &[]), "");
     }
 
     #[test]
