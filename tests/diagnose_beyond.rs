@@ -149,8 +149,11 @@ fn sled_motion_that_no_setup_states_is_found() {
     assert!(delay < 0.03 && (0.15..=0.6).contains(&speed), "fitted motion {delay} s, {speed} m/s: {s}");
 }
 
-/// A sled that rests 0.05 s, then returns at 0.5 m/s — between the screen's grid points in
-/// both coordinates — and no setup says so: found, with about that motion.
+/// A sled that rests 0.05 s, then returns at 0.5 m/s, and no setup says so: found, with
+/// about that motion. A grid point of the motion screen, but not an easy one: a short DE
+/// leaves its shared parameters unconverged, and on raw SSEs a slow return at once fits
+/// about as well (the handling spill; docs/diagnosis-report.md), so the screen must rank
+/// its grid at the full budget on the loss-adjusted gap.
 #[test]
 fn a_delayed_unstated_sled_motion_is_found() {
     if !heavy("diagnose_beyond::a_delayed_unstated_sled_motion_is_found") {

@@ -66,6 +66,15 @@ pub struct Probe {
     pub bins: Vec<Vec<f64>>,
 }
 
+/// One model's screen ([`Solver::screen`]): its population, best first.
+#[derive(Clone, Debug)]
+pub struct Screened {
+    /// Points in parameter units with their objective at the screen's particle count.
+    pub members: Vec<(Vec<f64>, f64)>,
+    /// Simulations of the whole condition set the screen used.
+    pub evaluations: u64,
+}
+
 /// One fitted model.
 #[derive(Clone, Debug)]
 pub struct Fit {
@@ -138,6 +147,47 @@ impl Solver {
     /// Fit every model: screen, then polish. `log` receives progress lines.
     pub fn fit(&self, sim: &Simulator, models: &[Model], log: &mut dyn FnMut(String)) -> anyhow::Result<Vec<Fit>> {
         self.check(sim, models)?;
+        let members = self.evolve(sim, models, log);
+        // the polish starts from the screen's best and the model's own starts
+        let starts: Vec<Vec<Vec<f64>>> = members
+            .iter()
+            .zip(models)
+            .map(|(mem, model)| {
+                let best = mem.pop.iter().min_by(|a, b| a.1.total_cmp(&b.1)).expect("population").0.clone();
+                std::iter::once(best).chain(model.starts.iter().map(|x| model.space.to_unit(x))).collect()
+            })
+            .collect();
+        let screened: Vec<u64> = members.iter().map(|m| m.evaluations).collect();
+        self.polish_from(sim, models, starts, &screened, log)
+    }
+
+    /// The screen stage alone: every model's differential-evolution population after the
+    /// generations, in parameter units with its objective at the screen's particle count,
+    /// best first. For a search that ranks several models' screens before polishing any
+    /// (the diagnosis's motion screen).
+    pub fn screen(
+        &self,
+        sim: &Simulator,
+        models: &[Model],
+        log: &mut dyn FnMut(String),
+    ) -> anyhow::Result<Vec<Screened>> {
+        self.check(sim, models)?;
+        let members = self.evolve(sim, models, log);
+        Ok(members
+            .into_iter()
+            .zip(models)
+            .map(|(mem, model)| {
+                let mut pop: Vec<(Vec<f64>, f64)> =
+                    mem.pop.into_iter().map(|(u, v)| (model.space.from_unit(&u), v)).collect();
+                pop.sort_by(|a, b| a.1.total_cmp(&b.1));
+                Screened { members: pop, evaluations: mem.evaluations }
+            })
+            .collect())
+    }
+
+    /// The differential evolution of every model in lockstep, from its starts (the first
+    /// `pop` of them) and uniform points.
+    fn evolve(&self, sim: &Simulator, models: &[Model], log: &mut dyn FnMut(String)) -> Vec<Member> {
         let seed = self.seed;
         let mut members: Vec<Member> = models
             .iter()
@@ -187,17 +237,7 @@ impl Solver {
                 ));
             }
         }
-        // the polish starts from the screen's best and the model's own starts
-        let starts: Vec<Vec<Vec<f64>>> = members
-            .iter()
-            .zip(models)
-            .map(|(mem, model)| {
-                let best = mem.pop.iter().min_by(|a, b| a.1.total_cmp(&b.1)).expect("population").0.clone();
-                std::iter::once(best).chain(model.starts.iter().map(|x| model.space.to_unit(x))).collect()
-            })
-            .collect();
-        let screened: Vec<u64> = members.iter().map(|m| m.evaluations).collect();
-        self.polish_from(sim, models, starts, &screened, log)
+        members
     }
 
     /// The polish stage alone, from each model's starts (at least one each). `log` receives

@@ -23,8 +23,13 @@ pub struct Space {
     /// The effects switched on (none for the baseline).
     pub effects: Vec<EffectKind>,
     /// The effects' fitted parameters, as (index into `effects`, parameter index): all of
-    /// them, except sled-motion values that every condition states (`KnownMotion`).
+    /// them, except sled-motion values that every condition states (`KnownMotion`) and
+    /// those `pinned`.
     pub free: Vec<(usize, usize)>,
+    /// Effect parameters held at a value instead of fitted, as (index into `effects`,
+    /// parameter index, value): a search that scans a parameter over a grid holds it at
+    /// each grid value in turn ([`Space::pin`]).
+    pub pinned: Vec<(usize, usize, f64)>,
 }
 
 impl Space {
@@ -44,7 +49,18 @@ impl Space {
                 }
             }
         }
-        Space { shared, effects: effects.to_vec(), free }
+        Space { shared, effects: effects.to_vec(), free, pinned: Vec::new() }
+    }
+
+    /// This space with its free parameter `name` held at `value` (no longer fitted; a
+    /// value a condition states still wins for that condition, as it does for a fitted
+    /// one). None when `name` is not one of the effects' free parameters.
+    pub fn pin(&self, name: &str, value: f64) -> Option<Space> {
+        let j = self.free.iter().position(|(k, i)| self.effects[*k].param_names()[*i] == name)?;
+        let mut s = self.clone();
+        let (k, i) = s.free.remove(j);
+        s.pinned.push((k, i, value));
+        Some(s)
     }
 
     pub fn dim(&self) -> usize {
@@ -104,6 +120,11 @@ impl Space {
                     v[*i] = *xv;
                 }
             }
+            for (pk, i, pv) in &self.pinned {
+                if *pk == k {
+                    v[*i] = *pv;
+                }
+            }
             if e == EffectKind::SledMotion {
                 for (i, vi) in v.iter_mut().enumerate() {
                     if let Some(known) = cond.motion.get(i) {
@@ -125,5 +146,36 @@ impl Space {
             .zip(self.bounds())
             .map(|(x, (l, h))| if h > l { ((x - l) / (h - l)).clamp(0.0, 1.0) } else { 0.0 })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibrate::condition::test3;
+
+    #[test]
+    fn a_pinned_parameter_leaves_the_search_and_holds_its_value() {
+        let mut unstated = test3();
+        unstated.motion = Default::default();
+        let conds = vec![unstated.clone()];
+        let space = Space::new(shared_params(&conds), &[EffectKind::SledMotion], &conds);
+        let shared: Vec<&str> = space.shared.iter().map(|p| p.name()).collect();
+        assert_eq!(space.names()[shared.len()..], ["delay_s", "return_speed_m_s"]);
+        let pinned = space.pin("delay_s", 0.05).expect("delay_s is free");
+        assert_eq!(pinned.names()[shared.len()..], ["return_speed_m_s"]);
+        assert_eq!(pinned.dim(), space.dim() - 1);
+        let mut x: Vec<f64> = space.shared.iter().map(|p| p.bounds().0).collect();
+        x.push(0.4);
+        let motion = pinned.scenario_at(&unstated, &x).effects.sled_motion.expect("a moving sled");
+        assert_eq!((motion.delay_s, motion.return_speed_m_s), (0.05, 0.4));
+        // a stated value wins over the pin, as it does over a fitted value
+        let mut stated = unstated.clone();
+        stated.motion.delay_s = Some(0.2);
+        let motion = pinned.scenario_at(&stated, &x).effects.sled_motion.expect("a moving sled");
+        assert_eq!(motion.delay_s, 0.2);
+        // only a free parameter can be pinned
+        assert!(pinned.pin("delay_s", 0.0).is_none());
+        assert!(space.pin("k_elastic", 0.5).is_none());
     }
 }

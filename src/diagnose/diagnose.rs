@@ -88,13 +88,14 @@ pub use super::model_result::{num, DepthLayer, ModelResult, Z_FLAG};
 pub use crate::calibrate::space::shared_params;
 use crate::calibrate::stats::{percentile, sample_sd};
 pub use crate::calibrate::{Condition, KnownMotion};
-use crate::calibrate::{Effort, Fit, MeasuredSummary, Model, ObjectiveKind, Param, Simulator, Solver, Space, Target};
+use crate::calibrate::{Effort, Fit, MeasuredSummary, Model, ObjectiveKind, Param, Simulator, Space, Target};
 use crate::engine::{evaluate_detailed, particle_engine, BatchEvaluator, EngineKind};
 use crate::model::effects::known_effects;
 pub use crate::model::effects::EffectKind;
 use crate::model::outcome::{centre_and_dispersion, end_tooth, ParticleState};
 use crate::model::Scenario;
 
+use super::motion_screen::{halton, motion_start};
 use super::verdict::{self, Verdict};
 
 /// Lower and upper percentile of every bootstrap interval.
@@ -612,118 +613,6 @@ fn effect_starts(space: &Space, base_names: &[&'static str], base_x: &[f64], ext
     starts
 }
 
-/// The grid of unstated sled motions the motion screen starts from: delays (s) "at once"
-/// and well into the flights (a longer delay outlasts them: the baseline's own start), and
-/// return speeds (m/s) doubling over the search box (the POC profile's 0.05 m/s to a fast
-/// return). At a few tenths of a m/s the sled returns its stroke (10 mm on the practice
-/// rig) in tens of milliseconds, while grains fly, and the outcome is steep in the speed:
-/// at a step of 2.7 (0.3 to 0.8 m/s) a 0.05 s, 0.5 m/s motion fell between two points that
-/// each screened worse than no motion at all (docs/diagnosis-report.md). The fit moves the
-/// motion from the best points onward.
-const MOTION_GRID: ([f64; 2], [f64; 6]) = ([0.0, 0.05], [0.03, 0.06, 0.12, 0.25, 0.5, 1.0]);
-/// The differential evolution over the shared parameters at each grid point: population
-/// (about three per parameter, and the baseline's point), generations, and the compass
-/// iterations that follow it, all at the screen's particle count. A compass search from the
-/// baseline's parameters alone lands in the wrong basin (docs/diagnosis-report.md): with a
-/// moving sled, k_elastic, μ and k_drag have several.
-const MOTION_POP: usize = 10;
-const MOTION_GENERATIONS: usize = 12;
-const MOTION_POLISH: usize = 4;
-/// Grid points the motion screen hands to the fit.
-const MOTION_STARTS: usize = 3;
-
-/// Starts for the sled-motion candidate when some setup leaves the motion out (issue 32,
-/// item 4). A moving sled changes the landing points so much that the baseline, fitted
-/// without it, has already bent k_elastic, μ and k_drag towards it; from the baseline's
-/// optimum the motion looks useless, and the screen never leaves the no-motion corner. So
-/// at every point of a grid over the unstated delay and return speed, held fixed, the
-/// shared parameters are searched over their whole box (a small differential evolution
-/// with the baseline's point among its members, then a short compass polish) at the
-/// screen's particle count, and the best few points seed the fit, where the motion is free
-/// again. Costs nothing when every setup states its motion.
-fn motion_starts(
-    solver: &Solver,
-    sim: &Simulator,
-    space: &Space,
-    targets: &[Target],
-    base: &[Vec<f64>],
-    log: &mut dyn FnMut(String),
-) -> anyhow::Result<Vec<Vec<f64>>> {
-    let Some(base) = base.first() else { return Ok(Vec::new()) };
-    let motion: Vec<(usize, usize)> = space
-        .free
-        .iter()
-        .enumerate()
-        .filter(|(_, (k, _))| space.effects[*k] == EffectKind::SledMotion)
-        .map(|(p, (_, i))| (space.shared.len() + p, *i))
-        .collect();
-    if motion.is_empty() {
-        return Ok(Vec::new());
-    }
-    // every combination of the grid's values for the unstated parameters
-    let mut grid: Vec<Vec<f64>> = vec![Vec::new()];
-    for (_, i) in &motion {
-        let values: &[f64] = if *i == 0 { &MOTION_GRID.0 } else { &MOTION_GRID.1 };
-        grid = grid.iter().flat_map(|g| values.iter().map(move |v| [g.clone(), vec![*v]].concat())).collect();
-    }
-    log(format!("diagnose: sled-motion: the setups leave the motion out; screening {} grid points", grid.len()));
-    let screen = Solver {
-        pop: MOTION_POP,
-        generations: MOTION_GENERATIONS,
-        particles: solver.screen_particles,
-        polish_iterations: MOTION_POLISH,
-        ..*solver
-    };
-    let shared = &base[..space.shared.len()];
-    let mut found: Vec<(f64, Vec<f64>)> = Vec::with_capacity(grid.len());
-    for g in &grid {
-        // the grid point's motion held fixed (as if every setup stated it): only the shared
-        // parameters move, so the search cannot slide back to the no-motion corner before
-        // k_elastic, μ and k_drag have followed the motion
-        let conditions: Vec<Condition> = sim
-            .conditions
-            .iter()
-            .map(|c| {
-                let mut c = c.clone();
-                for ((_, i), v) in motion.iter().zip(g) {
-                    match i {
-                        0 => c.motion.delay_s = c.motion.delay_s.or(Some(*v)),
-                        _ => c.motion.return_speed_m_s = c.motion.return_speed_m_s.or(Some(*v)),
-                    }
-                }
-                c
-            })
-            .collect();
-        let fixed = Space::new(space.shared.clone(), &space.effects, &conditions);
-        let fixed_sim = Simulator { engine: sim.engine, conditions: &conditions };
-        let model = Model { space: &fixed, targets, starts: vec![shared.to_vec()] };
-        let fit = screen.fit(&fixed_sim, &[model], &mut |_| {})?.remove(0);
-        found.push((fit.value, [fit.x, g.clone()].concat()));
-    }
-    found.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let names = space.names();
-    let shown: Vec<String> = found
-        .iter()
-        .map(|(v, x)| {
-            let m: Vec<String> = names.iter().zip(x).map(|(n, v)| format!("{n} {v:.3}")).collect();
-            format!("{} (SSE {v:.1})", m.join(", "))
-        })
-        .collect();
-    log(format!("diagnose: sled-motion: grid points polished, best first: {}", shown.join("; ")));
-    Ok(found.into_iter().take(MOTION_STARTS).map(|(_, x)| x).collect())
-}
-
-/// The i-th point of the van der Corput sequence in `base`.
-fn halton(mut i: usize, base: usize) -> f64 {
-    let (mut f, mut r) = (1.0, 0.0);
-    while i > 0 {
-        f /= base as f64;
-        r += f * (i % base) as f64;
-        i /= base;
-    }
-    r
-}
-
 fn new_result(space: &Space, fit: Fit, baseline_dim: usize) -> ModelResult {
     ModelResult {
         effects: space.effects.clone(),
@@ -849,12 +738,28 @@ pub fn diagnose(
             starts: effect_starts(sp, &base_names, &base_fit.x, effort.pop / 2),
         })
         .collect();
-    for m in models.iter_mut().filter(|m| m.space.effects == [EffectKind::SledMotion]) {
-        let found = motion_starts(&solver, &sim, m.space, &targets, &m.starts[..1], log)?;
-        // after the baseline's own start, before the Halton points the population may drop
-        m.starts.splice(1.min(m.starts.len())..1.min(m.starts.len()), found);
+    // an unstated motion is searched by the motion screen, which replaces the candidate's
+    // differential evolution: its fit polishes from the screen's point and the baseline's
+    let mut screened = None;
+    if let Some(i) = models.iter().position(|m| m.space.effects == [EffectKind::SledMotion]) {
+        if let Some(found) = motion_start(&solver, &sim, models[i].space, &targets, &base_fit.x, log)? {
+            let m = &mut models[i];
+            m.starts = std::iter::once(found.x).chain(m.starts.drain(..).take(1)).collect();
+            screened = Some((i, found.evaluations));
+        }
     }
-    let fits = solver.fit(&sim, &models, log)?;
+    let fits = match screened {
+        None => solver.fit(&sim, &models, log)?,
+        Some((i, evaluations)) => {
+            let own = models.remove(i);
+            let mut fits = solver.fit(&sim, &models, log)?;
+            log("diagnose: sled-motion: polishing from the motion screen's point and the baseline's".to_string());
+            let mut fit = solver.polish(&sim, std::slice::from_ref(&own), log)?.remove(0);
+            fit.evaluations += evaluations;
+            fits.insert(i, fit);
+            fits
+        }
+    };
     let mut all: Vec<ModelResult> = vec![new_result(&base_space, base_fit, baseline_dim)];
     for (sp, f) in spaces.iter().zip(fits) {
         log(format!("diagnose: {}: SSE {:.1} %² (fit streams)", model_name(&sp.effects), f.value));

@@ -7,6 +7,7 @@
 #[allow(clippy::module_inception)]
 pub mod diagnose;
 pub mod model_result;
+pub mod motion_screen;
 pub mod render;
 pub mod request;
 pub mod synth;

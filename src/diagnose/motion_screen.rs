@@ -1,0 +1,250 @@
+//! The motion screen (issue 32, item 4): where some setup leaves the sled's motion after
+//! the stroke out, the sled-motion candidate's delay and return speed are searched from the
+//! data before its fit.
+//!
+//! Why a screen of its own: a moving sled changes the landing points so much that the
+//! baseline, fitted without it, has already bent k_elastic, μ and k_drag towards it; from
+//! the baseline's optimum any motion looks worse, and with a moving sled the shared
+//! parameters have several basins (a compass search from the baseline's point lands in
+//! the wrong one; docs/diagnosis-report.md). So:
+//!
+//! 1. **Grid.** At every point of a grid over the unstated delay and return speed
+//!    ([`MOTION_GRID`]), held fixed ([`Space::pin`]), the shared parameters are searched over
+//!    their whole box: one differential evolution per grid point, all in lockstep (one engine
+//!    call per generation), at the screen's particle count, every population starting from
+//!    the same points (the baseline's and a Halton set), so that the grid points are
+//!    compared from equal starts.
+//! 2. **Ranking at the full budget.** Each grid point's best member is simulated again at
+//!    the full particle count and the points are ranked by their *loss-adjusted* SSE
+//!    ([`super::verdict::loss_adjusted_sse`], the gap the diagnosis ranks models on). Both halves
+//!    matter. At the screen's 2000 particles a DE's minimum is partly a lucky draw of the
+//!    particle streams: on campaign uB, with the true motion stated, the screen's best
+//!    point scored 24.1 %² and 39.1 %² on the full budget's streams. And on raw SSEs a
+//!    motion that loses grains in flight mimics the 0-4 % each run spills in handling: on
+//!    uB the true motion fitted to 27.2 %² raw and a slow return at once to 26.4 %², but
+//!    once the spill is allowed for, 4.4 %² against 15.6 %² on fresh streams; on uC 19.0
+//!    against 15.7 raw, 3.8 against 8.4 adjusted. Ranked on raw SSEs, the slow return won.
+//! 3. **Polish.** The best `POLISHED` grid points are polished at the full budget (a
+//!    short compass search, the motion still held), and the best of them by the
+//!    loss-adjusted SSE is the sled-motion fit's start, where the motion is free again. The
+//!    fit polishes from it and from the baseline's point (so that the candidate is never
+//!    worse than no motion), without a differential evolution of its own: the screen was
+//!    its global search, and a DE over all five parameters at the screen's particle count
+//!    never improved on the screen's point (campaigns uA-uC) while its lucky minima could
+//!    pull the polish into the slow-return basin. The polish matters: on uB the true
+//!    motion's grid point led a slow return at once by 25.7 against 26.9 %² before it and
+//!    18.0 against 24.9 after (shared parameters from a short DE are not yet converged).
+//!
+//! Costs nothing when every setup states its motion.
+
+use super::verdict::loss_adjusted_sse;
+use crate::calibrate::{Fit, Model, Simulator, Solver, Space, Target};
+use crate::model::effects::EffectKind;
+
+/// The grid of unstated sled motions: delays (s) "at once" and well into the flights (a
+/// longer delay outlasts them: the baseline's own start), and return speeds (m/s) doubling
+/// over the search box (the POC profile's 0.05 m/s to a fast return). At a few tenths of a
+/// m/s the sled returns its stroke (10 mm on the practice rig) in tens of milliseconds,
+/// while grains fly, and the outcome is steep in the speed: at a step of 2.7 (0.3 to
+/// 0.8 m/s) a 0.05 s, 0.5 m/s motion fell between two points that each screened worse than
+/// no motion at all (docs/diagnosis-report.md). The fit moves the motion from the chosen
+/// point onward.
+pub const MOTION_GRID: ([f64; 2], [f64; 6]) = ([0.0, 0.05], [0.03, 0.06, 0.12, 0.25, 0.5, 1.0]);
+/// The differential evolution over the shared parameters at each grid point: population
+/// (about three per parameter, the baseline's point among them) and the generations every
+/// grid point gets.
+const POP: usize = 10;
+const GENERATIONS: usize = 8;
+/// Grid points polished at the full budget (the best by the loss-adjusted SSE of their
+/// screened point), and the compass iterations each gets.
+const POLISHED: usize = 3;
+const POLISH: usize = 3;
+
+/// The motion screen's answer: the sled-motion fit's start (the space's parameter order)
+/// and the simulations of the condition set it took.
+#[derive(Clone, Debug)]
+pub struct MotionStart {
+    pub x: Vec<f64>,
+    pub evaluations: u64,
+}
+
+/// Every combination of the grid's values for the free parameters `names` (the motion's,
+/// in the space's order): `delay_s` takes the grid's delays, `return_speed_m_s` its speeds.
+pub fn grid(names: &[&'static str]) -> Vec<Vec<(&'static str, f64)>> {
+    let mut grid: Vec<Vec<(&'static str, f64)>> = vec![Vec::new()];
+    for name in names {
+        let values: &[f64] = if *name == "delay_s" { &MOTION_GRID.0 } else { &MOTION_GRID.1 };
+        grid = grid.iter().flat_map(|g| values.iter().map(move |v| [g.clone(), vec![(*name, *v)]].concat())).collect();
+    }
+    grid
+}
+
+/// `n` points of the box `bounds` that every grid point's population starts from: `first`,
+/// then a Halton sequence (bases 2, 3, 5, 7), the same for every grid point.
+pub fn common_starts(first: &[f64], bounds: &[(f64, f64)], n: usize) -> Vec<Vec<f64>> {
+    let mut starts = vec![first.to_vec()];
+    for i in 1..n {
+        starts.push(
+            bounds.iter().enumerate().map(|(k, (lo, hi))| lo + halton(i, [2, 3, 5, 7][k % 4]) * (hi - lo)).collect(),
+        );
+    }
+    starts
+}
+
+/// The loss-adjusted SSE (%²) of a fit's bins, summed over the conditions.
+fn adjusted(sim: &Simulator, targets: &[Target], fit: &Fit) -> f64 {
+    sim.conditions.iter().zip(targets).zip(&fit.bins).map(|((c, t), b)| loss_adjusted_sse(c, &t.bins, b)).sum()
+}
+
+/// The start for the sled-motion candidate's fit in `space` when some setup leaves the
+/// motion out (None when every setup states it), from the baseline's optimum `base` (the
+/// baseline's parameters, the shared ones first). `solver` is the diagnosis's: the screen
+/// runs at its screen particle count, the ranking and polish at its full one.
+pub fn motion_start(
+    solver: &Solver,
+    sim: &Simulator,
+    space: &Space,
+    targets: &[Target],
+    base: &[f64],
+    log: &mut dyn FnMut(String),
+) -> anyhow::Result<Option<MotionStart>> {
+    let names = space.names();
+    let motion: Vec<&'static str> = space
+        .free
+        .iter()
+        .filter(|(k, _)| space.effects[*k] == EffectKind::SledMotion)
+        .map(|(k, i)| space.effects[*k].param_names()[*i])
+        .collect();
+    if motion.is_empty() || base.len() < space.shared.len() {
+        return Ok(None);
+    }
+    let started = std::time::Instant::now();
+    let grid = grid(&motion);
+    let spaces: Vec<Space> = grid
+        .iter()
+        .map(|g| g.iter().try_fold(space.clone(), |s, (n, v)| s.pin(n, *v)).expect("the motion's parameters are free"))
+        .collect();
+    log(format!(
+        "diagnose: sled-motion: the setups leave the motion out; screening {} grid points ({} members × {} generations each at {} particles)",
+        grid.len(),
+        POP,
+        GENERATIONS,
+        solver.screen_particles
+    ));
+    // every pinned space has the shared parameters and any other free ones the same way
+    let fixed = &spaces[0];
+    let first = fixed.start_from(&names[..space.shared.len()], &base[..space.shared.len()]);
+    let Some(first) = first.filter(|_| fixed.dim() == space.shared.len()) else {
+        return Ok(None);
+    };
+    let starts = common_starts(&first, &fixed.bounds(), POP);
+    let models: Vec<Model> = spaces.iter().map(|s| Model { space: s, targets, starts: starts.clone() }).collect();
+    // 1. every grid point's DE
+    let screen = Solver { pop: POP, generations: GENERATIONS, ..*solver };
+    let screened = screen.screen(sim, &models, &mut |_| {})?;
+    let mut evaluations: u64 = screened.iter().map(|s| s.evaluations).sum();
+
+    // 2. each grid point's best again at the full budget, ranked by the loss-adjusted SSE
+    let full = Solver { polish_iterations: 0, ..*solver };
+    let best: Vec<Model> = spaces
+        .iter()
+        .zip(&screened)
+        .map(|(s, sc)| Model { space: s, targets, starts: vec![sc.members[0].0.clone()] })
+        .collect();
+    let ranked = full.polish(sim, &best, &mut |_| {})?;
+    evaluations += ranked.len() as u64;
+    let mut order: Vec<(usize, f64)> = ranked.iter().map(|f| adjusted(sim, targets, f)).enumerate().collect();
+    order.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let describe = |g: usize, x: &[f64]| {
+        let motion: Vec<String> = grid[g].iter().map(|(n, v)| format!("{n} {v}")).collect();
+        let shared: Vec<String> = spaces[g].names().iter().zip(x).map(|(n, v)| format!("{n} {v:.3}")).collect();
+        format!("{}: {}", motion.join(", "), shared.join(", "))
+    };
+    let shown: Vec<String> = order
+        .iter()
+        .map(|(g, a)| {
+            let (x, screen) = &screened[*g].members[0];
+            format!("{} (screen {screen:.1}, full {:.1}, loss-adjusted {a:.1})", describe(*g, x), ranked[*g].value)
+        })
+        .collect();
+    log(format!(
+        "diagnose: sled-motion: grid points at {} particles, best first (SSE %²): {} ({:.1} s elapsed)",
+        solver.particles,
+        shown.join("; "),
+        started.elapsed().as_secs_f64()
+    ));
+
+    // 3. the best few polished at the full budget, the motion still held
+    let chosen: Vec<usize> = order.iter().take(POLISHED).map(|(g, _)| *g).collect();
+    let polish = Solver { polish_iterations: POLISH, ..*solver };
+    let models: Vec<Model> =
+        chosen.iter().map(|g| Model { space: &spaces[*g], targets, starts: vec![ranked[*g].x.clone()] }).collect();
+    let polished = polish.polish(sim, &models, &mut |_| {})?;
+    evaluations += polished.iter().map(|f| f.evaluations).sum::<u64>();
+    let scored: Vec<(usize, f64, &Fit)> =
+        chosen.iter().zip(&polished).map(|(g, f)| (*g, adjusted(sim, targets, f), f)).collect();
+    let shown: Vec<String> = scored
+        .iter()
+        .map(|(g, a, f)| format!("{} (full {:.1}, loss-adjusted {a:.1})", describe(*g, &f.x), f.value))
+        .collect();
+    log(format!("diagnose: sled-motion: polished at the full budget, the motion held: {}", shown.join("; ")));
+    let (g, _, f) = scored.iter().min_by(|a, b| a.1.total_cmp(&b.1)).expect("at least one grid point");
+
+    // back to the candidate's own parameters: the fit's shared values, the grid's motion
+    let fitted = spaces[*g].names();
+    let x: Vec<f64> = names
+        .iter()
+        .map(|n| match fitted.iter().position(|m| m == n) {
+            Some(p) => f.x[p],
+            None => grid[*g].iter().find(|(m, _)| m == n).map(|(_, v)| *v).expect("a pinned motion parameter"),
+        })
+        .collect();
+    log(format!(
+        "diagnose: sled-motion: the fit starts from {} (the screen took {:.1} s, {evaluations} simulations of the conditions)",
+        describe(*g, &f.x),
+        started.elapsed().as_secs_f64()
+    ));
+    Ok(Some(MotionStart { x, evaluations }))
+}
+
+/// The i-th point of the van der Corput sequence in `base`.
+pub(crate) fn halton(mut i: usize, base: usize) -> f64 {
+    let (mut f, mut r) = (1.0, 0.0);
+    while i > 0 {
+        f /= base as f64;
+        r += f * (i % base) as f64;
+        i /= base;
+    }
+    r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_grid_crosses_every_delay_with_every_speed_in_the_spaces_order() {
+        let g = grid(&["delay_s", "return_speed_m_s"]);
+        assert_eq!(g.len(), MOTION_GRID.0.len() * MOTION_GRID.1.len());
+        assert_eq!(g[0], [("delay_s", 0.0), ("return_speed_m_s", 0.03)]);
+        assert_eq!(g[7], [("delay_s", 0.05), ("return_speed_m_s", 0.06)]);
+        // a setup that states the delay leaves only the speed to scan
+        let speeds = grid(&["return_speed_m_s"]);
+        assert_eq!(speeds.iter().map(|p| p[0].1).collect::<Vec<_>>(), MOTION_GRID.1);
+        assert_eq!(grid(&[]), [Vec::<(&str, f64)>::new()]);
+    }
+
+    #[test]
+    fn common_starts_are_the_first_point_then_a_halton_set_inside_the_box() {
+        let bounds = [(0.0, 1.0), (10.0, 20.0), (-1.0, 1.0)];
+        let s = common_starts(&[0.5, 15.0, 0.0], &bounds, 4);
+        assert_eq!(s.len(), 4);
+        assert_eq!(s[0], [0.5, 15.0, 0.0]);
+        // van der Corput in bases 2, 3, 5: 1/2, 1/3, 1/5, then 1/4, 2/3, 2/5, then 3/4, 1/9, 3/5
+        let near = |a: &[f64], b: [f64; 3]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12);
+        assert!(near(&s[1], [0.5, 10.0 + 10.0 / 3.0, -1.0 + 2.0 / 5.0]), "{:?}", s[1]);
+        assert!(near(&s[2], [0.25, 10.0 + 20.0 / 3.0, -1.0 + 4.0 / 5.0]), "{:?}", s[2]);
+        assert!(near(&s[3], [0.75, 10.0 + 10.0 / 9.0, -1.0 + 6.0 / 5.0]), "{:?}", s[3]);
+        assert!(s.iter().all(|p| p.iter().zip(&bounds).all(|(v, (lo, hi))| (lo..=hi).contains(&v))));
+    }
+}
