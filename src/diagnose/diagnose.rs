@@ -95,7 +95,7 @@ pub use crate::model::effects::EffectKind;
 use crate::model::outcome::{centre_and_dispersion, end_tooth, ParticleState};
 use crate::model::Scenario;
 
-use super::motion_screen::{halton, motion_start};
+use super::motion_screen::{halton_point, motion_start};
 use super::verdict::{self, Verdict};
 
 /// Lower and upper percentile of every bootstrap interval.
@@ -604,11 +604,7 @@ fn effect_starts(space: &Space, base_names: &[&'static str], base_x: &[f64], ext
     }
     let bounds = space.bounds();
     for i in 1..=extra {
-        let mut x = shared.clone();
-        for (k, (lo, hi)) in bounds[space.shared.len()..].iter().enumerate() {
-            x.push(lo + halton(i, [2, 3, 5, 7][k % 4]) * (hi - lo));
-        }
-        starts.push(x);
+        starts.push([shared.clone(), halton_point(i, &bounds[space.shared.len()..])].concat());
     }
     starts
 }

@@ -82,13 +82,12 @@ pub fn grid(names: &[&'static str]) -> Vec<Vec<(&'static str, f64)>> {
 /// `n` points of the box `bounds` that every grid point's population starts from: `first`,
 /// then a Halton sequence (bases 2, 3, 5, 7), the same for every grid point.
 pub fn common_starts(first: &[f64], bounds: &[(f64, f64)], n: usize) -> Vec<Vec<f64>> {
-    let mut starts = vec![first.to_vec()];
-    for i in 1..n {
-        starts.push(
-            bounds.iter().enumerate().map(|(k, (lo, hi))| lo + halton(i, [2, 3, 5, 7][k % 4]) * (hi - lo)).collect(),
-        );
-    }
-    starts
+    std::iter::once(first.to_vec()).chain((1..n).map(|i| halton_point(i, bounds))).collect()
+}
+
+/// The i-th point of a Halton sequence (bases 2, 3, 5, 7, repeating) scaled into `bounds`.
+pub(crate) fn halton_point(i: usize, bounds: &[(f64, f64)]) -> Vec<f64> {
+    bounds.iter().enumerate().map(|(k, (lo, hi))| lo + halton(i, [2, 3, 5, 7][k % 4]) * (hi - lo)).collect()
 }
 
 /// The loss-adjusted SSE (%²) of a fit's bins, summed over the conditions.
@@ -208,7 +207,7 @@ pub fn motion_start(
 }
 
 /// The i-th point of the van der Corput sequence in `base`.
-pub(crate) fn halton(mut i: usize, base: usize) -> f64 {
+fn halton(mut i: usize, base: usize) -> f64 {
     let (mut f, mut r) = (1.0, 0.0);
     while i > 0 {
         f /= base as f64;
