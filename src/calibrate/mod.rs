@@ -23,6 +23,6 @@ pub use condition::{Condition, KnownMotion, Normalise};
 pub use effort::{particles_from_data, Effort, EffortSettings, MIN_PARTICLES};
 pub use fields::Spelling;
 pub use param::{parse_assignments, parse_params, Param};
-pub use solver::{Fit, Model, Probe, Screened, Solver};
+pub use solver::{Fit, Model, Probe, Screened, Search, Solver};
 pub use space::{shared_params, Space};
 pub use target::{collapse_to_weighed, subset, MeasuredSummary, ObjectiveKind, Target};

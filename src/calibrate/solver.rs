@@ -29,13 +29,30 @@ use super::objective;
 use super::space::Space;
 use super::target::{ObjectiveKind, Target};
 
-/// One model to fit: its space, what it is fitted to, and extra starting points
-/// (parameter units).
+/// One model to fit: its space, what it is fitted to, extra starting points (parameter
+/// units), its random stream and how it is searched.
 pub struct Model<'a> {
     pub space: &'a Space,
     /// One target per condition of the simulator.
     pub targets: &'a [Target],
     pub starts: Vec<Vec<f64>>,
+    /// The stream the model's differential evolution draws from (with the solver's seed). A
+    /// model's fit depends on its own stream, not on which other models share the batch or
+    /// where it stands in it: a caller that drops a model from a batch changes no other fit.
+    pub stream: u64,
+    pub search: Search,
+}
+
+/// How the solver searches a model's space before the polish.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Search {
+    /// Differential evolution over the whole box, then the polish from its best point and
+    /// the model's starts.
+    Global,
+    /// The polish from the model's starts alone (at least one), for a model whose starts
+    /// come from a global search of its own (the diagnosis's motion screen). It shares the
+    /// batch's polish, one engine call per iteration with the others.
+    FromStarts,
 }
 
 /// The solver's settings: what it minimises and how hard it works.
@@ -147,14 +164,18 @@ impl Solver {
     /// Fit every model: screen, then polish. `log` receives progress lines.
     pub fn fit(&self, sim: &Simulator, models: &[Model], log: &mut dyn FnMut(String)) -> anyhow::Result<Vec<Fit>> {
         self.check(sim, models)?;
+        if let Some(m) = models.iter().position(|m| m.search == Search::FromStarts && m.starts.is_empty()) {
+            bail!("model {m} is searched from its starts alone and has none");
+        }
         let members = self.evolve(sim, models, log);
-        // the polish starts from the screen's best and the model's own starts
+        // the polish starts from the screen's best (where there was a screen) and the
+        // model's own starts
         let starts: Vec<Vec<Vec<f64>>> = members
             .iter()
             .zip(models)
             .map(|(mem, model)| {
-                let best = mem.pop.iter().min_by(|a, b| a.1.total_cmp(&b.1)).expect("population").0.clone();
-                std::iter::once(best).chain(model.starts.iter().map(|x| model.space.to_unit(x))).collect()
+                let best = mem.pop.iter().min_by(|a, b| a.1.total_cmp(&b.1)).map(|b| b.0.clone());
+                best.into_iter().chain(model.starts.iter().map(|x| model.space.to_unit(x))).collect()
             })
             .collect();
         let screened: Vec<u64> = members.iter().map(|m| m.evaluations).collect();
@@ -186,14 +207,17 @@ impl Solver {
     }
 
     /// The differential evolution of every model in lockstep, from its starts (the first
-    /// `pop` of them) and uniform points.
+    /// `pop` of them) and uniform points; a model searched from its starts alone gets an
+    /// empty population.
     fn evolve(&self, sim: &Simulator, models: &[Model], log: &mut dyn FnMut(String)) -> Vec<Member> {
         let seed = self.seed;
         let mut members: Vec<Member> = models
             .iter()
-            .enumerate()
-            .map(|(m, model)| {
-                let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (0xCA11_B000 + m as u64));
+            .map(|model| {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (0xCA11_B000 + model.stream));
+                if model.search == Search::FromStarts {
+                    return Member { pop: Vec::new(), rng, evaluations: 0 };
+                }
                 let d = model.space.dim();
                 let mut pop: Vec<Vec<f64>> =
                     model.starts.iter().map(|x| model.space.to_unit(x)).take(self.pop).collect();
@@ -226,6 +250,7 @@ impl Solver {
             if (g + 1) % 10 == 0 || g + 1 == self.generations {
                 let best: Vec<String> = members
                     .iter()
+                    .filter(|m| !m.pop.is_empty())
                     .map(|m| format!("{:.1}", m.pop.iter().map(|p| p.1).fold(f64::INFINITY, f64::min)))
                     .collect();
                 log(format!(
@@ -369,9 +394,13 @@ struct Member {
 }
 
 impl Member {
-    /// One generation's trial points (DE/rand-to-best/1/bin, F dithered, CR 0.9).
+    /// One generation's trial points (DE/rand-to-best/1/bin, F dithered, CR 0.9); none for
+    /// an empty population.
     fn trials(&mut self) -> Vec<Vec<f64>> {
         let n = self.pop.len();
+        if n == 0 {
+            return Vec::new();
+        }
         let d = self.pop[0].0.len();
         let best = (0..n).min_by(|a, b| self.pop[*a].1.total_cmp(&self.pop[*b].1)).expect("population");
         let f = 0.5 + 0.4 * self.rng.random::<f64>();
@@ -450,8 +479,14 @@ mod tests {
         let space = Space::new(shared_params(&conditions), &[], &conditions);
         let targets: Vec<Target> = conditions.iter().map(Condition::target_all).collect();
         let models = [
-            Model { space: &space, targets: &targets, starts: vec![] },
-            Model { space: &space, targets: &targets, starts: vec![vec![0.5, 0.5, 5.0]] },
+            Model { space: &space, targets: &targets, starts: vec![], stream: 0, search: Search::Global },
+            Model {
+                space: &space,
+                targets: &targets,
+                starts: vec![vec![0.5, 0.5, 5.0]],
+                stream: 1,
+                search: Search::Global,
+            },
         ];
         let solver = Solver {
             objective: ObjectiveKind::Sse,
@@ -484,6 +519,71 @@ mod tests {
         );
     }
 
+    fn small_solver(seed: u64) -> Solver {
+        Solver {
+            objective: ObjectiveKind::Sse,
+            pop: 6,
+            generations: 3,
+            screen_particles: 40,
+            particles: 60,
+            polish_iterations: 2,
+            first_step: FIRST_STEP,
+            min_step: MIN_STEP,
+            seed,
+        }
+    }
+
+    #[test]
+    fn a_models_fit_follows_its_own_stream_not_its_place_in_the_batch() {
+        let conditions = vec![test3()];
+        let engine = make_engine(EngineKind::Cpu).unwrap();
+        let sim = Simulator { engine: &*engine, conditions: &conditions };
+        let space = Space::new(shared_params(&conditions), &[], &conditions);
+        let targets: Vec<Target> = conditions.iter().map(Condition::target_all).collect();
+        let model = |stream| Model { space: &space, targets: &targets, starts: vec![], stream, search: Search::Global };
+        let solver = small_solver(3);
+        let together = solver.fit(&sim, &[model(3), model(4)], &mut |_| {}).unwrap();
+        let alone = solver.fit(&sim, &[model(4)], &mut |_| {}).unwrap();
+        assert_eq!(together[1].x, alone[0].x, "dropping a batch-mate must not change a fit");
+        assert_eq!(together[1].value, alone[0].value);
+        // the stream is what decides: another one evolves another population
+        assert_ne!(together[0].x, together[1].x);
+    }
+
+    #[test]
+    fn a_model_searched_from_its_starts_gets_no_evolution_and_shares_the_batchs_polish() {
+        let conditions = vec![test3()];
+        let engine = Counting { inner: make_engine(EngineKind::Cpu).unwrap(), calls: Mutex::new(Vec::new()) };
+        let sim = Simulator { engine: &engine, conditions: &conditions };
+        let space = Space::new(shared_params(&conditions), &[], &conditions);
+        let targets: Vec<Target> = conditions.iter().map(Condition::target_all).collect();
+        let start = vec![0.5, 0.5, 5.0];
+        let searched = Model { space: &space, targets: &targets, starts: vec![], stream: 0, search: Search::Global };
+        let from_start = || Model {
+            space: &space,
+            targets: &targets,
+            starts: vec![start.clone()],
+            stream: 1,
+            search: Search::FromStarts,
+        };
+        let solver = small_solver(5);
+        let fits = solver.fit(&sim, &[searched, from_start()], &mut |_| {}).unwrap();
+        let calls = engine.calls.lock().unwrap().clone();
+        // initial population + 3 generations of the first model alone (6 points each), then
+        // the polish's starts: the first model's screened best and the second's start
+        assert_eq!(calls[..5], [6, 6, 6, 6, 2], "{calls:?}");
+        // exactly the polish of that model alone, evaluations included
+        let alone = solver.polish(&sim, &[from_start()], &mut |_| {}).unwrap();
+        assert_eq!(
+            (&fits[1].x, fits[1].value, fits[1].evaluations),
+            (&alone[0].x, alone[0].value, alone[0].evaluations)
+        );
+        assert!(fits[1].evaluations < fits[0].evaluations);
+        // such a model needs a start
+        let bare = Model { space: &space, targets: &targets, starts: vec![], stream: 1, search: Search::FromStarts };
+        assert!(solver.fit(&sim, &[bare], &mut |_| {}).unwrap_err().to_string().contains("starts"));
+    }
+
     #[test]
     fn polish_refits_many_targets_in_lockstep() {
         let conditions = vec![test3()];
@@ -491,8 +591,16 @@ mod tests {
         let sim = Simulator { engine: &engine, conditions: &conditions };
         let space = Space::new(vec![crate::calibrate::Param::KDrag], &[], &conditions);
         let targets: Vec<[Target; 1]> = (0..5).map(|i| [conditions[0].target(&[i, i + 1, i + 2])]).collect();
-        let models: Vec<Model> =
-            targets.iter().map(|t| Model { space: &space, targets: t, starts: vec![vec![5.0]] }).collect();
+        let models: Vec<Model> = targets
+            .iter()
+            .map(|t| Model {
+                space: &space,
+                targets: t,
+                starts: vec![vec![5.0]],
+                stream: 0,
+                search: Search::FromStarts,
+            })
+            .collect();
         let solver = Solver {
             objective: ObjectiveKind::Likelihood,
             pop: 5,
@@ -517,7 +625,8 @@ mod tests {
             assert_eq!(f.value, solver.value(&Some(f.bins.clone()), models[0].targets, 50).min(f.value));
         }
         // a model without a start is refused
-        let bare = [Model { space: &space, targets: &targets[0], starts: vec![] }];
+        let bare =
+            [Model { space: &space, targets: &targets[0], starts: vec![], stream: 0, search: Search::FromStarts }];
         assert!(solver.polish(&sim, &bare, &mut |_| {}).unwrap_err().to_string().contains("start"));
     }
 }

@@ -88,7 +88,7 @@ pub use super::model_result::{num, DepthLayer, ModelResult, Z_FLAG};
 pub use crate::calibrate::space::shared_params;
 use crate::calibrate::stats::{percentile, sample_sd};
 pub use crate::calibrate::{Condition, KnownMotion};
-use crate::calibrate::{Effort, Fit, MeasuredSummary, Model, ObjectiveKind, Param, Simulator, Space, Target};
+use crate::calibrate::{Effort, Fit, MeasuredSummary, Model, ObjectiveKind, Param, Search, Simulator, Space, Target};
 use crate::engine::{evaluate_detailed, particle_engine, BatchEvaluator, EngineKind};
 use crate::model::effects::known_effects;
 pub use crate::model::effects::EffectKind;
@@ -651,6 +651,16 @@ pub fn applicable_effects(candidates: &[EffectKind], conditions: &[Condition]) -
     (effects, notes)
 }
 
+/// The random stream of a single candidate's fit: its place in [`EffectKind::ALL`] (where
+/// it stood in the batch when every candidate was tried, so a full diagnosis fits as it
+/// did when the streams followed the batch). The baseline and a pair are fitted alone, on 0.
+fn candidate_stream(effects: &[EffectKind]) -> u64 {
+    match effects {
+        [e] => EffectKind::ALL.iter().position(|k| k == e).expect("every effect is in ALL") as u64,
+        _ => 0,
+    }
+}
+
 /// Run the diagnosis. `log` receives progress lines.
 pub fn diagnose(
     engine: &dyn BatchEvaluator,
@@ -720,41 +730,44 @@ pub fn diagnose(
 
     // the baseline first: its optimum starts every nested effect
     let base_space = Space::new(shared.clone(), &[], &conditions);
-    let base_fit =
-        solver.fit(&sim, &[Model { space: &base_space, targets: &targets, starts: Vec::new() }], log)?.remove(0);
+    let base_model =
+        Model { space: &base_space, targets: &targets, starts: Vec::new(), stream: 0, search: Search::Global };
+    let base_fit = solver.fit(&sim, &[base_model], log)?.remove(0);
     log(format!("diagnose: baseline: SSE {:.1} %² (fit streams)", base_fit.value));
     let baseline_dim = base_space.dim();
     let spaces: Vec<Space> = effects.iter().map(|e| Space::new(shared.clone(), &[*e], &conditions)).collect();
     let base_names = base_space.names();
+    // Each candidate draws its differential evolution from the stream of its place in the
+    // list of every candidate (`EffectKind::ALL`), not in this run's batch: a candidate's fit
+    // is the same whichever others are tried with it (vacuum leaves the drag candidates
+    // out, `--effects` picks some), and the motion screen can take the sled-motion
+    // candidate's evolution over without moving anyone else's.
     let mut models: Vec<Model> = spaces
         .iter()
         .map(|sp| Model {
             space: sp,
             targets: &targets,
             starts: effect_starts(sp, &base_names, &base_fit.x, effort.pop / 2),
+            stream: candidate_stream(&sp.effects),
+            search: Search::Global,
         })
         .collect();
     // an unstated motion is searched by the motion screen, which replaces the candidate's
-    // differential evolution: its fit polishes from the screen's point and the baseline's
+    // differential evolution: its fit polishes from the screen's point and the baseline's,
+    // beside the others' polish
     let mut screened = None;
     if let Some(i) = models.iter().position(|m| m.space.effects == [EffectKind::SledMotion]) {
         if let Some(found) = motion_start(&solver, &sim, models[i].space, &targets, &base_fit.x, log)? {
             let m = &mut models[i];
             m.starts = std::iter::once(found.x).chain(m.starts.drain(..).take(1)).collect();
+            m.search = Search::FromStarts;
             screened = Some((i, found.evaluations));
+            log("diagnose: sled-motion: its fit polishes from the motion screen's point and the baseline's".to_string());
         }
     }
-    // Every model stays in the batch, the screened one too: the solver seeds each model's
-    // differential evolution by its place in the batch, so taking one out would hand every
-    // later candidate another random stream and another fit (on the DEM candidate campaign,
-    // fill-surface-loss's gap went from 40 to 50 %² that way). The screened model's own
-    // evolution is then set aside for the polish from the screen's point.
     let mut fits = solver.fit(&sim, &models, log)?;
     if let Some((i, evaluations)) = screened {
-        log("diagnose: sled-motion: polishing from the motion screen's point and the baseline's".to_string());
-        let mut fit = solver.polish(&sim, std::slice::from_ref(&models[i]), log)?.remove(0);
-        fit.evaluations += evaluations;
-        fits[i] = fit;
+        fits[i].evaluations += evaluations;
     }
     let mut all: Vec<ModelResult> = vec![new_result(&base_space, base_fit, baseline_dim)];
     for (sp, f) in spaces.iter().zip(fits) {
@@ -848,7 +861,9 @@ pub fn diagnose(
         let space = Space::new(shared.clone(), &pair, &conditions);
         let starts: Vec<Vec<f64>> =
             [beating[0], beating[1], &baseline].iter().filter_map(|m| space.start_from(&m.names, &m.full.x)).collect();
-        let fit = solver.fit(&sim, &[Model { space: &space, targets: &targets, starts }], log)?.remove(0);
+        // fitted in a batch of its own, like the baseline, on the stream the baseline used
+        let model = Model { space: &space, targets: &targets, starts, stream: 0, search: Search::Global };
+        let fit = solver.fit(&sim, &[model], log)?.remove(0);
         let mut m = new_result(&space, fit, baseline_dim);
         rescore(&sim, &[&space], std::slice::from_mut(&mut m), particles, streams, seed);
         // the resamples depend only on the seed and the conditions, so bootstrapping the

@@ -38,7 +38,7 @@
 //! Costs nothing when every setup states its motion.
 
 use super::verdict::loss_adjusted_sse;
-use crate::calibrate::{Fit, Model, Simulator, Solver, Space, Target};
+use crate::calibrate::{Fit, Model, Search, Simulator, Solver, Space, Target};
 use crate::model::effects::EffectKind;
 
 /// The grid of unstated sled motions: delays (s) "at once" and well into the flights (a
@@ -137,7 +137,11 @@ pub fn motion_start(
         return Ok(None);
     };
     let starts = common_starts(&first, &fixed.bounds(), POP);
-    let models: Vec<Model> = spaces.iter().map(|s| Model { space: s, targets, starts: starts.clone() }).collect();
+    let models: Vec<Model> = spaces
+        .iter()
+        .enumerate()
+        .map(|(g, s)| Model { space: s, targets, starts: starts.clone(), stream: g as u64, search: Search::Global })
+        .collect();
     // 1. every grid point's DE
     let screen = Solver { pop: POP, generations: GENERATIONS, ..*solver };
     let screened = screen.screen(sim, &models, &mut |_| {})?;
@@ -148,7 +152,13 @@ pub fn motion_start(
     let best: Vec<Model> = spaces
         .iter()
         .zip(&screened)
-        .map(|(s, sc)| Model { space: s, targets, starts: vec![sc.members[0].0.clone()] })
+        .map(|(s, sc)| Model {
+            space: s,
+            targets,
+            starts: vec![sc.members[0].0.clone()],
+            stream: 0,
+            search: Search::FromStarts,
+        })
         .collect();
     let ranked = full.polish(sim, &best, &mut |_| {})?;
     evaluations += ranked.len() as u64;
@@ -176,8 +186,16 @@ pub fn motion_start(
     // 3. the best few polished at the full budget, the motion still held
     let chosen: Vec<usize> = order.iter().take(POLISHED).map(|(g, _)| *g).collect();
     let polish = Solver { polish_iterations: POLISH, ..*solver };
-    let models: Vec<Model> =
-        chosen.iter().map(|g| Model { space: &spaces[*g], targets, starts: vec![ranked[*g].x.clone()] }).collect();
+    let models: Vec<Model> = chosen
+        .iter()
+        .map(|g| Model {
+            space: &spaces[*g],
+            targets,
+            starts: vec![ranked[*g].x.clone()],
+            stream: 0,
+            search: Search::FromStarts,
+        })
+        .collect();
     let polished = polish.polish(sim, &models, &mut |_| {})?;
     evaluations += polished.iter().map(|f| f.evaluations).sum::<u64>();
     let scored: Vec<(usize, f64, &Fit)> =

@@ -43,7 +43,7 @@ use crate::calibrate::param::known_names;
 use crate::calibrate::solver::MIN_STEP;
 use crate::calibrate::stats::{percentile, sample_sd};
 use crate::calibrate::{
-    Condition, Effort, MeasuredSummary, Model, ObjectiveKind, Param, Simulator, Solver, Space, Target,
+    Condition, Effort, MeasuredSummary, Model, ObjectiveKind, Param, Search, Simulator, Solver, Space, Target,
 };
 use crate::engine::BatchEvaluator;
 use crate::model::Scenario;
@@ -130,9 +130,21 @@ pub fn fit(
     let fit_idx: Vec<usize> = (0..n - k).collect();
     let held_idx: Vec<usize> = (n - k..n).collect();
     let fit_targets = [condition.target(&fit_idx)];
-    let mut models = vec![Model { space: &space, targets: &all_targets, starts: vec![start.clone()] }];
+    let mut models = vec![Model {
+        space: &space,
+        targets: &all_targets,
+        starts: vec![start.clone()],
+        stream: 0,
+        search: Search::Global,
+    }];
     if k > 0 {
-        models.push(Model { space: &space, targets: &fit_targets, starts: vec![start] });
+        models.push(Model {
+            space: &space,
+            targets: &fit_targets,
+            starts: vec![start],
+            stream: 1,
+            search: Search::Global,
+        });
     }
     log(format!(
         "fit: {} particles per simulation (screen {}), DE {} x {} generations + {} compass iterations{}",
@@ -220,7 +232,7 @@ fn bootstrap(
                 .map(|p| (p, solver.value(&Some(p.bins.clone()), t, solver.particles)))
                 .min_by(|a, b| a.1.total_cmp(&b.1))
                 .map_or_else(|| full.x.clone(), |(p, _)| p.x.clone());
-            Model { space, targets: t, starts: vec![start] }
+            Model { space, targets: t, starts: vec![start], stream: 0, search: Search::FromStarts }
         })
         .collect();
     // a resample's optimum lies near the full data's: finer steps than the main polish's,
