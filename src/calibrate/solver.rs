@@ -227,6 +227,9 @@ impl Solver {
                 Member { pop: pop.into_iter().map(|u| (u, f64::INFINITY)).collect(), rng, evaluations: 0 }
             })
             .collect();
+        if members.iter().all(|m| m.pop.is_empty()) {
+            return members;
+        }
         let initial: Vec<Vec<Vec<f64>>> =
             members.iter().map(|mem| mem.pop.iter().map(|(u, _)| u.clone()).collect()).collect();
         for (mem, scored) in members.iter_mut().zip(self.score(sim, models, &initial, self.screen_particles)) {

@@ -147,6 +147,30 @@ pub const AIR_VISCOSITY: f64 = 1.81e-5;
 pub const QUADRATIC_DRAG_STEP_S: f64 = 0.02;
 
 impl QuadraticDrag {
+    /// The diameter, m, of grains of `density_kg_m3` whose drag over speed at `speed_m_s`,
+    /// 18 μ / (ρ_p d²) · (1 + 0.15 Re^0.687) (Eq. 4.17), is `k_drag` (1/s): the quadratic
+    /// drag that matches a linear drag at that speed. Clamped to [1 µm, 1 m]; the drag falls
+    /// monotonically with the diameter, so bisection in log d finds it.
+    pub fn equivalent_diameter(k_drag: f64, density_kg_m3: f64, speed_m_s: f64) -> f64 {
+        let drag = |d: f64| QuadraticDrag { diameter_m: d, density_kg_m3 }.drag_over_speed(speed_m_s);
+        let (mut lo, mut hi) = (1e-6_f64.ln(), 0.0_f64);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if drag(mid.exp()) > k_drag {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        (0.5 * (lo + hi)).exp()
+    }
+
+    /// The drag over speed, 1/s, at `speed_m_s` (Eq. 4.17 with Eq. 4.18's Re).
+    pub fn drag_over_speed(&self, speed_m_s: f64) -> f64 {
+        let (stokes, re_per_speed) = self.coefficients();
+        stokes * (1.0 + 0.15 * (re_per_speed * speed_m_s.abs()).powf(0.687))
+    }
+
     /// Stokes part 18 μ / (ρ_p d²), 1/s, and Re per unit speed ρ_air d / μ, s/m.
     pub fn coefficients(&self) -> (f64, f64) {
         (
