@@ -909,12 +909,12 @@ pub fn diagnose(
         let space = Space::new(shared.clone(), &pair, &conditions);
         let starts = pair_starts(&space, [beating[0], beating[1]], &baseline);
         // Both singles were searched over their whole boxes, so the pair is polished from
-        // them (no evolution of its own): from each single's fit with the other effect at
-        // the other's fitted values, and from each single nested in the pair (the other
-        // effect off) where the other effect has an "off" value. The nested start keeps the
-        // pair from ending worse than that single; before, with starts only of the nested
-        // kind, a pair with quadratic drag (no "off" inside its box) lost the sled-motion
-        // fit altogether and ended at 46.9 %² against sled-motion's own 32.1 (campaign uA).
+        // their fits (no evolution of its own; pair_starts says which points). A pair with
+        // quadratic drag does not contain the other single, since quadratic drag replaces
+        // the linear k_drag: on campaign uA (an unstated sled motion, linear drag) the pair
+        // sled-motion + quadratic-drag still ends at quadratic drag's own point, 46.9 %²
+        // on the fit streams against sled-motion's 32.1, and its improvement over that
+        // single is reported negative.
         let model = Model { space: &space, targets: &targets, starts, stream: 0, search: Search::FromStarts };
         let fit = solver.fit(&sim, &[model], log)?.remove(0);
         let mut m = new_result(&space, fit, baseline_dim);
