@@ -51,7 +51,9 @@ cargo clippy --release --locked --workspace --all-targets -- -D warnings || {
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
 status=0
-cargo test --release --locked --all-targets --no-fail-fast 2>&1 | tee "$log" || status=$?
+# --workspace: the benchmarks too (benches/, their own package so that plain `cargo test` does
+# not compile criterion); the Python package is built and tested by pip and pytest below.
+cargo test --release --locked --workspace --exclude sawtooth-py --all-targets --no-fail-fast 2>&1 | tee "$log" || status=$?
 # One closing line over every test binary (cargo's own last line belongs to whichever
 # target ran last, possibly one without tests).
 awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^failed/) f += $i } }
@@ -80,7 +82,7 @@ if ! .venv/bin/python -m pip --version >/dev/null 2>&1; then
 fi
 {
     .venv/bin/python -m pip install -q maturin pytest numpy pymoo pandas matplotlib &&
-        # the CLI the tests compare with: built by `cargo test --all-targets` above; a separate
+        # the CLI the tests compare with: built by `cargo test ... --all-targets` above; a separate
         # `cargo build` would resolve without the dev-dependencies' features and recompile wgpu
         { [ -x target/release/sawtooth ] || cargo build --release --locked --bin sawtooth; } &&
         MATURIN_PEP517_ARGS="--locked" .venv/bin/python -m pip install -q ./python &&

@@ -404,8 +404,8 @@ pub fn launch_points(
 }
 
 /// [`launch_points`] compiled for x86-64-v3 ([`crate::x86_64_v3`]): the candidate tests run
-/// on four f64 lanes instead of two (preparation 14–16 % faster, `cargo bench --bench
-/// engines -- prepare`), to the same bits (tested below).
+/// on four f64 lanes instead of two (preparation 14–16 % faster, `cargo bench -p
+/// sawtooth-benches --bench engines -- prepare`), to the same bits (tested below).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,movbe,popcnt,sse3,ssse3,sse4.1,sse4.2")]
 fn x86_64_v3_launch_points(
