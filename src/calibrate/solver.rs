@@ -474,6 +474,21 @@ mod tests {
         crate::calibrate::condition::test3()
     }
 
+    /// A solver small enough for a unit test: 6 members, 3 generations, tens of particles.
+    fn small_solver(seed: u64) -> Solver {
+        Solver {
+            objective: ObjectiveKind::Sse,
+            pop: 6,
+            generations: 3,
+            screen_particles: 40,
+            particles: 60,
+            polish_iterations: 2,
+            first_step: FIRST_STEP,
+            min_step: MIN_STEP,
+            seed,
+        }
+    }
+
     #[test]
     fn every_generation_of_every_model_is_one_engine_call() {
         let conditions = vec![test3(), test3()];
@@ -491,17 +506,7 @@ mod tests {
                 search: Search::Global,
             },
         ];
-        let solver = Solver {
-            objective: ObjectiveKind::Sse,
-            pop: 6,
-            generations: 3,
-            screen_particles: 40,
-            particles: 60,
-            polish_iterations: 2,
-            first_step: FIRST_STEP,
-            min_step: MIN_STEP,
-            seed: 1,
-        };
+        let solver = small_solver(1);
         let fits = solver.fit(&sim, &models, &mut |_| {}).unwrap();
         let calls = engine.calls.lock().unwrap().clone();
         // initial population + 3 generations (2 models x 6 points x 2 conditions each), the
@@ -520,20 +525,6 @@ mod tests {
             again.iter().map(|f| f.x.clone()).collect::<Vec<_>>(),
             fits.iter().map(|f| f.x.clone()).collect::<Vec<_>>()
         );
-    }
-
-    fn small_solver(seed: u64) -> Solver {
-        Solver {
-            objective: ObjectiveKind::Sse,
-            pop: 6,
-            generations: 3,
-            screen_particles: 40,
-            particles: 60,
-            polish_iterations: 2,
-            first_step: FIRST_STEP,
-            min_step: MIN_STEP,
-            seed,
-        }
     }
 
     #[test]
