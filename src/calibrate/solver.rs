@@ -30,16 +30,12 @@ use super::space::Space;
 use super::target::{ObjectiveKind, Target};
 
 /// One model to fit: its space, what it is fitted to, extra starting points (parameter
-/// units), its random stream and how it is searched.
+/// units) and how it is searched.
 pub struct Model<'a> {
     pub space: &'a Space,
     /// One target per condition of the simulator.
     pub targets: &'a [Target],
     pub starts: Vec<Vec<f64>>,
-    /// The stream the model's differential evolution draws from (with the solver's seed). A
-    /// model's fit depends on its own stream, not on which other models share the batch or
-    /// where it stands in it: a caller that drops a model from a batch changes no other fit.
-    pub stream: u64,
     pub search: Search,
 }
 
@@ -47,8 +43,11 @@ pub struct Model<'a> {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Search {
     /// Differential evolution over the whole box, then the polish from its best point and
-    /// the model's starts.
-    Global,
+    /// the model's starts. The evolution draws from random stream `stream` (with the
+    /// solver's seed): a model's fit depends on its own stream, not on which other models
+    /// share the batch or where it stands in it, so a caller that drops a model from a
+    /// batch changes no other fit.
+    Global { stream: u64 },
     /// The polish from the model's starts alone (at least one), for a model whose starts
     /// come from a global search of its own (the diagnosis's motion screen). It shares the
     /// batch's polish, one engine call per iteration with the others.
@@ -214,10 +213,14 @@ impl Solver {
         let mut members: Vec<Member> = models
             .iter()
             .map(|model| {
-                let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (0xCA11_B000 + model.stream));
-                if model.search == Search::FromStarts {
-                    return Member { pop: Vec::new(), rng, evaluations: 0 };
-                }
+                let stream = match model.search {
+                    Search::Global { stream } => stream,
+                    // an empty population, whose generator never draws
+                    Search::FromStarts => {
+                        return Member { pop: Vec::new(), rng: ChaCha8Rng::seed_from_u64(seed), evaluations: 0 }
+                    }
+                };
+                let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (0xCA11_B000 + stream));
                 let d = model.space.dim();
                 let mut pop: Vec<Vec<f64>> =
                     model.starts.iter().map(|x| model.space.to_unit(x)).take(self.pop).collect();
@@ -497,13 +500,12 @@ mod tests {
         let space = Space::new(shared_params(&conditions), &[], &conditions);
         let targets: Vec<Target> = conditions.iter().map(Condition::target_all).collect();
         let models = [
-            Model { space: &space, targets: &targets, starts: vec![], stream: 0, search: Search::Global },
+            Model { space: &space, targets: &targets, starts: vec![], search: Search::Global { stream: 0 } },
             Model {
                 space: &space,
                 targets: &targets,
                 starts: vec![vec![0.5, 0.5, 5.0]],
-                stream: 1,
-                search: Search::Global,
+                search: Search::Global { stream: 1 },
             },
         ];
         let solver = small_solver(1);
@@ -534,7 +536,8 @@ mod tests {
         let sim = Simulator { engine: &*engine, conditions: &conditions };
         let space = Space::new(shared_params(&conditions), &[], &conditions);
         let targets: Vec<Target> = conditions.iter().map(Condition::target_all).collect();
-        let model = |stream| Model { space: &space, targets: &targets, starts: vec![], stream, search: Search::Global };
+        let model =
+            |stream| Model { space: &space, targets: &targets, starts: vec![], search: Search::Global { stream } };
         let solver = small_solver(3);
         let together = solver.fit(&sim, &[model(3), model(4)], &mut |_| {}).unwrap();
         let alone = solver.fit(&sim, &[model(4)], &mut |_| {}).unwrap();
@@ -552,14 +555,9 @@ mod tests {
         let space = Space::new(shared_params(&conditions), &[], &conditions);
         let targets: Vec<Target> = conditions.iter().map(Condition::target_all).collect();
         let start = vec![0.5, 0.5, 5.0];
-        let searched = Model { space: &space, targets: &targets, starts: vec![], stream: 0, search: Search::Global };
-        let from_start = || Model {
-            space: &space,
-            targets: &targets,
-            starts: vec![start.clone()],
-            stream: 1,
-            search: Search::FromStarts,
-        };
+        let searched = Model { space: &space, targets: &targets, starts: vec![], search: Search::Global { stream: 0 } };
+        let from_start =
+            || Model { space: &space, targets: &targets, starts: vec![start.clone()], search: Search::FromStarts };
         let solver = small_solver(5);
         let fits = solver.fit(&sim, &[searched, from_start()], &mut |_| {}).unwrap();
         let calls = engine.calls.lock().unwrap().clone();
@@ -574,7 +572,7 @@ mod tests {
         );
         assert!(fits[1].evaluations < fits[0].evaluations);
         // such a model needs a start
-        let bare = Model { space: &space, targets: &targets, starts: vec![], stream: 1, search: Search::FromStarts };
+        let bare = Model { space: &space, targets: &targets, starts: vec![], search: Search::FromStarts };
         assert!(solver.fit(&sim, &[bare], &mut |_| {}).unwrap_err().to_string().contains("starts"));
     }
 
@@ -587,13 +585,7 @@ mod tests {
         let targets: Vec<[Target; 1]> = (0..5).map(|i| [conditions[0].target(&[i, i + 1, i + 2])]).collect();
         let models: Vec<Model> = targets
             .iter()
-            .map(|t| Model {
-                space: &space,
-                targets: t,
-                starts: vec![vec![5.0]],
-                stream: 0,
-                search: Search::FromStarts,
-            })
+            .map(|t| Model { space: &space, targets: t, starts: vec![vec![5.0]], search: Search::FromStarts })
             .collect();
         let solver = Solver {
             objective: ObjectiveKind::Likelihood,
@@ -619,8 +611,7 @@ mod tests {
             assert_eq!(f.value, solver.value(&Some(f.bins.clone()), models[0].targets, 50).min(f.value));
         }
         // a model without a start is refused
-        let bare =
-            [Model { space: &space, targets: &targets[0], starts: vec![], stream: 0, search: Search::FromStarts }];
+        let bare = [Model { space: &space, targets: &targets[0], starts: vec![], search: Search::FromStarts }];
         assert!(solver.polish(&sim, &bare, &mut |_| {}).unwrap_err().to_string().contains("start"));
     }
 }

@@ -701,7 +701,7 @@ fn pair_starts(space: &Space, singles: [&ModelResult; 2], baseline: &ModelResult
 
 /// The random stream of a single candidate's fit: its place in [`EffectKind::ALL`] (where
 /// it stood in the batch when every candidate was tried, so a full diagnosis fits as it
-/// did when the streams followed the batch). The baseline and a pair are fitted alone, on 0.
+/// did when the streams followed the batch). The baseline, fitted alone, is on 0.
 fn candidate_stream(effects: &[EffectKind]) -> u64 {
     match effects {
         [e] => EffectKind::ALL.iter().position(|k| k == e).expect("every effect is in ALL") as u64,
@@ -779,7 +779,7 @@ pub fn diagnose(
     // the baseline first: its optimum starts every nested effect
     let base_space = Space::new(shared.clone(), &[], &conditions);
     let base_model =
-        Model { space: &base_space, targets: &targets, starts: Vec::new(), stream: 0, search: Search::Global };
+        Model { space: &base_space, targets: &targets, starts: Vec::new(), search: Search::Global { stream: 0 } };
     let base_fit = solver.fit(&sim, &[base_model], log)?.remove(0);
     log(format!("diagnose: baseline: SSE {:.1} %² (fit streams)", base_fit.value));
     let baseline_dim = base_space.dim();
@@ -796,8 +796,7 @@ pub fn diagnose(
             space: sp,
             targets: &targets,
             starts: effect_starts(sp, &base_names, &base_fit.x, effort.pop / 2),
-            stream: candidate_stream(&sp.effects),
-            search: Search::Global,
+            search: Search::Global { stream: candidate_stream(&sp.effects) },
         })
         .collect();
     // an unstated motion is searched by the motion screen, which replaces the candidate's
@@ -916,7 +915,7 @@ pub fn diagnose(
         // on the fit streams against sled-motion's 32.1 (the starts near sled-motion's fit
         // score 149 %² and more: the distributions are steep in the drag law's speed
         // dependence), and its improvement over that single is reported negative.
-        let model = Model { space: &space, targets: &targets, starts, stream: 0, search: Search::FromStarts };
+        let model = Model { space: &space, targets: &targets, starts, search: Search::FromStarts };
         let fit = solver.fit(&sim, &[model], log)?.remove(0);
         let mut m = new_result(&space, fit, baseline_dim);
         rescore(&sim, &[&space], std::slice::from_mut(&mut m), particles, streams, seed);

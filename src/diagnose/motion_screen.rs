@@ -140,7 +140,7 @@ pub fn motion_start(
     let models: Vec<Model> = spaces
         .iter()
         .enumerate()
-        .map(|(g, s)| Model { space: s, targets, starts: starts.clone(), stream: g as u64, search: Search::Global })
+        .map(|(g, s)| Model { space: s, targets, starts: starts.clone(), search: Search::Global { stream: g as u64 } })
         .collect();
     // 1. every grid point's DE
     let screen = Solver { pop: POP, generations: GENERATIONS, ..*solver };
@@ -152,13 +152,7 @@ pub fn motion_start(
     let best: Vec<Model> = spaces
         .iter()
         .zip(&screened)
-        .map(|(s, sc)| Model {
-            space: s,
-            targets,
-            starts: vec![sc.members[0].0.clone()],
-            stream: 0,
-            search: Search::FromStarts,
-        })
+        .map(|(s, sc)| Model { space: s, targets, starts: vec![sc.members[0].0.clone()], search: Search::FromStarts })
         .collect();
     let ranked = full.polish(sim, &best, &mut |_| {})?;
     evaluations += ranked.len() as u64;
@@ -188,13 +182,7 @@ pub fn motion_start(
     let polish = Solver { polish_iterations: POLISH, ..*solver };
     let models: Vec<Model> = chosen
         .iter()
-        .map(|g| Model {
-            space: &spaces[*g],
-            targets,
-            starts: vec![ranked[*g].x.clone()],
-            stream: 0,
-            search: Search::FromStarts,
-        })
+        .map(|g| Model { space: &spaces[*g], targets, starts: vec![ranked[*g].x.clone()], search: Search::FromStarts })
         .collect();
     let polished = polish.polish(sim, &models, &mut |_| {})?;
     evaluations += polished.iter().map(|f| f.evaluations).sum::<u64>();

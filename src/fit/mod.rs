@@ -134,16 +134,14 @@ pub fn fit(
         space: &space,
         targets: &all_targets,
         starts: vec![start.clone()],
-        stream: 0,
-        search: Search::Global,
+        search: Search::Global { stream: 0 },
     }];
     if k > 0 {
         models.push(Model {
             space: &space,
             targets: &fit_targets,
             starts: vec![start],
-            stream: 1,
-            search: Search::Global,
+            search: Search::Global { stream: 1 },
         });
     }
     log(format!(
@@ -232,7 +230,7 @@ fn bootstrap(
                 .map(|p| (p, solver.value(&Some(p.bins.clone()), t, solver.particles)))
                 .min_by(|a, b| a.1.total_cmp(&b.1))
                 .map_or_else(|| full.x.clone(), |(p, _)| p.x.clone());
-            Model { space, targets: t, starts: vec![start], stream: 0, search: Search::FromStarts }
+            Model { space, targets: t, starts: vec![start], search: Search::FromStarts }
         })
         .collect();
     // a resample's optimum lies near the full data's: finer steps than the main polish's,
