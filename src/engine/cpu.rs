@@ -135,6 +135,11 @@ pub fn run_particles<T: Real>(
         (Some(d64), Some(ph64)) if lanes::applies(ph64) && lanes::available() => Some((d64, ph64)),
         _ => None,
     };
+    // flights in pieces (sled motion, quadratic drag) likewise, piece by piece
+    let piecewise = match (any_d.downcast_ref::<KDesign<f64>>(), any_ph.downcast_ref::<KPhysics<f64>>()) {
+        (Some(d64), Some(ph64)) if lanes::applies_piecewise(ph64) && lanes::available() => Some((d64, ph64)),
+        _ => None,
+    };
     // and the launch factors' draws of every engine run are made sixteen at a time
     let draw_lanes = lanes::available();
     // the indices of the particles still flying, for the lanes
@@ -239,6 +244,30 @@ pub fn run_particles<T: Real>(
                     };
                     record(i as usize, p, flown);
                 }
+            }
+        } else if let Some((d64, ph64)) = piecewise {
+            // as `fly_particle`: each flight's pieces searched (on the lanes), then the landing
+            let any_parts: &dyn Any = &parts;
+            let parts64 = any_parts.downcast_ref::<Vec<KParticle<f64>>>().expect("T is f64 here");
+            let flights = lanes::first_hits_piecewise(d64, ph64, parts64, &to_fly, bounce);
+            for ((h, fl, start), &i) in flights.into_iter().zip(&to_fly) {
+                let p = &mut parts[i as usize];
+                let hit = Hit {
+                    found: h.found,
+                    t: T::c(h.t),
+                    pos: [T::c(h.pos[0]), T::c(h.pos[1])],
+                    tooth: h.tooth,
+                    surface: h.surface,
+                };
+                let fl = Flight {
+                    p0: [T::c(fl.p0[0]), T::c(fl.p0[1])],
+                    v0: [T::c(fl.v0[0]), T::c(fl.v0[1])],
+                    g: T::c(fl.g),
+                    k: T::c(fl.k),
+                    drift: [T::c(fl.drift[0]), T::c(fl.drift[1])],
+                };
+                let flown = land(&d, &ph, p, i, bounce, hit, &fl, T::c(start));
+                record(i as usize, p, flown);
             }
         } else {
             for (i, p) in parts.iter_mut().enumerate() {

@@ -669,12 +669,67 @@ fn schiller_naumann_k<T: Real>(ph: &KPhysics<T>, speed: T) -> T {
     ph.qd_k0 * (T::one() + T::c(0.15) * re.powf(T::c(0.687)))
 }
 
-/// The first impact of a flight split into pieces: where the sled's motion changes (each
-/// piece a drifting flight in the sled frame) and, with quadratic drag, every `qd_step`
-/// (each piece a Stokes flight with k from the speed at its midpoint). Returns the hit (time
+/// The next piece of a flight split into pieces, for the particle `q` as it is at the
+/// piece's start: pieces end where the sled's motion changes (each piece a drifting flight
+/// in the sled frame) and, with quadratic drag, every `qd_step` (each piece a Stokes flight
+/// with k from the speed at its midpoint). Returns the piece's flight, the clock at its end
+/// and its length (infinite for the last piece).
+#[inline(always)]
+pub fn next_piece<T: Real>(d: &KDesign<T>, ph: &KPhysics<T>, q: &KParticle<T>) -> (Flight<T>, T, T) {
+    let (drift, mut phase_end) =
+        if ph.sled_speed > T::zero() { sled_phase(d, ph, q.clock) } else { ([T::zero(); 2], T::infinity()) };
+    let mut k = q.k_drag;
+    if ph.qd_step > T::zero() {
+        // midpoint rule for the drag rate: predict the speed half a piece ahead with the
+        // rate at the start, fly the piece with the rate there (second order in the step)
+        phase_end = phase_end.min(q.clock + ph.qd_step);
+        let k0 = schiller_naumann_k(ph, (q.vel[0] * q.vel[0] + q.vel[1] * q.vel[1]).sqrt());
+        let probe = Flight { p0: q.pos, v0: q.vel, g: ph.g, k: k0, drift };
+        let vh = probe.vel(T::c(0.5) * (phase_end - q.clock));
+        k = schiller_naumann_k(ph, (vh[0] * vh[0] + vh[1] * vh[1]).sqrt());
+    }
+    let fl = Flight { p0: q.pos, v0: q.vel, g: ph.g, k, drift };
+    (fl, phase_end, phase_end - q.clock)
+}
+
+/// After the search of one piece (`next_piece`'s `fl`, ending at clock `phase_end` after
+/// `limit`) found `hit`: the flight's first impact (time counted from the start of the whole
+/// flight, `elapsed` being the piece's start) when the flight ends in this piece; otherwise
+/// None, with `q` moved to the piece's end and `elapsed` to the next piece's start.
+#[inline(always)]
+pub fn end_of_piece<T: Real>(
+    d: &KDesign<T>,
+    q: &mut KParticle<T>,
+    fl: &Flight<T>,
+    (phase_end, limit): (T, T),
+    mut hit: Hit<T>,
+    elapsed: &mut T,
+) -> Option<Hit<T>> {
+    if hit.found || !limit.is_finite() {
+        hit.t = hit.t + *elapsed;
+        return Some(hit);
+    }
+    // no impact in this phase: continue from where the particle is when it ends
+    q.pos = fl.pos(limit);
+    q.vel = fl.vel(limit);
+    // Below the base line (through this frame's p1) without a hit: the flight crossed the
+    // line beyond the conveyor's ends and falls away (lost, as in `first_hit`). The time
+    // cap keeps a pathological flight from looping (no flight lasts a minute on the rig).
+    if dot(q.pos, d.n_base) < T::zero() || *elapsed + limit > T::c(MAX_FLIGHT_S) {
+        hit.t = hit.t + *elapsed;
+        return Some(hit);
+    }
+    q.surface = SURFACE_NONE; // airborne: no surface is being left any more
+    q.clock = phase_end;
+    *elapsed = *elapsed + limit;
+    None
+}
+
+/// The first impact of a flight split into pieces ([`next_piece`]). Returns the hit (time
 /// counted from the start of the whole flight) and the flight of the piece it lies in, with
-/// that piece's start time.
-fn first_hit_piecewise<T: Real>(
+/// that piece's start time. The cpu engine's lanes fly eight particles' pieces at once
+/// (`lanes::first_hits_piecewise`) with the same two steps around each piece's search.
+pub fn first_hit_piecewise<T: Real>(
     d: &KDesign<T>,
     ph: &KPhysics<T>,
     p: &KParticle<T>,
@@ -683,38 +738,12 @@ fn first_hit_piecewise<T: Real>(
     let mut q = *p;
     let mut elapsed = T::zero();
     loop {
-        let (drift, mut phase_end) =
-            if ph.sled_speed > T::zero() { sled_phase(d, ph, q.clock) } else { ([T::zero(); 2], T::infinity()) };
-        let mut k = q.k_drag;
-        if ph.qd_step > T::zero() {
-            // midpoint rule for the drag rate: predict the speed half a piece ahead with the
-            // rate at the start, fly the piece with the rate there (second order in the step)
-            phase_end = phase_end.min(q.clock + ph.qd_step);
-            let k0 = schiller_naumann_k(ph, (q.vel[0] * q.vel[0] + q.vel[1] * q.vel[1]).sqrt());
-            let probe = Flight { p0: q.pos, v0: q.vel, g: ph.g, k: k0, drift };
-            let vh = probe.vel(T::c(0.5) * (phase_end - q.clock));
-            k = schiller_naumann_k(ph, (vh[0] * vh[0] + vh[1] * vh[1]).sqrt());
+        let (fl, phase_end, limit) = next_piece(d, ph, &q);
+        let hit = first_hit_in(d, ph, &q, &fl, bounce, limit);
+        let start = elapsed;
+        if let Some(hit) = end_of_piece(d, &mut q, &fl, (phase_end, limit), hit, &mut elapsed) {
+            return (hit, fl, start);
         }
-        let fl = Flight { p0: q.pos, v0: q.vel, g: ph.g, k, drift };
-        let limit = phase_end - q.clock;
-        let mut hit = first_hit_in(d, ph, &q, &fl, bounce, limit);
-        if hit.found || !limit.is_finite() {
-            hit.t = hit.t + elapsed;
-            return (hit, fl, elapsed);
-        }
-        // no impact in this phase: continue from where the particle is when it ends
-        q.pos = fl.pos(limit);
-        q.vel = fl.vel(limit);
-        // Below the base line (through this frame's p1) without a hit: the flight crossed the
-        // line beyond the conveyor's ends and falls away (lost, as in `first_hit`). The time
-        // cap keeps a pathological flight from looping (no flight lasts a minute on the rig).
-        if dot(q.pos, d.n_base) < T::zero() || elapsed + limit > T::c(MAX_FLIGHT_S) {
-            hit.t = hit.t + elapsed;
-            return (hit, fl, elapsed);
-        }
-        q.surface = SURFACE_NONE; // airborne: no surface is being left any more
-        q.clock = phase_end;
-        elapsed = elapsed + limit;
     }
 }
 

@@ -16,9 +16,11 @@
 //! scalar, 45 % slower than the one-particle search (BENCHMARKS.md).
 
 use super::kernel::{
-    first_hit, Hit, KDesign, KParticle, KPhysics, SURFACE_BASE, SURFACE_CATCH, SURFACE_NONE, SURFACE_RAMP,
+    end_of_piece, first_hit, first_hit_in, next_piece, Hit, KDesign, KParticle, KPhysics, SURFACE_BASE, SURFACE_CATCH,
+    SURFACE_NONE, SURFACE_RAMP,
 };
 use crate::model::collision::Restitution;
+use crate::model::flight::Flight;
 
 /// Particles searched together: eight f64 lanes, one AVX-512 register.
 pub const LANES: usize = 8;
@@ -28,6 +30,51 @@ pub const LANES: usize = 8;
 /// rule skips roots the lanes would take). Vacuum (the Moon) and Stokes drag (Earth) both.
 pub fn applies(ph: &KPhysics<f64>) -> bool {
     ph.sled_speed == 0.0 && ph.qd_step == 0.0 && ph.min_hop == 0.0
+}
+
+/// Whether [`first_hits_piecewise`] gives the scalar search's hits for these physics:
+/// flights in pieces (sled motion, quadratic drag) and no minimum hop.
+pub fn applies_piecewise(ph: &KPhysics<f64>) -> bool {
+    (ph.sled_speed > 0.0 || ph.qd_step > 0.0) && ph.min_hop == 0.0
+}
+
+/// One lane's flight for [`avx512::first_hits`]: where it starts (the particle's position,
+/// surface and tooth frame), its launch velocity and drag rate, and how long the search
+/// looks (infinite for a flight in one piece).
+#[derive(Clone, Copy)]
+struct LaneFlight {
+    pos: [f64; 2],
+    vel: [f64; 2],
+    surface: u32,
+    tooth: i32,
+    k: f64,
+    limit: f64,
+}
+
+impl LaneFlight {
+    fn of(p: &KParticle<f64>, k: f64, limit: f64) -> Self {
+        LaneFlight { pos: p.pos, vel: p.vel, surface: p.surface, tooth: p.tooth, k, limit }
+    }
+}
+
+/// The lanes' search of 1 to [`LANES`] flights (lanes beyond them repeat the first and are
+/// dropped).
+fn search(d: &KDesign<f64>, ph: &KPhysics<f64>, flights: &[LaneFlight], bounce: u32) -> [Hit<f64>; LANES] {
+    assert!(available() && !flights.is_empty() && flights.len() <= LANES);
+    let lanes: [LaneFlight; LANES] = std::array::from_fn(|l| flights[if l < flights.len() { l } else { 0 }]);
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: the CPU has AVX-512F (asserted above).
+    return unsafe {
+        if ph.k_drag > 0.0 {
+            avx512::first_hits::<true>(d, ph, &lanes, bounce)
+        } else {
+            avx512::first_hits::<false>(d, ph, &lanes, bounce)
+        }
+    };
+    #[allow(unreachable_code)]
+    {
+        unreachable!("available() is false off x86-64")
+    }
 }
 
 /// Whether this CPU runs [`first_hits`] (AVX-512F, not capped by `SAWTOOTH_CPU_LEVEL`; the
@@ -55,17 +102,14 @@ pub fn first_hits(
     // every grain has drag when the air has (Stokes k_drag > 0, scaled per grain when
     // polydisperse), none in vacuum
     let drag = ph.k_drag > 0.0;
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: the CPU has AVX-512F (asserted above).
-    let mut hits = unsafe {
-        if drag {
-            avx512::first_hits::<true>(d, ph, parts, idx, bounce)
-        } else {
-            avx512::first_hits::<false>(d, ph, parts, idx, bounce)
-        }
-    };
-    #[cfg(not(target_arch = "x86_64"))]
-    let mut hits: [Hit<f64>; LANES] = unreachable!("available() is false off x86-64");
+    let flights: Vec<LaneFlight> = idx
+        .iter()
+        .map(|&i| {
+            let p = &parts[i as usize];
+            LaneFlight::of(p, if drag { p.k_drag } else { 0.0 }, f64::INFINITY)
+        })
+        .collect();
+    let mut hits = search(d, ph, &flights, bounce);
     // a grain whose own k_drag rounds to 0 (polydisperse, an extreme draw) flies in vacuum:
     // the scalar search, which picks the flight's form per grain, takes it (in vacuum every
     // grain's k_drag is 0 times its factor, and the vacuum search never reads it)
@@ -78,6 +122,77 @@ pub fn first_hits(
         }
     }
     hits
+}
+
+/// A flight's first impact (time from the flight's start), the flight of the piece it lies
+/// in, and that piece's start: what `kernel::first_hit_piecewise` returns.
+pub type PieceHit = (Hit<f64>, Flight<f64>, f64);
+
+/// `kernel::first_hit_piecewise` of the particles `parts[i]`, i in `idx` (any number), on a
+/// CPU where [`available`] holds and for physics where [`applies_piecewise`] does: for each,
+/// the hit (time from the flight's start), the piece's flight it lies in and that piece's
+/// start, to the scalar search's bits. Eight particles fly at a time, each from piece to
+/// piece with the scalar `next_piece` and `end_of_piece`; a piece in still air (the sled at
+/// rest, every quadratic-drag piece) is searched on the lanes, a drifting one (the sled
+/// returning) or a grain without drag in air by the scalar search. A particle whose flight
+/// ends leaves its lane to the next.
+pub fn first_hits_piecewise(
+    d: &KDesign<f64>,
+    ph: &KPhysics<f64>,
+    parts: &[KParticle<f64>],
+    idx: &[u32],
+    bounce: u32,
+) -> Vec<PieceHit> {
+    assert!(applies_piecewise(ph) && available());
+    let drag = ph.k_drag > 0.0;
+    /// A particle in flight: its place in `idx`, its state at its piece's start and when
+    /// that piece starts.
+    struct Slot {
+        n: usize,
+        q: KParticle<f64>,
+        elapsed: f64,
+    }
+    let mut out: Vec<Option<PieceHit>> = vec![None; idx.len()];
+    let mut waiting = 0..idx.len();
+    let mut slots: Vec<Slot> = Vec::with_capacity(LANES);
+    loop {
+        while slots.len() < LANES {
+            let Some(n) = waiting.next() else { break };
+            slots.push(Slot { n, q: parts[idx[n] as usize], elapsed: 0.0 });
+        }
+        if slots.is_empty() {
+            break;
+        }
+        let pieces: Vec<(Flight<f64>, f64, f64)> = slots.iter().map(|s| next_piece(d, ph, &s.q)).collect();
+        let on_lanes: Vec<usize> =
+            (0..slots.len()).filter(|&i| pieces[i].0.drift == [0.0; 2] && (!drag || pieces[i].0.k > 0.0)).collect();
+        let mut hits = [Hit::default(); LANES];
+        if !on_lanes.is_empty() {
+            let flights: Vec<LaneFlight> = on_lanes
+                .iter()
+                .map(|&i| LaneFlight::of(&slots[i].q, if drag { pieces[i].0.k } else { 0.0 }, pieces[i].2))
+                .collect();
+            let found = search(d, ph, &flights, bounce);
+            for (l, &i) in on_lanes.iter().enumerate() {
+                hits[i] = found[l];
+            }
+        }
+        for (i, (slot, piece)) in slots.iter().zip(&pieces).enumerate() {
+            if !on_lanes.contains(&i) {
+                hits[i] = first_hit_in(d, ph, &slot.q, &piece.0, bounce, piece.2);
+            }
+        }
+        for i in (0..slots.len()).rev() {
+            let (fl, phase_end, limit) = pieces[i];
+            let slot = &mut slots[i];
+            let start = slot.elapsed;
+            if let Some(hit) = end_of_piece(d, &mut slot.q, &fl, (phase_end, limit), hits[i], &mut slot.elapsed) {
+                out[slot.n] = Some((hit, fl, start));
+                slots.swap_remove(i);
+            }
+        }
+    }
+    out.into_iter().map(|o| o.expect("every flight ends")).collect()
 }
 
 /// The scalar search for the rare grain the lanes leave to it, kept out of line.
@@ -861,23 +976,24 @@ mod avx512 {
     /// without drift or time limit, step by step; whole numbers (teeth, codes) ride as f64.
     /// `DRAG`: every lane's grain has Stokes drag (k_drag > 0), else none has.
     #[target_feature(enable = "avx512f")]
-    pub fn first_hits<const DRAG: bool>(
+    pub(super) fn first_hits<const DRAG: bool>(
         d: &KDesign<f64>,
         ph: &KPhysics<f64>,
-        parts: &[KParticle<f64>],
-        idx: &[u32],
+        lanes: &[LaneFlight; LANES],
         bounce: u32,
     ) -> [Hit<f64>; LANES] {
-        let mut a = [[0.0; LANES]; 7];
-        for l in 0..LANES {
-            let p = &parts[idx[if l < idx.len() { l } else { 0 }] as usize];
-            (a[0][l], a[1][l], a[2][l], a[3][l]) = (p.pos[0], p.pos[1], p.vel[0], p.vel[1]);
-            (a[4][l], a[5][l]) = (p.surface as f64, p.tooth as f64);
+        let mut a = [[0.0; LANES]; 8];
+        for (l, fl) in lanes.iter().enumerate() {
+            (a[0][l], a[1][l], a[2][l], a[3][l]) = (fl.pos[0], fl.pos[1], fl.vel[0], fl.vel[1]);
+            (a[4][l], a[5][l], a[7][l]) = (fl.surface as f64, fl.tooth as f64, fl.limit);
             if DRAG {
-                a[6][l] = p.k_drag;
+                a[6][l] = fl.k;
             }
         }
         let k = load(&a[6]);
+        // how long each lane's search looks: infinite for a flight in one piece, a piece's
+        // length otherwise (`first_hit_in`'s t_limit)
+        let limit = load(&a[7]);
         let (px, py, vx, vy) = (load(&a[0]), load(&a[1]), load(&a[2]), load(&a[3]));
         // the terminal velocity as `Flight` computes it, -g / k
         let vinf = if DRAG { div(neg(sp(ph.g)), k) } else { sp(0.0) };
@@ -891,7 +1007,7 @@ mod avx512 {
         // The base line through every p1; its crossing bounds the flight.
         let n_base = (sp(d.n_base[0]), sp(d.n_base[1]));
         let departing_base = eq(surface, sp(SURFACE_BASE as f64));
-        let mut roots = crossings::<DRAG>(!0, &f, c2_g, (zero, zero), n_base, departing_base, zero, inf);
+        let mut roots = crossings::<DRAG>(!0, &f, c2_g, (zero, zero), n_base, departing_base, zero, limit);
         let s0 = mul(neg(kf), sp(d.pitch_len));
         let s1 = add(s0, sp(d.base_length));
         let (tb0, tb1) = (sp(d.t_base[0]), sp(d.t_base[1]));
@@ -905,7 +1021,7 @@ mod avx512 {
         let (qx, qy) = pos_at::<DRAG>(&f, has, t);
         let s = add(mul(qx, tb0), mul(qy, tb1));
         let mut found = has & ge(s, s0) & le(s, add(sp(d.base_length), s0));
-        let horizon = sel(has, t, inf);
+        let horizon = min(sel(has, t, inf), limit);
         let teeth_last = sp((d.teeth - 1) as f64);
         let j = min(max(add(to_index(floor(div(s, sp(d.pitch_len)))), kf), zero), teeth_last);
         let mut best_t = sel(found, t, inf);
@@ -1097,6 +1213,108 @@ mod tests {
             return;
         };
         assert!(compared > 5_000, "{compared} flights compared");
+    }
+
+    /// Flights in pieces: a sled that returns while grains fly (down the slope or along the
+    /// launch, at once or after a delay; lunar and Earth) and quadratic drag (alone, with
+    /// polydisperse sizes, and with a returning sled). Every particle's hit, the piece it lies
+    /// in and that piece's start are the scalar `first_hit_piecewise`'s to the bit, in lane
+    /// groups of every size, and the flights compared include pieces searched on the lanes
+    /// and drifting ones searched by the scalar search.
+    #[test]
+    fn each_lane_finds_the_scalar_piecewise_hit_to_the_bit() {
+        use crate::engine::kernel::first_hit_piecewise;
+        use crate::model::effects::{MotionDirection, QuadraticDrag, SledMotion};
+        if !available() {
+            eprintln!("skipped: this CPU lacks AVX-512F, so the engine does not use the lanes");
+            return;
+        }
+        let sled = |delay_s, return_speed_m_s, direction| SledMotion { delay_s, return_speed_m_s, direction };
+        let drag = QuadraticDrag { diameter_m: 300e-6, density_kg_m3: 2500.0 };
+        let mut cases = Vec::new();
+        for (c, base) in [Scenario::lunar(), Scenario::earth()].into_iter().enumerate() {
+            for (m, motion) in [
+                sled(0.0, 0.3, MotionDirection::Slope),
+                sled(0.05, 0.5, MotionDirection::Slope),
+                sled(0.02, 0.06, MotionDirection::Launch),
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                let mut s = base.clone();
+                s.sim.particles = 100;
+                s.environment.alpha_deg = [0.0, 20.0, 35.0][(c + m) % 3];
+                s.effects.sled_motion = Some(motion);
+                cases.push(s);
+            }
+        }
+        for alpha in [0.0, 30.0] {
+            let mut s = Scenario::earth();
+            s.sim.particles = 100;
+            s.environment.alpha_deg = alpha;
+            s.effects.quadratic_drag = Some(drag);
+            cases.push(s.clone());
+            s.effects.polydisperse = Some(Polydisperse { sigma_ln: 0.4, form: SizeForm::default() });
+            cases.push(s.clone());
+            s.effects.polydisperse = None;
+            s.effects.sled_motion = Some(sled(0.0, 0.25, MotionDirection::Slope));
+            cases.push(s);
+        }
+        let (mut compared, mut drifting, mut pieces) = (0usize, 0usize, 0usize);
+        for (c, s) in cases.iter().enumerate() {
+            let ctx = Context::new(s);
+            let ph = kernel_physics::<f64>(&ctx);
+            assert!(applies_piecewise(&ph) && !applies(&ph), "case {c} flies in pieces");
+            for design in random_valid_designs(s, 3, 70 + c as u64) {
+                let prep = prepare(s, &design).unwrap();
+                let d = kernel_design::<f64>(&prep);
+                let mut parts: Vec<KParticle<f64>> =
+                    prep.launches.iter().enumerate().map(|(i, l)| init_particle(&d, &ph, *l, i as u32)).collect();
+                for bounce in 0..ctx.max_bounces {
+                    for (i, p) in parts.iter_mut().enumerate().filter(|(_, p)| p.state == STATE_FLYING) {
+                        randomise_launch(&d, &ph, p, i as u32, bounce);
+                    }
+                    let flying: Vec<u32> =
+                        (0..parts.len() as u32).filter(|&i| parts[i as usize].state == STATE_FLYING).collect();
+                    if flying.is_empty() {
+                        break;
+                    }
+                    // all at once, then in groups of 1, 2, ..., 7 particles
+                    let mut lane_hits = first_hits_piecewise(&d, &ph, &parts, &flying, bounce);
+                    let mut size = 1 + (bounce as usize % (LANES - 1));
+                    let mut rest = &flying[..];
+                    let mut grouped = Vec::new();
+                    while !rest.is_empty() {
+                        let (group, tail) = rest.split_at(size.min(rest.len()));
+                        grouped.extend(first_hits_piecewise(&d, &ph, &parts, group, bounce));
+                        rest = tail;
+                        size = size % (LANES - 1) + 1;
+                    }
+                    lane_hits.extend(grouped);
+                    for (n, (h, fl, start)) in lane_hits.iter().enumerate() {
+                        let i = flying[n % flying.len()];
+                        let (sh, sfl, sstart) = first_hit_piecewise(&d, &ph, &parts[i as usize], bounce);
+                        let flight_bits =
+                            |f: &Flight<f64>| [f.p0, f.v0, f.drift, [f.k, f.g]].map(|v| v.map(f64::to_bits));
+                        assert_eq!(
+                            (bits(h), flight_bits(fl), start.to_bits()),
+                            (bits(&sh), flight_bits(&sfl), sstart.to_bits()),
+                            "case {c}, bounce {bounce}, particle {i}"
+                        );
+                        compared += 1;
+                        pieces += usize::from(*start > 0.0);
+                        drifting += usize::from(fl.drift != [0.0; 2]);
+                    }
+                    for &i in &flying {
+                        fly_particle(&d, &ph, &mut parts[i as usize], i, bounce);
+                    }
+                }
+            }
+        }
+        assert!(
+            compared > 20_000 && drifting > compared / 50 && pieces > compared / 20,
+            "{compared} flights compared, {drifting} ending in a drifting piece, {pieces} after their first piece"
+        );
     }
 
     /// Lane hits against scalar hits over `cases`: how many flights were compared, and how
@@ -1298,9 +1516,11 @@ mod tests {
 
     /// The cpu engine with its lanes leaves every particle as the scalar kernel's bounce
     /// loop does (randomise every launch, fly, land, one particle at a time): lunar designs
-    /// with and without launch randomisation, Earth's (drag), with and without the effects.
+    /// with and without launch randomisation, Earth's (drag), with and without the effects,
+    /// and with flights in pieces (a returning sled; quadratic drag on Earth).
     #[test]
     fn the_engine_on_lanes_leaves_every_particle_as_the_scalar_loop() {
+        use crate::model::effects::{QuadraticDrag, SledMotion};
         if !available() {
             eprintln!("skipped: this CPU lacks AVX-512F, so the engine does not use the lanes");
             return;
@@ -1314,7 +1534,15 @@ mod tests {
             s.effects.impact_scatter = Some(ImpactScatter { sigma_deg: 4.0, form: TiltForm::default() });
             s.effects.launch_spread = Some(LaunchSpread { speed_spread: 0.2, angle_sigma_deg: 5.0 });
             s.effects.polydisperse = Some(Polydisperse { sigma_ln: 0.3, form: SizeForm::default() });
-            cases.push(s);
+            cases.push(s.clone());
+            // flights in pieces: the sled returning while grains fly, and (in air) quadratic drag
+            s.effects.sled_motion =
+                Some(SledMotion { delay_s: 0.02, return_speed_m_s: 0.3, direction: Default::default() });
+            cases.push(s.clone());
+            if s.environment.k_drag.is_some() {
+                s.effects.quadratic_drag = Some(QuadraticDrag { diameter_m: 300e-6, density_kg_m3: 2500.0 });
+                cases.push(s);
+            }
         }
         for (c, s) in cases.iter().enumerate() {
             let ctx = Context::new(s);
@@ -1361,5 +1589,9 @@ mod tests {
         s.effects.sled_motion =
             Some(SledMotion { delay_s: 0.01, return_speed_m_s: 0.5, direction: Default::default() });
         assert!(!applies(&physics(&s)));
+        // flights in pieces go to the piecewise search, unless the listing's minimum hop applies
+        assert!(applies_piecewise(&physics(&s)));
+        assert!(!applies_piecewise(&physics(&s.clone().into_listing_compat())));
+        assert!(!applies_piecewise(&physics(&Scenario::earth())));
     }
 }
