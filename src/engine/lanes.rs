@@ -1,7 +1,8 @@
 //! The flight search of [`first_hit`](super::kernel::first_hit) for [`LANES`] particles at
-//! once, in f64, for flights of the text's physics in one piece (no sled motion or quadratic
-//! drag, every hop an impact): vacuum parabolas (the lunar batches) and Stokes flights
-//! (Earth's). The branches of the scalar search become masks and selects on AVX-512 lanes,
+//! once, in f64, every hop an impact: vacuum parabolas (the lunar batches) and Stokes
+//! flights (Earth's), in one piece ([`first_hits`]) or in the pieces of a flight with sled
+//! motion or quadratic drag ([`first_hits_piecewise`], `first_hit_in` with a time limit and a
+//! drift). The branches of the scalar search become masks and selects on AVX-512 lanes,
 //! and every lane does the scalar search's IEEE operations in the scalar search's order, so
 //! each lane's hit is the scalar hit to the bit (`tests` below, and
 //! `examples/dev/engine_digest.rs`). A lane whose particle has finished its teeth (or its
@@ -48,12 +49,13 @@ struct LaneFlight {
     surface: u32,
     tooth: i32,
     k: f64,
+    drift: [f64; 2],
     limit: f64,
 }
 
 impl LaneFlight {
-    fn of(p: &KParticle<f64>, k: f64, limit: f64) -> Self {
-        LaneFlight { pos: p.pos, vel: p.vel, surface: p.surface, tooth: p.tooth, k, limit }
+    fn of(p: &KParticle<f64>, k: f64, drift: [f64; 2], limit: f64) -> Self {
+        LaneFlight { pos: p.pos, vel: p.vel, surface: p.surface, tooth: p.tooth, k, drift, limit }
     }
 }
 
@@ -106,7 +108,7 @@ pub fn first_hits(
         .iter()
         .map(|&i| {
             let p = &parts[i as usize];
-            LaneFlight::of(p, if drag { p.k_drag } else { 0.0 }, f64::INFINITY)
+            LaneFlight::of(p, if drag { p.k_drag } else { 0.0 }, [0.0; 2], f64::INFINITY)
         })
         .collect();
     let mut hits = search(d, ph, &flights, bounce);
@@ -132,10 +134,10 @@ pub type PieceHit = (Hit<f64>, Flight<f64>, f64);
 /// CPU where [`available`] holds and for physics where [`applies_piecewise`] does: for each,
 /// the hit (time from the flight's start), the piece's flight it lies in and that piece's
 /// start, to the scalar search's bits. Eight particles fly at a time, each from piece to
-/// piece with the scalar `next_piece` and `end_of_piece`; a piece in still air (the sled at
-/// rest, every quadratic-drag piece) is searched on the lanes, a drifting one (the sled
-/// returning) or a grain without drag in air by the scalar search. A particle whose flight
-/// ends leaves its lane to the next.
+/// piece with the scalar `next_piece` and `end_of_piece`, each piece's search on the lanes
+/// (a drifting piece, the sled returning, searches every tooth of its reach over the whole
+/// piece, as the scalar search does; a grain without drag in air goes to the scalar
+/// search). A particle whose flight ends leaves its lane to the next.
 pub fn first_hits_piecewise(
     d: &KDesign<f64>,
     ph: &KPhysics<f64>,
@@ -164,13 +166,15 @@ pub fn first_hits_piecewise(
             break;
         }
         let pieces: Vec<(Flight<f64>, f64, f64)> = slots.iter().map(|s| next_piece(d, ph, &s.q)).collect();
-        let on_lanes: Vec<usize> =
-            (0..slots.len()).filter(|&i| pieces[i].0.drift == [0.0; 2] && (!drag || pieces[i].0.k > 0.0)).collect();
+        let on_lanes: Vec<usize> = (0..slots.len()).filter(|&i| !drag || pieces[i].0.k > 0.0).collect();
         let mut hits = [Hit::default(); LANES];
         if !on_lanes.is_empty() {
             let flights: Vec<LaneFlight> = on_lanes
                 .iter()
-                .map(|&i| LaneFlight::of(&slots[i].q, if drag { pieces[i].0.k } else { 0.0 }, pieces[i].2))
+                .map(|&i| {
+                    let (fl, _, limit) = &pieces[i];
+                    LaneFlight::of(&slots[i].q, if drag { fl.k } else { 0.0 }, fl.drift, *limit)
+                })
                 .collect();
             let found = search(d, ph, &flights, bounce);
             for (l, &i) in on_lanes.iter().enumerate() {
@@ -529,6 +533,11 @@ mod avx512 {
         /// Stokes k_drag (1/s; 0 in vacuum) and the terminal velocity -g/k of a drag flight.
         k: V,
         vinf: V,
+        /// The sled-motion drift added to the position (zero but where a piece drifts) and
+        /// the lanes whose piece drifts (`Flight::drift` not zero).
+        wx: V,
+        wy: V,
+        drifting: M,
     }
 
     /// `relax`, (1 - e^{-kt})/k (flight.rs), in the lanes of `mask`.
@@ -551,12 +560,18 @@ mod avx512 {
     #[target_feature(enable = "avx512f")]
     #[inline]
     fn pos_at<const DRAG: bool>(f: &Fl, mask: M, t: V) -> (V, V) {
-        if DRAG {
+        let (x, y) = if DRAG {
             // Eq. 4.53-4.54
             let e = relax(f, mask, t);
-            return (add(f.px, mul(f.vx, e)), add(add(f.py, mul(f.vinf, t)), mul(sub(f.vy, f.vinf), e)));
+            (add(f.px, mul(f.vx, e)), add(add(f.py, mul(f.vinf, t)), mul(sub(f.vy, f.vinf), e)))
+        } else {
+            (add(f.px, mul(f.vx, t)), sub(add(f.py, mul(f.vy, t)), mul(mul(f.half_g, t), t)))
+        };
+        if f.drifting == 0 {
+            return (x, y);
         }
-        (add(f.px, mul(f.vx, t)), sub(add(f.py, mul(f.vy, t)), mul(mul(f.half_g, t), t)))
+        // the drift adds to the position where there is one (`Flight::pos`)
+        (sel(f.drifting, add(x, mul(f.wx, t)), x), sel(f.drifting, add(y, mul(f.wy, t)), y))
     }
 
     /// `Flight::time_at_x`, needed in the lanes of `mask`.
@@ -611,7 +626,7 @@ mod avx512 {
         let zero = sp(0.0);
         let c0 = sel(departing, zero, add(mul(nx, sub(f.px, ax)), mul(ny, sub(f.py, ay))));
         let nv = add(mul(nx, f.vx), mul(ny, f.vy));
-        let nw = add(mul(nx, zero), mul(ny, zero)); // the drift term, zero here
+        let nw = add(mul(nx, f.wx), mul(ny, f.wy)); // drift adds to the linear term
         let c1 = add(nv, nw);
         let c2 = mul(sp(c2_g), ny);
         let mut r = Roots { n: zero, r0: zero, r1: zero };
@@ -752,7 +767,7 @@ mod avx512 {
         let (zero, inf) = (sp(0.0), sp(f64::INFINITY));
         let c0 = sel(departing, zero, add(mul(nx, sub(f.px, ax)), mul(ny, sub(f.py, ay))));
         let nv = add(mul(nx, f.vx), mul(ny, f.vy));
-        let nw = add(mul(nx, zero), mul(ny, zero)); // the drift term, zero here
+        let nw = add(mul(nx, f.wx), mul(ny, f.wy)); // drift adds to the linear term
         let mut r = Roots { n: zero, r0: zero, r1: zero };
         let vinf_n = mul(f.vinf, ny);
         let (ca, cb) = (add(vinf_n, nw), sub(nv, vinf_n));
@@ -982,10 +997,11 @@ mod avx512 {
         lanes: &[LaneFlight; LANES],
         bounce: u32,
     ) -> [Hit<f64>; LANES] {
-        let mut a = [[0.0; LANES]; 8];
+        let mut a = [[0.0; LANES]; 10];
         for (l, fl) in lanes.iter().enumerate() {
             (a[0][l], a[1][l], a[2][l], a[3][l]) = (fl.pos[0], fl.pos[1], fl.vel[0], fl.vel[1]);
             (a[4][l], a[5][l], a[7][l]) = (fl.surface as f64, fl.tooth as f64, fl.limit);
+            (a[8][l], a[9][l]) = (fl.drift[0], fl.drift[1]);
             if DRAG {
                 a[6][l] = fl.k;
             }
@@ -997,12 +1013,14 @@ mod avx512 {
         let (px, py, vx, vy) = (load(&a[0]), load(&a[1]), load(&a[2]), load(&a[3]));
         // the terminal velocity as `Flight` computes it, -g / k
         let vinf = if DRAG { div(neg(sp(ph.g)), k) } else { sp(0.0) };
-        let f = Fl { px, py, vx, vy, half_g: sp(0.5 * ph.g), k, vinf };
+        let (wx, wy) = (load(&a[8]), load(&a[9]));
+        let (zero, inf) = (sp(0.0), sp(f64::INFINITY));
+        let drifting = ne(wx, zero) | ne(wy, zero);
+        let f = Fl { px, py, vx, vy, half_g: sp(0.5 * ph.g), k, vinf, wx, wy, drifting };
         let (surface, kf) = (load(&a[4]), load(&a[5]));
         let c2_g = -0.5 * ph.g;
-        let (zero, inf) = (sp(0.0), sp(f64::INFINITY));
-        // `rel_vel` of the scalar search: the velocity plus a zero drift
-        let rel_vel = (add(f.vx, zero), add(f.vy, zero));
+        // `rel_vel` of the scalar search: the velocity plus the drift
+        let rel_vel = (add(f.vx, wx), add(f.vy, wy));
 
         // The base line through every p1; its crossing bounds the flight.
         let n_base = (sp(d.n_base[0]), sp(d.n_base[1]));
@@ -1032,8 +1050,12 @@ mod avx512 {
         // The teeth whose x-extent overlaps the flight's x-range before the horizon.
         let finite = lt(abs(horizon), inf);
         let x_end = sel(finite, pos_at::<DRAG>(&f, finite, horizon).0, sel(ge(f.vx, zero), inf, sp(f64::NEG_INFINITY)));
-        let forward = ge(x_end, f.px);
-        let (xmin, xmax) = (sel(forward, f.px, x_end), sel(forward, x_end, f.px));
+        // with drift x(t) need not be monotone: |x(t) - x0| <= (|vx| + |wx|) t bounds the
+        // range instead
+        let reach = mul(add(abs(f.vx), abs(wx)), horizon);
+        let (x_end, x_start) = (sel(drifting, add(f.px, reach), x_end), sel(drifting, sub(f.px, reach), f.px));
+        let forward = ge(x_end, x_start);
+        let (xmin, xmax) = (sel(forward, x_start, x_end), sel(forward, x_end, x_start));
         let lo = add(to_index(ceil(div(sub(xmin, sp(d.ext_max)), sp(d.pitch[0])))), kf);
         let hi = add(to_index(floor(div(sub(xmax, sp(d.ext_min)), sp(d.pitch[0])))), kf);
         let j_lo = min(max(lo, zero), teeth_last);
@@ -1059,7 +1081,8 @@ mod avx512 {
             let reached = in_range & !gt(xa, xb);
             let (sa, ya) = y_at_x::<DRAG>(&f, reached, xa);
             let (sb, yb) = y_at_x::<DRAG>(&f, reached, xb);
-            let flies_over = gt(xa, xb) | (sa & sb & gt(ya, top) & gt(yb, top));
+            // (a drifting lane's x(t) is not monotone: it searches every tooth of its range)
+            let flies_over = !drifting & (gt(xa, xb) | (sa & sb & gt(ya, top) & gt(yb, top)));
             let live = in_range & !flies_over;
             if live == 0 {
                 continue;
@@ -1084,9 +1107,11 @@ mod avx512 {
                 let x_out = sel(backward, xa, xb);
                 let moving = gt(f.vx, zero) | lt(f.vx, zero);
                 let inside = ge(f.px, xa) & le(f.px, xb);
-                let t_lo = sel(moving, time_at_x::<DRAG>(&f, on & moving, x_in), sel(inside, zero, inf));
+                // a drifting lane searches the whole time (`first_hit_in`: no x-window)
+                let t_lo =
+                    sel(drifting, zero, sel(moving, time_at_x::<DRAG>(&f, on & moving, x_in), sel(inside, zero, inf)));
                 let search_lo = on & !gt(t_lo, t_max);
-                let t_hi = sel(moving, time_at_x::<DRAG>(&f, search_lo & moving, x_out), inf);
+                let t_hi = sel(drifting, inf, sel(moving, time_at_x::<DRAG>(&f, search_lo & moving, x_out), inf));
                 let search = search_lo;
                 let mut roots = crossings::<DRAG>(search, &f, c2_g, (ax, ay), n, departing, t_lo, min(t_max, t_hi));
                 let over = on & !departing & contact(d.pitch_len, &f, rel_vel, (ax, ay), (bx, by), n);
@@ -1219,8 +1244,8 @@ mod tests {
     /// launch, at once or after a delay; lunar and Earth) and quadratic drag (alone, with
     /// polydisperse sizes, and with a returning sled). Every particle's hit, the piece it lies
     /// in and that piece's start are the scalar `first_hit_piecewise`'s to the bit, in lane
-    /// groups of every size, and the flights compared include pieces searched on the lanes
-    /// and drifting ones searched by the scalar search.
+    /// groups of every size, and the flights compared include ones that end after their first
+    /// piece and ones that end in a drifting piece.
     #[test]
     fn each_lane_finds_the_scalar_piecewise_hit_to_the_bit() {
         use crate::engine::kernel::first_hit_piecewise;
