@@ -39,38 +39,55 @@ pub fn applies_piecewise(ph: &KPhysics<f64>) -> bool {
     (ph.sled_speed > 0.0 || ph.qd_step > 0.0) && ph.min_hop == 0.0
 }
 
-/// One lane's flight for [`avx512::first_hits`]: where it starts (the particle's position,
-/// surface and tooth frame), its launch velocity and drag rate, and how long the search
-/// looks (infinite for a flight in one piece).
-#[derive(Clone, Copy)]
-struct LaneFlight {
-    pos: [f64; 2],
-    vel: [f64; 2],
-    surface: u32,
-    tooth: i32,
-    k: f64,
-    drift: [f64; 2],
-    limit: f64,
-}
+/// The lanes' flights for [`avx512::first_hits`], one row per quantity and one column per
+/// lane (filled in place: the lunar batches' search is short enough for a copy to show):
+/// where each starts (the particle's position, surface and tooth frame), its launch velocity
+/// and drag rate, and for a piece how long the search looks and the drift.
+struct LaneFlights([[f64; LANES]; 10]);
 
-impl LaneFlight {
-    fn of(p: &KParticle<f64>, k: f64, drift: [f64; 2], limit: f64) -> Self {
-        LaneFlight { pos: p.pos, vel: p.vel, surface: p.surface, tooth: p.tooth, k, drift, limit }
+impl LaneFlights {
+    const POS: usize = 0;
+    const VEL: usize = 2;
+    const SURFACE: usize = 4;
+    const TOOTH: usize = 5;
+    const K: usize = 6;
+    const LIMIT: usize = 7;
+    const DRIFT: usize = 8;
+
+    fn new() -> Self {
+        LaneFlights([[0.0; LANES]; 10])
+    }
+
+    /// Lane `l` flies particle `p` with drag rate `k` (a flight in one piece).
+    #[inline(always)]
+    fn set(&mut self, l: usize, p: &KParticle<f64>, k: f64) {
+        let a = &mut self.0;
+        (a[Self::POS][l], a[Self::POS + 1][l]) = (p.pos[0], p.pos[1]);
+        (a[Self::VEL][l], a[Self::VEL + 1][l]) = (p.vel[0], p.vel[1]);
+        (a[Self::SURFACE][l], a[Self::TOOTH][l], a[Self::K][l]) = (p.surface as f64, p.tooth as f64, k);
+    }
+
+    /// Lane `l` flies a piece of particle `p`'s flight: drag rate `k`, `drift`, length `limit`.
+    #[inline(always)]
+    fn set_piece(&mut self, l: usize, p: &KParticle<f64>, k: f64, drift: [f64; 2], limit: f64) {
+        self.set(l, p, k);
+        let a = &mut self.0;
+        (a[Self::DRIFT][l], a[Self::DRIFT + 1][l], a[Self::LIMIT][l]) = (drift[0], drift[1], limit);
     }
 }
 
-/// The lanes' search of 1 to [`LANES`] flights (lanes beyond them repeat the first and are
-/// dropped).
-fn search(d: &KDesign<f64>, ph: &KPhysics<f64>, flights: &[LaneFlight], bounce: u32) -> [Hit<f64>; LANES] {
-    assert!(available() && !flights.is_empty() && flights.len() <= LANES);
-    let lanes: [LaneFlight; LANES] = std::array::from_fn(|l| flights[if l < flights.len() { l } else { 0 }]);
+/// The lanes' search of [`LANES`] flights (a caller with fewer repeats the first and drops
+/// its lanes' hits); `pieces`: some may have a time limit or a drift.
+fn search(d: &KDesign<f64>, ph: &KPhysics<f64>, lanes: &LaneFlights, pieces: bool, bounce: u32) -> [Hit<f64>; LANES] {
+    assert!(available());
     #[cfg(target_arch = "x86_64")]
     // SAFETY: the CPU has AVX-512F (asserted above).
     return unsafe {
-        if ph.k_drag > 0.0 {
-            avx512::first_hits::<true>(d, ph, &lanes, bounce)
-        } else {
-            avx512::first_hits::<false>(d, ph, &lanes, bounce)
+        match (ph.k_drag > 0.0, pieces) {
+            (true, false) => avx512::first_hits::<true, false>(d, ph, lanes, bounce),
+            (false, false) => avx512::first_hits::<false, false>(d, ph, lanes, bounce),
+            (true, true) => avx512::first_hits::<true, true>(d, ph, lanes, bounce),
+            (false, true) => avx512::first_hits::<false, true>(d, ph, lanes, bounce),
         }
     };
     #[allow(unreachable_code)]
@@ -104,14 +121,12 @@ pub fn first_hits(
     // every grain has drag when the air has (Stokes k_drag > 0, scaled per grain when
     // polydisperse), none in vacuum
     let drag = ph.k_drag > 0.0;
-    let flights: Vec<LaneFlight> = idx
-        .iter()
-        .map(|&i| {
-            let p = &parts[i as usize];
-            LaneFlight::of(p, if drag { p.k_drag } else { 0.0 }, [0.0; 2], f64::INFINITY)
-        })
-        .collect();
-    let mut hits = search(d, ph, &flights, bounce);
+    let mut flights = LaneFlights::new();
+    for l in 0..LANES {
+        let p = &parts[idx[if l < idx.len() { l } else { 0 }] as usize];
+        flights.set(l, p, if drag { p.k_drag } else { 0.0 });
+    }
+    let mut hits = search(d, ph, &flights, false, bounce);
     // a grain whose own k_drag rounds to 0 (polydisperse, an extreme draw) flies in vacuum:
     // the scalar search, which picks the flight's form per grain, takes it (in vacuum every
     // grain's k_drag is 0 times its factor, and the vacuum search never reads it)
@@ -169,14 +184,13 @@ pub fn first_hits_piecewise(
         let on_lanes: Vec<usize> = (0..slots.len()).filter(|&i| !drag || pieces[i].0.k > 0.0).collect();
         let mut hits = [Hit::default(); LANES];
         if !on_lanes.is_empty() {
-            let flights: Vec<LaneFlight> = on_lanes
-                .iter()
-                .map(|&i| {
-                    let (fl, _, limit) = &pieces[i];
-                    LaneFlight::of(&slots[i].q, if drag { fl.k } else { 0.0 }, fl.drift, *limit)
-                })
-                .collect();
-            let found = search(d, ph, &flights, bounce);
+            let mut flights = LaneFlights::new();
+            for l in 0..LANES {
+                let i = on_lanes[if l < on_lanes.len() { l } else { 0 }];
+                let (fl, _, limit) = &pieces[i];
+                flights.set_piece(l, &slots[i].q, if drag { fl.k } else { 0.0 }, fl.drift, *limit);
+            }
+            let found = search(d, ph, &flights, true, bounce);
             for (l, &i) in on_lanes.iter().enumerate() {
                 hits[i] = found[l];
             }
@@ -987,37 +1001,33 @@ mod avx512 {
         }
     }
 
-    /// [`super::first_hits`] on eight AVX-512 lanes: `kernel::first_hit_in` for a flight
-    /// without drift or time limit, step by step; whole numbers (teeth, codes) ride as f64.
-    /// `DRAG`: every lane's grain has Stokes drag (k_drag > 0), else none has.
+    /// [`super::first_hits`] on eight AVX-512 lanes: `kernel::first_hit_in` step by step;
+    /// whole numbers (teeth, codes) ride as f64. `DRAG`: every lane's grain has Stokes drag
+    /// (k_drag > 0), else none has. `PIECES`: the lanes' flights are pieces, with a time limit
+    /// and perhaps a drift; else flights in one piece, whose code is the search's without
+    /// either (the lunar batches ran 7 % slower through the pieces' selects).
     #[target_feature(enable = "avx512f")]
-    pub(super) fn first_hits<const DRAG: bool>(
+    pub(super) fn first_hits<const DRAG: bool, const PIECES: bool>(
         d: &KDesign<f64>,
         ph: &KPhysics<f64>,
-        lanes: &[LaneFlight; LANES],
+        lanes: &LaneFlights,
         bounce: u32,
     ) -> [Hit<f64>; LANES] {
-        let mut a = [[0.0; LANES]; 10];
-        for (l, fl) in lanes.iter().enumerate() {
-            (a[0][l], a[1][l], a[2][l], a[3][l]) = (fl.pos[0], fl.pos[1], fl.vel[0], fl.vel[1]);
-            (a[4][l], a[5][l], a[7][l]) = (fl.surface as f64, fl.tooth as f64, fl.limit);
-            (a[8][l], a[9][l]) = (fl.drift[0], fl.drift[1]);
-            if DRAG {
-                a[6][l] = fl.k;
-            }
-        }
-        let k = load(&a[6]);
-        // how long each lane's search looks: infinite for a flight in one piece, a piece's
-        // length otherwise (`first_hit_in`'s t_limit)
-        let limit = load(&a[7]);
-        let (px, py, vx, vy) = (load(&a[0]), load(&a[1]), load(&a[2]), load(&a[3]));
+        let a = &lanes.0;
+        let k = if DRAG { load(&a[LaneFlights::K]) } else { sp(0.0) };
+        let (zero, inf) = (sp(0.0), sp(f64::INFINITY));
+        // how long each lane's search looks (`first_hit_in`'s t_limit: a piece's length,
+        // infinite for a flight in one piece), and each lane's drift
+        let limit = if PIECES { load(&a[LaneFlights::LIMIT]) } else { inf };
+        let (wx, wy) =
+            if PIECES { (load(&a[LaneFlights::DRIFT]), load(&a[LaneFlights::DRIFT + 1])) } else { (zero, zero) };
+        let drifting = if PIECES { ne(wx, zero) | ne(wy, zero) } else { 0 };
+        let (px, py) = (load(&a[LaneFlights::POS]), load(&a[LaneFlights::POS + 1]));
+        let (vx, vy) = (load(&a[LaneFlights::VEL]), load(&a[LaneFlights::VEL + 1]));
         // the terminal velocity as `Flight` computes it, -g / k
         let vinf = if DRAG { div(neg(sp(ph.g)), k) } else { sp(0.0) };
-        let (wx, wy) = (load(&a[8]), load(&a[9]));
-        let (zero, inf) = (sp(0.0), sp(f64::INFINITY));
-        let drifting = ne(wx, zero) | ne(wy, zero);
         let f = Fl { px, py, vx, vy, half_g: sp(0.5 * ph.g), k, vinf, wx, wy, drifting };
-        let (surface, kf) = (load(&a[4]), load(&a[5]));
+        let (surface, kf) = (load(&a[LaneFlights::SURFACE]), load(&a[LaneFlights::TOOTH]));
         let c2_g = -0.5 * ph.g;
         // `rel_vel` of the scalar search: the velocity plus the drift
         let rel_vel = (add(f.vx, wx), add(f.vy, wy));
@@ -1039,7 +1049,7 @@ mod avx512 {
         let (qx, qy) = pos_at::<DRAG>(&f, has, t);
         let s = add(mul(qx, tb0), mul(qy, tb1));
         let mut found = has & ge(s, s0) & le(s, add(sp(d.base_length), s0));
-        let horizon = min(sel(has, t, inf), limit);
+        let horizon = if PIECES { min(sel(has, t, inf), limit) } else { sel(has, t, inf) };
         let teeth_last = sp((d.teeth - 1) as f64);
         let j = min(max(add(to_index(floor(div(s, sp(d.pitch_len)))), kf), zero), teeth_last);
         let mut best_t = sel(found, t, inf);
@@ -1052,8 +1062,12 @@ mod avx512 {
         let x_end = sel(finite, pos_at::<DRAG>(&f, finite, horizon).0, sel(ge(f.vx, zero), inf, sp(f64::NEG_INFINITY)));
         // with drift x(t) need not be monotone: |x(t) - x0| <= (|vx| + |wx|) t bounds the
         // range instead
-        let reach = mul(add(abs(f.vx), abs(wx)), horizon);
-        let (x_end, x_start) = (sel(drifting, add(f.px, reach), x_end), sel(drifting, sub(f.px, reach), f.px));
+        let (x_end, x_start) = if drifting != 0 {
+            let reach = mul(add(abs(f.vx), abs(wx)), horizon);
+            (sel(drifting, add(f.px, reach), x_end), sel(drifting, sub(f.px, reach), f.px))
+        } else {
+            (x_end, f.px)
+        };
         let forward = ge(x_end, x_start);
         let (xmin, xmax) = (sel(forward, x_start, x_end), sel(forward, x_end, x_start));
         let lo = add(to_index(ceil(div(sub(xmin, sp(d.ext_max)), sp(d.pitch[0])))), kf);
@@ -1082,7 +1096,7 @@ mod avx512 {
             let (sa, ya) = y_at_x::<DRAG>(&f, reached, xa);
             let (sb, yb) = y_at_x::<DRAG>(&f, reached, xb);
             // (a drifting lane's x(t) is not monotone: it searches every tooth of its range)
-            let flies_over = !drifting & (gt(xa, xb) | (sa & sb & gt(ya, top) & gt(yb, top)));
+            let flies_over = (gt(xa, xb) | (sa & sb & gt(ya, top) & gt(yb, top))) & !drifting;
             let live = in_range & !flies_over;
             if live == 0 {
                 continue;
@@ -1107,11 +1121,12 @@ mod avx512 {
                 let x_out = sel(backward, xa, xb);
                 let moving = gt(f.vx, zero) | lt(f.vx, zero);
                 let inside = ge(f.px, xa) & le(f.px, xb);
+                let t_lo = sel(moving, time_at_x::<DRAG>(&f, on & moving, x_in), sel(inside, zero, inf));
                 // a drifting lane searches the whole time (`first_hit_in`: no x-window)
-                let t_lo =
-                    sel(drifting, zero, sel(moving, time_at_x::<DRAG>(&f, on & moving, x_in), sel(inside, zero, inf)));
+                let t_lo = if drifting != 0 { sel(drifting, zero, t_lo) } else { t_lo };
                 let search_lo = on & !gt(t_lo, t_max);
-                let t_hi = sel(drifting, inf, sel(moving, time_at_x::<DRAG>(&f, search_lo & moving, x_out), inf));
+                let t_hi = sel(moving, time_at_x::<DRAG>(&f, search_lo & moving, x_out), inf);
+                let t_hi = if drifting != 0 { sel(drifting, inf, t_hi) } else { t_hi };
                 let search = search_lo;
                 let mut roots = crossings::<DRAG>(search, &f, c2_g, (ax, ay), n, departing, t_lo, min(t_max, t_hi));
                 let over = on & !departing & contact(d.pitch_len, &f, rel_vel, (ax, ay), (bx, by), n);
