@@ -24,8 +24,8 @@
 //!    uB the true motion fitted to 27.2 %² raw and a slow return at once to 26.4 %², but
 //!    once the spill is allowed for, 4.4 %² against 15.6 %² on fresh streams; on uC 19.0
 //!    against 15.7 raw, 3.8 against 8.4 adjusted. Ranked on raw SSEs, the slow return won.
-//! 3. **Polish.** The best `POLISHED` grid points are polished at the full budget (a
-//!    short compass search, the motion still held), and the best of them by the
+//! 3. **Polish.** The best `POLISHED` grid points are polished at the full budget (the
+//!    diagnosis's compass search, `--polish` iterations, the motion still held), and the best of them by the
 //!    loss-adjusted SSE is the sled-motion fit's start, where the motion is free again. The
 //!    fit polishes from it and from the baseline's point (so that the candidate is never
 //!    worse than no motion), without a differential evolution of its own: the screen was
@@ -34,6 +34,11 @@
 //!    pull the polish into the slow-return basin. The polish matters: on uB the true
 //!    motion's grid point led a slow return at once by 25.7 against 26.9 %² before it and
 //!    18.0 against 24.9 after (shared parameters from a short DE are not yet converged).
+//!    And it needs its iterations: a polish of 3 left uA's grid point (0 s, 0.25 m/s) at
+//!    38.4 %² raw where a full fit at that held motion reaches 28.4, and the free fit from
+//!    there stopped at 0.2 m/s for the true 0.3 (17.0 %² left on fresh streams); with the
+//!    diagnosis's 12 the point scores 30.6, the fit finds 0.35 m/s and leaves 3.6 %²
+//!    (uB 2.2 → 1.0, uC 7.0 → 8.5; docs/diagnosis-report.md).
 //!
 //! Costs nothing when every setup states its motion.
 
@@ -56,9 +61,8 @@ pub const MOTION_GRID: ([f64; 2], [f64; 6]) = ([0.0, 0.05], [0.03, 0.06, 0.12, 0
 const POP: usize = 10;
 const GENERATIONS: usize = 8;
 /// Grid points polished at the full budget (the best by the loss-adjusted SSE of their
-/// screened point), and the compass iterations each gets.
+/// screened point), each with the diagnosis's compass iterations.
 const POLISHED: usize = 3;
-const POLISH: usize = 3;
 
 /// The motion screen's answer: the sled-motion fit's start (the space's parameter order)
 /// and the simulations of the condition set it took.
@@ -179,7 +183,7 @@ pub fn motion_start(
 
     // 3. the best few polished at the full budget, the motion still held
     let chosen: Vec<usize> = order.iter().take(POLISHED).map(|(g, _)| *g).collect();
-    let polish = Solver { polish_iterations: POLISH, ..*solver };
+    let polish = Solver { polish_iterations: solver.polish_iterations, ..*solver };
     let models: Vec<Model> = chosen
         .iter()
         .map(|g| Model { space: &spaces[*g], targets, starts: vec![ranked[*g].x.clone()], search: Search::FromStarts })
