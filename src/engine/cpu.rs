@@ -102,6 +102,12 @@ pub fn kernel_physics<T: Real>(ctx: &Context) -> KPhysics<T> {
     }
 }
 
+/// A hit the lanes found (in f64) as the kernel's precision `T` holds it (`T` is f64
+/// wherever the lanes run, so this copies).
+fn hit_from_lanes<T: Real>(h: &Hit<f64>) -> Hit<T> {
+    Hit { found: h.found, t: T::c(h.t), pos: [T::c(h.pos[0]), T::c(h.pos[1])], tooth: h.tooth, surface: h.surface }
+}
+
 fn state_of(code: u32) -> ParticleState {
     match code {
         STATE_RESTING => ParticleState::Resting,
@@ -226,13 +232,7 @@ pub fn run_particles<T: Real>(
                 });
                 for (l, (h, &i)) in hits.iter().zip(group).enumerate() {
                     let p = &mut parts[i as usize];
-                    let hit = Hit {
-                        found: h.found,
-                        t: T::c(h.t),
-                        pos: [T::c(h.pos[0]), T::c(h.pos[1])],
-                        tooth: h.tooth,
-                        surface: h.surface,
-                    };
+                    let hit = hit_from_lanes(h);
                     let flown = if let (Some(out), true) = (&bounced, hit.found) {
                         // as `land`, with the rebound from the lanes (less the zero drift)
                         let flown = Flown { from_tooth: p.tooth, from: p.pos, vel: p.vel, t: hit.t };
@@ -252,13 +252,7 @@ pub fn run_particles<T: Real>(
             let flights = lanes::first_hits_piecewise(d64, ph64, parts64, &to_fly, bounce);
             for ((h, fl, start), &i) in flights.into_iter().zip(&to_fly) {
                 let p = &mut parts[i as usize];
-                let hit = Hit {
-                    found: h.found,
-                    t: T::c(h.t),
-                    pos: [T::c(h.pos[0]), T::c(h.pos[1])],
-                    tooth: h.tooth,
-                    surface: h.surface,
-                };
+                let hit = hit_from_lanes(&h);
                 let fl = Flight {
                     p0: [T::c(fl.p0[0]), T::c(fl.p0[1])],
                     v0: [T::c(fl.v0[0]), T::c(fl.v0[1])],

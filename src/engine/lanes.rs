@@ -1301,11 +1301,52 @@ mod tests {
             cases.push(s);
         }
         let (mut compared, mut drifting, mut pieces) = (0usize, 0usize, 0usize);
+        each_bounce(&cases, 3, 70, |c, d, ph, parts, flying, bounce| {
+            assert!(applies_piecewise(ph) && !applies(ph), "case {c} flies in pieces");
+            // all at once, then in groups of 1, 2, ..., 7 particles
+            let mut lane_hits = first_hits_piecewise(d, ph, parts, flying, bounce);
+            let mut size = 1 + (bounce as usize % (LANES - 1));
+            let mut rest = flying;
+            while !rest.is_empty() {
+                let (group, tail) = rest.split_at(size.min(rest.len()));
+                lane_hits.extend(first_hits_piecewise(d, ph, parts, group, bounce));
+                rest = tail;
+                size = size % (LANES - 1) + 1;
+            }
+            for (n, (h, fl, start)) in lane_hits.iter().enumerate() {
+                let i = flying[n % flying.len()];
+                let (sh, sfl, sstart) = first_hit_piecewise(d, ph, &parts[i as usize], bounce);
+                let flight_bits = |f: &Flight<f64>| [f.p0, f.v0, f.drift, [f.k, f.g]].map(|v| v.map(f64::to_bits));
+                assert_eq!(
+                    (bits(h), flight_bits(fl), start.to_bits()),
+                    (bits(&sh), flight_bits(&sfl), sstart.to_bits()),
+                    "case {c}, bounce {bounce}, particle {i}"
+                );
+                compared += 1;
+                pieces += usize::from(*start > 0.0);
+                drifting += usize::from(fl.drift != [0.0; 2]);
+            }
+        });
+        assert!(
+            compared > 20_000 && drifting > compared / 50 && pieces > compared / 20,
+            "{compared} flights compared, {drifting} ending in a drifting piece, {pieces} after their first piece"
+        );
+    }
+
+    /// Every bounce of the particles of `designs` random valid designs per case of `cases`
+    /// (design seeds from `seed`), as the scalar kernel's loop flies them: `visit` gets the
+    /// case's index, the design, the physics, the particles with this bounce's launches
+    /// randomised, the flying ones and the bounce, before they fly.
+    fn each_bounce(
+        cases: &[Scenario],
+        designs: usize,
+        seed: u64,
+        mut visit: impl FnMut(usize, &KDesign<f64>, &KPhysics<f64>, &[KParticle<f64>], &[u32], u32),
+    ) {
         for (c, s) in cases.iter().enumerate() {
             let ctx = Context::new(s);
             let ph = kernel_physics::<f64>(&ctx);
-            assert!(applies_piecewise(&ph) && !applies(&ph), "case {c} flies in pieces");
-            for design in random_valid_designs(s, 3, 70 + c as u64) {
+            for design in random_valid_designs(s, designs, seed + c as u64) {
                 let prep = prepare(s, &design).unwrap();
                 let d = kernel_design::<f64>(&prep);
                 let mut parts: Vec<KParticle<f64>> =
@@ -1319,42 +1360,13 @@ mod tests {
                     if flying.is_empty() {
                         break;
                     }
-                    // all at once, then in groups of 1, 2, ..., 7 particles
-                    let mut lane_hits = first_hits_piecewise(&d, &ph, &parts, &flying, bounce);
-                    let mut size = 1 + (bounce as usize % (LANES - 1));
-                    let mut rest = &flying[..];
-                    let mut grouped = Vec::new();
-                    while !rest.is_empty() {
-                        let (group, tail) = rest.split_at(size.min(rest.len()));
-                        grouped.extend(first_hits_piecewise(&d, &ph, &parts, group, bounce));
-                        rest = tail;
-                        size = size % (LANES - 1) + 1;
-                    }
-                    lane_hits.extend(grouped);
-                    for (n, (h, fl, start)) in lane_hits.iter().enumerate() {
-                        let i = flying[n % flying.len()];
-                        let (sh, sfl, sstart) = first_hit_piecewise(&d, &ph, &parts[i as usize], bounce);
-                        let flight_bits =
-                            |f: &Flight<f64>| [f.p0, f.v0, f.drift, [f.k, f.g]].map(|v| v.map(f64::to_bits));
-                        assert_eq!(
-                            (bits(h), flight_bits(fl), start.to_bits()),
-                            (bits(&sh), flight_bits(&sfl), sstart.to_bits()),
-                            "case {c}, bounce {bounce}, particle {i}"
-                        );
-                        compared += 1;
-                        pieces += usize::from(*start > 0.0);
-                        drifting += usize::from(fl.drift != [0.0; 2]);
-                    }
+                    visit(c, &d, &ph, &parts, &flying, bounce);
                     for &i in &flying {
                         fly_particle(&d, &ph, &mut parts[i as usize], i, bounce);
                     }
                 }
             }
         }
-        assert!(
-            compared > 20_000 && drifting > compared / 50 && pieces > compared / 20,
-            "{compared} flights compared, {drifting} ending in a drifting piece, {pieces} after their first piece"
-        );
     }
 
     /// Lane hits against scalar hits over `cases`: how many flights were compared, and how
@@ -1365,45 +1377,24 @@ mod tests {
             return None;
         }
         let (mut compared, mut on_teeth) = (0usize, 0usize);
-        for (c, s) in cases.iter().enumerate() {
-            let ctx = Context::new(s);
-            let ph = kernel_physics::<f64>(&ctx);
-            assert!(applies(&ph), "case {c} is a one-piece flight of the text's physics");
-            for design in random_valid_designs(s, 5, 7 + c as u64) {
-                let prep = prepare(s, &design).unwrap();
-                let d = kernel_design::<f64>(&prep);
-                let mut parts: Vec<KParticle<f64>> =
-                    prep.launches.iter().enumerate().map(|(i, l)| init_particle(&d, &ph, *l, i as u32)).collect();
-                for bounce in 0..ctx.max_bounces {
-                    for (i, p) in parts.iter_mut().enumerate().filter(|(_, p)| p.state == STATE_FLYING) {
-                        randomise_launch(&d, &ph, p, i as u32, bounce);
-                    }
-                    let flying: Vec<u32> =
-                        (0..parts.len() as u32).filter(|&i| parts[i as usize].state == STATE_FLYING).collect();
-                    if flying.is_empty() {
-                        break;
-                    }
-                    // groups of 1, 2, ..., 8 particles, then again
-                    let mut rest = &flying[..];
-                    let mut size = 1 + (bounce as usize % LANES);
-                    while !rest.is_empty() {
-                        let (group, tail) = rest.split_at(size.min(rest.len()));
-                        let hits = first_hits(&d, &ph, &parts, group, bounce);
-                        for (h, &i) in hits.iter().zip(group) {
-                            let scalar = first_hit(&d, &ph, &parts[i as usize], bounce);
-                            assert_eq!(bits(h), bits(&scalar), "case {c}, bounce {bounce}, particle {i}");
-                            compared += 1;
-                            on_teeth += usize::from(scalar.found && scalar.surface != SURFACE_BASE);
-                        }
-                        rest = tail;
-                        size = size % LANES + 1;
-                    }
-                    for &i in &flying {
-                        fly_particle(&d, &ph, &mut parts[i as usize], i, bounce);
-                    }
+        each_bounce(cases, 5, 7, |c, d, ph, parts, flying, bounce| {
+            assert!(applies(ph), "case {c} is a one-piece flight of the text's physics");
+            // groups of 1, 2, ..., 8 particles, then again
+            let mut rest = flying;
+            let mut size = 1 + (bounce as usize % LANES);
+            while !rest.is_empty() {
+                let (group, tail) = rest.split_at(size.min(rest.len()));
+                let hits = first_hits(d, ph, parts, group, bounce);
+                for (h, &i) in hits.iter().zip(group) {
+                    let scalar = first_hit(d, ph, &parts[i as usize], bounce);
+                    assert_eq!(bits(h), bits(&scalar), "case {c}, bounce {bounce}, particle {i}");
+                    compared += 1;
+                    on_teeth += usize::from(scalar.found && scalar.surface != SURFACE_BASE);
                 }
+                rest = tail;
+                size = size % LANES + 1;
             }
-        }
+        });
         Some((compared, on_teeth))
     }
 
