@@ -25,8 +25,9 @@
 //!    once the spill is allowed for, 4.4 %² against 15.6 %² on fresh streams; on uC 19.0
 //!    against 15.7 raw, 3.8 against 8.4 adjusted. Ranked on raw SSEs, the slow return won.
 //! 3. **Polish.** The best `POLISHED` grid points are polished at the full budget (the
-//!    diagnosis's compass search, `--polish` iterations, the motion still held), and the best of them by the
-//!    loss-adjusted SSE is the sled-motion fit's start, where the motion is free again. The
+//!    diagnosis's compass search, `--polish` iterations, the motion still held), and the
+//!    best of them by the loss-adjusted SSE is the sled-motion fit's start, where the
+//!    motion is free again. The
 //!    fit polishes from it and from the baseline's point (so that the candidate is never
 //!    worse than no motion), without a differential evolution of its own: the screen was
 //!    its global search, and a DE over all five parameters at the screen's particle count
