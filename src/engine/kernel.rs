@@ -665,8 +665,7 @@ pub const MAX_FLIGHT_S: f64 = 60.0;
 /// per unit mass and speed, 18μ/(ρ_p d²)(1 + 0.15 Re^0.687) (Eq. 4.18).
 #[inline(always)]
 fn schiller_naumann_k<T: Real>(ph: &KPhysics<T>, speed: T) -> T {
-    let re = ph.qd_re_per_speed * speed;
-    ph.qd_k0 * (T::one() + T::c(0.15) * re.powf(T::c(0.687)))
+    crate::model::effects::schiller_naumann_rate(ph.qd_k0, ph.qd_re_per_speed, speed)
 }
 
 /// The next piece of a flight split into pieces, for the particle `q` as it is at the

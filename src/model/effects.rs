@@ -4,6 +4,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::real::Real;
+
 /// The surface normal is tilted by a random angle at each impact (rough printed surfaces,
 /// non-spherical grains): tilt ~ N(0, sigma) (`form = "normal"`, the default), or uniform
 /// on [−√3 sigma, √3 sigma], the same standard deviation (`form = "uniform"`; cpu only: a
@@ -140,6 +142,15 @@ pub struct QuadraticDrag {
     pub density_kg_m3: f64,
 }
 
+/// The Schiller-Naumann drag force per unit mass and speed, 1/s:
+/// `stokes` (18 μ/(ρ_p d²)) · (1 + 0.15 Re^0.687), Re = `re_per_speed` · `speed` (Eq. 4.17-4.18).
+/// Generic, so that the cpu kernel's flights ([`QuadraticDrag`] pieces) and the host's
+/// matching ([`QuadraticDrag::equivalent_diameter`]) share one formula.
+#[inline(always)]
+pub fn schiller_naumann_rate<T: Real>(stokes: T, re_per_speed: T, speed: T) -> T {
+    stokes * (T::one() + T::c(0.15) * (re_per_speed * speed).powf(T::c(0.687)))
+}
+
 /// Sea-level air (4.1.3): density, kg/m³, and dynamic viscosity, Pa s.
 pub const AIR_DENSITY: f64 = 1.225;
 pub const AIR_VISCOSITY: f64 = 1.81e-5;
@@ -168,7 +179,7 @@ impl QuadraticDrag {
     /// The drag over speed, 1/s, at `speed_m_s` (Eq. 4.17 with Eq. 4.18's Re).
     pub fn drag_over_speed(&self, speed_m_s: f64) -> f64 {
         let (stokes, re_per_speed) = self.coefficients();
-        stokes * (1.0 + 0.15 * (re_per_speed * speed_m_s.abs()).powf(0.687))
+        schiller_naumann_rate(stokes, re_per_speed, speed_m_s.abs())
     }
 
     /// Stokes part 18 μ / (ρ_p d²), 1/s, and Re per unit speed ρ_air d / μ, s/m.
