@@ -137,15 +137,13 @@ pub fn run_particles<T: Real>(
     // at a time on SIMD lanes, to the same bits (`lanes`)
     let any_d: &dyn Any = &d;
     let any_ph: &dyn Any = &ph;
-    let vector = match (any_d.downcast_ref::<KDesign<f64>>(), any_ph.downcast_ref::<KPhysics<f64>>()) {
-        (Some(d64), Some(ph64)) if lanes::applies(ph64) && lanes::available() => Some((d64, ph64)),
+    let on_lanes = match (any_d.downcast_ref::<KDesign<f64>>(), any_ph.downcast_ref::<KPhysics<f64>>()) {
+        (Some(d64), Some(ph64)) if lanes::available() => Some((d64, ph64)),
         _ => None,
     };
+    let vector = on_lanes.filter(|(_, ph64)| lanes::applies(ph64));
     // flights in pieces (sled motion, quadratic drag) likewise, piece by piece
-    let piecewise = match (any_d.downcast_ref::<KDesign<f64>>(), any_ph.downcast_ref::<KPhysics<f64>>()) {
-        (Some(d64), Some(ph64)) if lanes::applies_piecewise(ph64) && lanes::available() => Some((d64, ph64)),
-        _ => None,
-    };
+    let piecewise = on_lanes.filter(|(_, ph64)| lanes::applies_piecewise(ph64));
     // and the launch factors' draws of every engine run are made sixteen at a time
     let draw_lanes = lanes::available();
     // the indices of the particles still flying, for the lanes

@@ -58,6 +58,17 @@ impl LaneFlights {
         LaneFlights([[0.0; LANES]; 10])
     }
 
+    /// Which of `n` flights (1 to [`LANES`]) lane `l` takes: its own, or the first again
+    /// beyond `n` (a lane whose hit the caller drops).
+    #[inline(always)]
+    fn source(l: usize, n: usize) -> usize {
+        if l < n {
+            l
+        } else {
+            0
+        }
+    }
+
     /// Lane `l` flies particle `p` with drag rate `k` (a flight in one piece).
     #[inline(always)]
     fn set(&mut self, l: usize, p: &KParticle<f64>, k: f64) {
@@ -123,7 +134,7 @@ pub fn first_hits(
     let drag = ph.k_drag > 0.0;
     let mut flights = LaneFlights::new();
     for l in 0..LANES {
-        let p = &parts[idx[if l < idx.len() { l } else { 0 }] as usize];
+        let p = &parts[idx[LaneFlights::source(l, idx.len())] as usize];
         flights.set(l, p, if drag { p.k_drag } else { 0.0 });
     }
     let mut hits = search(d, ph, &flights, false, bounce);
@@ -172,6 +183,12 @@ pub fn first_hits_piecewise(
     let mut out: Vec<Option<PieceHit>> = vec![None; idx.len()];
     let mut waiting = 0..idx.len();
     let mut slots: Vec<Slot> = Vec::with_capacity(LANES);
+    // each round's pieces and the slots searched on the lanes (kept across rounds: no
+    // allocation per round)
+    let mut pieces: Vec<(Flight<f64>, f64, f64)> = Vec::with_capacity(LANES);
+    let mut on_lanes: Vec<usize> = Vec::with_capacity(LANES);
+    // a grain without drag in air goes to the scalar search
+    let lane_search = |fl: &Flight<f64>| !drag || fl.k > 0.0;
     loop {
         while slots.len() < LANES {
             let Some(n) = waiting.next() else { break };
@@ -180,13 +197,15 @@ pub fn first_hits_piecewise(
         if slots.is_empty() {
             break;
         }
-        let pieces: Vec<(Flight<f64>, f64, f64)> = slots.iter().map(|s| next_piece(d, ph, &s.q)).collect();
-        let on_lanes: Vec<usize> = (0..slots.len()).filter(|&i| !drag || pieces[i].0.k > 0.0).collect();
+        pieces.clear();
+        pieces.extend(slots.iter().map(|s| next_piece(d, ph, &s.q)));
+        on_lanes.clear();
+        on_lanes.extend((0..slots.len()).filter(|&i| lane_search(&pieces[i].0)));
         let mut hits = [Hit::default(); LANES];
         if !on_lanes.is_empty() {
             let mut flights = LaneFlights::new();
             for l in 0..LANES {
-                let i = on_lanes[if l < on_lanes.len() { l } else { 0 }];
+                let i = on_lanes[LaneFlights::source(l, on_lanes.len())];
                 let (fl, _, limit) = &pieces[i];
                 flights.set_piece(l, &slots[i].q, if drag { fl.k } else { 0.0 }, fl.drift, *limit);
             }
@@ -195,9 +214,9 @@ pub fn first_hits_piecewise(
                 hits[i] = found[l];
             }
         }
-        for (i, (slot, piece)) in slots.iter().zip(&pieces).enumerate() {
-            if !on_lanes.contains(&i) {
-                hits[i] = first_hit_in(d, ph, &slot.q, &piece.0, bounce, piece.2);
+        for ((slot, piece), hit) in slots.iter().zip(&pieces).zip(&mut hits) {
+            if !lane_search(&piece.0) {
+                *hit = first_hit_in(d, ph, &slot.q, &piece.0, bounce, piece.2);
             }
         }
         for i in (0..slots.len()).rev() {
