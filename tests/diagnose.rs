@@ -43,10 +43,20 @@ fn diagnose(pairs: &[(&Path, &str)], out: &Path) -> Value {
     assert!(svg_texts(&ranking).iter().any(|t| t.starts_with("1. ")), "ranked rows");
     assert!(svg_texts(&ranking).iter().any(|t| t.contains("best = ")), "footer");
     let keys: Vec<&String> = v.as_object().unwrap().keys().collect();
-    assert_eq!(keys.len(), 9, "{keys:?}");
-    for k in
-        ["gap", "ranking", "best", "verdict", "verdict_detail", "indistinguishable", "combined", "baseline", "where"]
-    {
+    assert_eq!(keys.len(), 11, "{keys:?}");
+    for k in [
+        "gap",
+        "ranking",
+        "best",
+        "verdict",
+        "verdict_detail",
+        "indistinguishable",
+        "combined",
+        "baseline",
+        "where",
+        "detection_limits",
+        "suggestions",
+    ] {
         assert!(v.get(k).is_some(), "missing {k}");
     }
     v
@@ -323,6 +333,78 @@ fn the_text_summary_shows_the_score_it_ranks_by() {
         .collect();
     assert_eq!(scores.len(), 2, "{text}");
     assert!(scores[0] <= scores[1], "ranked by score: {text}");
+    std::fs::remove_dir_all(&d).ok();
+}
+
+/// Each candidate's detection limit comes with the diagnosis (diagnosis.json's
+/// `detection_limits`, report.md's section): per parameter a ladder of strengths from the top
+/// of the effect's search box down, each with a detection probability, and the limit read
+/// where the probability reaches 90 % (or none inside the box); a `no-gap` verdict names
+/// them. `--suggest` ranks additional conditions by how far apart they would put what the
+/// diagnosis leaves, best first. A tiny budget: this checks the outputs' form and their
+/// rules, the planted-effect benchmark their numbers.
+#[test]
+fn detection_limits_and_suggestions_come_with_the_diagnosis() {
+    let d = scratch("limits");
+    let data = d.join("synth.csv");
+    synth(&validation_setup("test3"), None, 5, &data);
+    let o = sawtooth()
+        .args(["diagnose", "--data", data.to_str().unwrap(), "--setup", &validation_setup("test3")])
+        .args(["--effects", "impact-scatter,launch-spread", "--max-particles", "2000", "--pop", "8"])
+        .args(["--generations", "4", "--polish", "3", "--bootstrap", "50", "--suggest", "--json", "--out"])
+        .arg(d.join("out"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let l = &v["detection_limits"];
+    assert_eq!(l["probability"], 0.9);
+    let limits = l["limits"].as_array().unwrap();
+    let params: Vec<(&str, &str)> =
+        limits.iter().map(|x| (x["effect"].as_str().unwrap(), x["param"].as_str().unwrap())).collect();
+    assert_eq!(
+        params,
+        [("impact-scatter", "sigma_deg"), ("launch-spread", "speed_spread"), ("launch-spread", "angle_sigma_deg")]
+    );
+    for x in limits {
+        let ladder = x["ladder"].as_array().unwrap();
+        let s: Vec<f64> = ladder.iter().map(|r| r["strength"].as_f64().unwrap()).collect();
+        let p: Vec<f64> = ladder.iter().map(|r| r["probability"].as_f64().unwrap()).collect();
+        assert!(s.len() >= 4 && s.windows(2).all(|w| (w[1] / w[0] - 2.0).abs() < 1e-9), "{x}");
+        assert!(p.iter().all(|p| (0.0..=1.0).contains(p)), "{x}");
+        // the limit: where every stronger rung is detected with 90 %, inside the ladder
+        match x["limit"].as_f64() {
+            Some(lim) => {
+                let first = p.iter().rposition(|p| *p < 0.9).map_or(0, |i| i + 1);
+                assert!(first < p.len(), "{x}");
+                assert!(lim <= s[first] * (1.0 + 1e-12) && (first == 0 || lim >= s[first - 1]), "{x}");
+            }
+            None => assert!(p.last().unwrap() < &0.9, "{x}"),
+        }
+        assert!(!x["found"].as_str().unwrap().is_empty());
+    }
+    // the `no-gap` verdict says what these data could not have seen
+    if v["verdict"] == "no-gap" {
+        let text = v["verdict_detail"]["text"].as_str().unwrap();
+        assert!(text.starts_with("no gap that these data resolve: `impact-scatter` sigma_deg"), "{text}");
+    }
+    let report = std::fs::read_to_string(d.join("out/report.md")).unwrap();
+    assert!(report.contains("## Detection limits"), "{report}");
+    // with a single condition and two candidates something is always left to separate
+    // (the set, the top two, or each candidate at its limit against the baseline)
+    let g = &v["suggestions"];
+    if !g.is_null() {
+        let proposals = g["proposals"].as_array().unwrap();
+        assert!(!proposals.is_empty() && g["models"].as_array().unwrap().len() >= 2, "{g}");
+        let sep: Vec<f64> = proposals.iter().map(|p| p["separation"].as_f64().unwrap()).collect();
+        assert!(sep.windows(2).all(|w| w[0] >= w[1]), "best first: {sep:?}");
+        let kinds: Vec<&str> =
+            proposals.iter().flat_map(|p| p["change"].as_object().unwrap().keys()).map(String::as_str).collect();
+        for k in ["v0_m_s", "a_m_s2", "alpha_deg", "runs"] {
+            assert!(kinds.contains(&k), "{k} proposed: {kinds:?}");
+        }
+        assert!(report.contains("## Next measurement"), "{report}");
+    }
     std::fs::remove_dir_all(&d).ok();
 }
 

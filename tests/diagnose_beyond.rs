@@ -11,7 +11,7 @@
 use std::path::Path;
 
 use crate::common;
-use common::campaigns::{diagnose, rig_setup, summary, synth, RIG};
+use common::campaigns::{diagnose, diagnose_with, rig_setup, summary, synth, RIG};
 use common::scratch;
 
 /// Whether a heavy test runs: each is a three-condition diagnosis with every candidate (the
@@ -217,4 +217,79 @@ fn a_subtle_polydispersity_is_resolved() {
         return;
     }
     subtle_effect_is_resolved("subtle-poly", "polydisperse=0.08", 320);
+}
+
+/// The names in a diagnosis.json's indistinguishable set.
+fn together(v: &serde_json::Value) -> Vec<String> {
+    v["indistinguishable"].as_array().unwrap().iter().map(|e| e.as_str().unwrap().to_string()).collect()
+}
+
+/// Three conditions that differ only in their runs (the rig's slow setup three times) leave
+/// an impact scatter of 11° in a set with candidates that widen the landings alike;
+/// `--suggest` names an additional condition that would separate them, and with that
+/// condition measured (synthesised with the same effect) and added, the diagnosis no longer
+/// leaves the others beside it (issue 46, item 3).
+#[test]
+fn the_suggested_condition_separates_what_three_could_not() {
+    if !heavy("diagnose_beyond::the_suggested_condition_separates_what_three_could_not") {
+        return;
+    }
+    let d = scratch("suggest");
+    let truth = "impact-scatter";
+    let slow = rig_setup("slow");
+    let mut pairs: Vec<(std::path::PathBuf, String)> = Vec::new();
+    for i in 0..3u64 {
+        let data = d.join(format!("slow{i}.csv"));
+        synth(&slow, Some("impact-scatter=11"), 600 + i, &data);
+        pairs.push((data, slow.clone()));
+    }
+    let v = diagnose_with(&pairs, &d.join("three"), &["--suggest"]);
+    let s = summary(&v);
+    eprintln!("three alike: {s}");
+    let before = together(&v);
+    assert!(before.len() >= 2 && before.iter().any(|e| e == truth), "three alike conditions tell it apart: {s}");
+    let top = &v["suggestions"]["proposals"][0];
+    eprintln!("suggested: {top}");
+    assert_eq!(top["separates"], true, "{top}");
+    // the suggested condition, measured: the rig's setup with the change made
+    let (var, value) = top["change"].as_object().unwrap().iter().next().unwrap();
+    let value = value.as_f64().unwrap();
+    let base = std::fs::read_to_string(&slow).unwrap();
+    let key = match var.as_str() {
+        "v0_m_s" => Some("v0_m_s"),
+        "a_m_s2" => Some("a_m_s2"),
+        "alpha_deg" => Some("alpha_deg"),
+        "runs" => None,
+        other => panic!("unknown change {other}"),
+    };
+    let text: String = base
+        .lines()
+        .map(|l| match key {
+            Some(k) if l.starts_with(&format!("{k} =")) => format!("{k} = {value}\n"),
+            _ => format!("{l}\n"),
+        })
+        .collect();
+    let setup = d.join("suggested.toml");
+    std::fs::write(&setup, text).unwrap();
+    let data = d.join("suggested.csv");
+    synth(setup.to_str().unwrap(), Some("impact-scatter=11"), 610, &data);
+    pairs.push((data, setup.to_str().unwrap().to_string()));
+    let w = diagnose(&pairs, &d.join("four"));
+    let s = summary(&w);
+    eprintln!("with the suggested condition: {s}");
+    assert_eq!(w["best"], truth, "{s}");
+    // every candidate the suggestion said it would tell from the truth is told apart
+    let after = together(&w);
+    let claimed: Vec<&str> = top["pairs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| p["separation"].as_f64().unwrap() > 3.0 && (p["a"] == truth || p["b"] == truth))
+        .map(|p| if p["a"] == truth { p["b"].as_str().unwrap() } else { p["a"].as_str().unwrap() })
+        .collect();
+    assert!(!claimed.is_empty(), "{top}");
+    for other in claimed {
+        assert!(!after.iter().any(|e| e == other), "`{other}` still beside {truth}: {s}");
+    }
+    std::fs::remove_dir_all(&d).ok();
 }

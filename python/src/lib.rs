@@ -658,13 +658,13 @@ fn choice<T: ValueEnum>(field: &str, name: &str) -> PyResult<T> {
 
 /// The effort keywords shared by fit and diagnose, over the library's defaults.
 fn effort_settings(
+    d: EffortSettings,
     particles: Option<u32>,
     max_particles: Option<u32>,
     pop: Option<usize>,
     generations: Option<usize>,
     polish: Option<usize>,
 ) -> EffortSettings {
-    let d = EffortSettings::default();
     EffortSettings {
         particles,
         max_particles: max_particles.unwrap_or(d.max_particles),
@@ -705,7 +705,7 @@ fn _fit<'py>(
     r.params = params.map(|p| parse_params(&p).context("params")).transpose().map_err(value_error)?;
     r.at = at.map(|a| parse_assignments(&a).context("at")).transpose().map_err(value_error)?;
     r.objective = choice("objective", objective)?;
-    r.effort = effort_settings(particles, max_particles, pop, generations, polish);
+    r.effort = effort_settings(EffortSettings::default(), particles, max_particles, pop, generations, polish);
     r.normalise = normalise.map(|n| choice("normalise", &n)).transpose()?;
     r.seed = seed;
     r.engine = engine_kind(engine)?;
@@ -721,7 +721,8 @@ fn _fit<'py>(
 /// figures into `out` (`sawtooth.diagnose` makes a temporary one when none is given).
 #[pyfunction]
 #[pyo3(signature = (data, setup, out, *, effects="all", seed=None, engine="cpu", particles=None, max_particles=None,
-    pop=None, generations=None, polish=None, normalise=None, rescore_streams=None, bootstrap=None))]
+    pop=None, generations=None, polish=None, normalise=None, rescore_streams=None, bootstrap=None,
+    detection_limits=true, suggest=false))]
 #[allow(clippy::too_many_arguments)]
 fn _diagnose<'py>(
     py: Python<'py>,
@@ -739,15 +740,19 @@ fn _diagnose<'py>(
     normalise: Option<String>,
     rescore_streams: Option<usize>,
     bootstrap: Option<usize>,
+    detection_limits: bool,
+    suggest: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let mut r = DiagnoseRequest::new(data, setup, out, Spelling::Keywords);
     r.effects = parse_effects(effects).context("effects").map_err(value_error)?;
     r.seed = seed;
     r.engine = engine_kind(engine)?;
-    r.effort = effort_settings(particles, max_particles, pop, generations, polish);
+    r.effort = effort_settings(DiagnoseRequest::DEFAULT_EFFORT, particles, max_particles, pop, generations, polish);
     r.normalise = normalise.map(|n| choice("normalise", &n)).transpose()?;
     r.rescore_streams = rescore_streams.unwrap_or(r.rescore_streams);
     r.bootstrap = bootstrap.unwrap_or(r.bootstrap);
+    r.detection_limits = detection_limits;
+    r.suggest = suggest;
     let (_, json) = py.detach(|| diagnose_request::run(&r, &mut |line| eprintln!("{line}"))).map_err(value_error)?;
     json_to_py(py, &json)
 }

@@ -256,9 +256,13 @@ def test_diagnose_small_budget_returns_the_report():
     d = sawtooth.diagnose(
         ROOT / "data/validation/test3.csv", ROOT / "data/validation/test3.toml",
         effects="impact-scatter", particles=1000, max_particles=1000, pop=5, generations=2, polish=1,
-        rescore_streams=1, bootstrap=20,
+        rescore_streams=1, bootstrap=20, suggest=True,
     )
     assert d["baseline"]["gap"] > 0 and [m["effect"] for m in d["ranking"]] == ["impact-scatter"]
+    # the detection limits by default, the next measurement when asked for (None when nothing
+    # is left to separate)
+    assert [(x["effect"], x["param"]) for x in d["detection_limits"]["limits"]] == [("impact-scatter", "sigma_deg")]
+    assert d["suggestions"] is None or d["suggestions"]["proposals"]
     with pytest.raises(ValueError, match="must come in pairs"):
         sawtooth.diagnose([ROOT / "data/validation/test3.csv"] * 2, ROOT / "data/validation/test3.toml")
 

@@ -244,9 +244,10 @@ pub struct EffortArgs {
     /// Differential-evolution population per model (>= 5), screening at 1/8 of the particles.
     #[arg(long, default_value_t = EffortSettings::DEFAULT_POP, value_parser = count::<usize>(&schema::FIT_POP))]
     pub pop: usize,
-    /// Differential-evolution generations per model.
-    #[arg(long, default_value_t = EffortSettings::DEFAULT_GENERATIONS, value_parser = count::<usize>(&schema::FIT_GENERATIONS))]
-    pub generations: usize,
+    /// Differential-evolution generations per model [default: 20 for `fit`, 10 for
+    /// `diagnose`, whose candidates start from the baseline's optimum].
+    #[arg(long, value_parser = count::<usize>(&schema::FIT_GENERATIONS))]
+    pub generations: Option<usize>,
     /// Compass-search iterations polishing each fit (and each bootstrap refit of `fit`) at
     /// the full budget.
     #[arg(long, default_value_t = EffortSettings::DEFAULT_POLISH, value_parser = count::<usize>(&schema::FIT_POLISH))]
@@ -254,13 +255,14 @@ pub struct EffortArgs {
 }
 
 impl EffortArgs {
-    /// The library's effort settings (checked by the library, naming these flags).
-    pub fn settings(&self) -> crate::calibrate::EffortSettings {
-        crate::calibrate::EffortSettings {
+    /// The library's effort settings (checked by the library, naming these flags), over the
+    /// command's `defaults` where a flag is not given.
+    pub fn settings(&self, defaults: EffortSettings) -> EffortSettings {
+        EffortSettings {
             particles: self.particles,
             max_particles: self.max_particles,
             pop: self.pop,
-            generations: self.generations,
+            generations: self.generations.unwrap_or(defaults.generations),
             polish: self.polish,
         }
     }

@@ -49,6 +49,15 @@ pub struct DiagnoseArgs {
     /// Bootstrap replicates for the intervals (resampling held-out runs).
     #[arg(long, default_value_t = DiagnoseRequest::DEFAULT_BOOTSTRAP, value_parser = super::args::count::<usize>(&crate::schema::DIAGNOSE_BOOTSTRAP))]
     pub bootstrap: usize,
+    /// Leave out each candidate's detection limit for this campaign (the smallest strength
+    /// the diagnosis detects with 90 % probability; diagnosis.json's `detection_limits`).
+    #[arg(long)]
+    pub no_detection_limits: bool,
+    /// Rank additional conditions (v0, a, slope, more runs) by how well they would separate
+    /// the candidates the diagnosis leaves, simulated from each one's fit (diagnosis.json's
+    /// `suggestions`, report.md's "Next measurement").
+    #[arg(long)]
+    pub suggest: bool,
     /// Write report.md, diagnosis.json and the figures residuals, ranking, distributions (.svg and .png) here.
     #[arg(long)]
     pub out: PathBuf,
@@ -62,10 +71,12 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     r.effects = parse_effects(&a.effects).context("--effects")?;
     r.seed = a.seed;
     r.engine = a.engine;
-    r.effort = a.effort.settings();
+    r.effort = a.effort.settings(DiagnoseRequest::DEFAULT_EFFORT);
     r.normalise = a.normalise;
     r.rescore_streams = a.rescore_streams;
     r.bootstrap = a.bootstrap;
+    r.detection_limits = !a.no_detection_limits;
+    r.suggest = a.suggest;
     let (d, json) = request::run(&r, &mut |line| eprintln!("{line}"))?;
     if a.json {
         writeln!(out, "{}", serde_json::to_string_pretty(&json)?).context("writing output")?;
@@ -95,6 +106,19 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
                 "indistinguishable: {}",
                 d.indistinguishable.iter().map(|e| e.name()).collect::<Vec<_>>().join(", ")
             )?;
+        }
+        if let Some(g) = d.suggestions.as_ref() {
+            for (i, p) in g.proposals.iter().take(3).enumerate() {
+                writeln!(
+                    out,
+                    "suggested {}: {} {} ({:.1}x the floor between the least separated pair{})",
+                    i + 1,
+                    p.base,
+                    p.change.label(),
+                    p.worst(),
+                    if p.separates() { ": separates them" } else { "" }
+                )?;
+            }
         }
         for n in &d.notes {
             writeln!(out, "note: {n}")?;

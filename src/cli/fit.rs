@@ -72,7 +72,7 @@ impl FitArgs {
             (None, None) => {}
         }
         r.objective = self.objective;
-        r.effort = self.effort.settings();
+        r.effort = self.effort.settings(crate::calibrate::EffortSettings::default());
         r.normalise = self.normalise;
         r.seed = self.seed;
         r.engine = self.engine.kind();

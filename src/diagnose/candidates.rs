@@ -151,7 +151,32 @@ pub fn rank_candidates(
         from_screen = Some((i, found.evaluations));
         log("diagnose: sled-motion: its fit polishes from the motion screen's point and the baseline's".to_string());
     }
-    let mut fits = run.solver.fit(&run.sim, &models, log)?;
+    // the evolution of every candidate in lockstep, then the polish of all from the best
+    // member and the first start (the baseline's optimum with the effect off, so that a nested
+    // candidate is never polished from worse than the baseline); the other starts only seeded
+    // the evolution, and re-scoring each at the full budget would cost a tenth of a diagnosis
+    let screened = run.solver.screen(&run.sim, &models, log)?;
+    let polished: Vec<Model> = models
+        .iter()
+        .zip(&screened)
+        .map(|(m, sc)| {
+            let starts = match m.search {
+                Search::FromStarts => m.starts.clone(),
+                Search::Global { .. } => sc
+                    .members
+                    .first()
+                    .map(|b| b.0.clone())
+                    .into_iter()
+                    .chain(m.starts.iter().take(1).cloned())
+                    .collect(),
+            };
+            Model { space: m.space, targets: m.targets, starts, search: Search::FromStarts }
+        })
+        .collect();
+    let mut fits = run.solver.polish(&run.sim, &polished, log)?;
+    for (f, sc) in fits.iter_mut().zip(&screened) {
+        f.evaluations += sc.evaluations;
+    }
     if let Some((i, evaluations)) = from_screen {
         fits[i].evaluations += evaluations;
     }

@@ -88,6 +88,8 @@
 use super::baseline::fit_baseline;
 use super::candidates::rank_candidates;
 pub use super::candidates::{MIN_REDUCTION, RANKING_RULE};
+use super::limits::detection_limits;
+pub use super::limits::DetectionLimits;
 use super::locate::locate;
 pub use super::locate::{GapCondition, Residual, WhereCondition};
 pub use super::model_result::{DepthLayer, ModelResult, Z_FLAG};
@@ -96,6 +98,8 @@ use super::pair::fit_pair;
 pub use super::pair::Combined;
 pub use super::run::{applicable_effects, parse_effects, shared_params, Run, Settings, NO_EFFECT_APPLIES};
 pub use super::scoring::INTERVAL;
+use super::suggest::suggest;
+pub use super::suggest::Suggestions;
 use super::verdict::{self, Verdict};
 use crate::calibrate::Param;
 pub use crate::calibrate::{Condition, KnownMotion};
@@ -119,6 +123,10 @@ pub struct Diagnosis {
     pub gap: Vec<GapCondition>,
     /// Whether the best effect explains the gap, or none does (item 2 of issue 32).
     pub verdict: Verdict,
+    /// Each candidate's detection limit for this campaign, when asked for.
+    pub limits: Option<DetectionLimits>,
+    /// The next measurement, when asked for (`--suggest`) and something is left to separate.
+    pub suggestions: Option<Suggestions>,
     pub notes: Vec<String>,
     pub particles: u32,
     pub engine: String,
@@ -148,6 +156,8 @@ pub fn diagnose(
     ));
     // the baseline first: its optimum starts every nested effect and the motion screen
     let baseline = fit_baseline(&run, log)?;
+    // what the campaign could not have seen, from the baseline alone
+    let limits = settings.detection_limits.then(|| detection_limits(&run, &baseline, log));
     let screened = screen_motion(&run, &baseline, log)?;
     let baseline_space = baseline.space.clone();
     let ranked = rank_candidates(&run, baseline, screened, log)?;
@@ -163,11 +173,14 @@ pub fn diagnose(
         &located.shown(),
         &located.layers(),
         run.particles(),
+        limits.as_ref().map(DetectionLimits::clause).as_deref(),
     );
     log(format!("diagnose: verdict {}: {}", verdict.kind.name(), verdict.text));
     let best = ranked.best.filter(|e| verdict.demoted != Some(*e));
     // how far two effects go together
     let combined = fit_pair(&run, &ranked, best, log)?;
+    // what to measure next
+    let suggestions = if settings.suggest { suggest(&run, &ranked, &verdict, limits.as_ref(), log) } else { None };
     let (particles, effects, shared) = (run.particles(), run.effects.clone(), run.shared.clone());
     let engine = engine.backend().to_string();
     let super::candidates::Ranked { baseline, ranking, indistinguishable, streams, .. } = ranked;
@@ -182,6 +195,8 @@ pub fn diagnose(
         where_: located.where_,
         gap: located.gap,
         verdict,
+        limits,
+        suggestions,
         notes,
         particles,
         engine,

@@ -9,9 +9,11 @@ use serde_json::Value;
 
 use super::candidates::RANKING_RULE;
 use super::diagnose::Diagnosis;
+use super::limits::{DetectionLimits, PROBABILITY};
 use super::locate::Residual;
 use super::model_result::{ModelResult, Z_FLAG};
 use super::scoring::INTERVAL;
+use super::suggest::{Separation, Suggestions};
 use super::verdict::{Judged, Verdict, CAUSE_SHARE, FLOOR_FACTOR};
 use crate::calibrate::Condition;
 
@@ -57,6 +59,8 @@ struct DiagnosisJson<'a> {
     baseline: BaselineJson<'a>,
     #[serde(rename = "where")]
     where_: WhereJson<'a>,
+    detection_limits: Option<LimitsJson<'a>>,
+    suggestions: Option<SuggestionsJson<'a>>,
 }
 
 impl<'a> DiagnosisJson<'a> {
@@ -108,6 +112,8 @@ impl<'a> DiagnosisJson<'a> {
                 conditions: d.conditions.iter().zip(&d.where_).map(|(c, w)| WhereConditionJson::new(c, w)).collect(),
                 z_flag: Z_FLAG,
             },
+            detection_limits: d.limits.as_ref().map(LimitsJson::new),
+            suggestions: d.suggestions.as_ref().map(SuggestionsJson::new),
         }
     }
 }
@@ -582,4 +588,130 @@ struct NotRemovedBin<'a> {
     z: f64,
     flag: bool,
     from_depth_percent: BTreeMap<&'static str, f64>,
+}
+
+/// `detection_limits`: each candidate parameter's smallest strength the diagnosis detects
+/// with the probability, how it was found, and the ladder it was found on.
+#[derive(Serialize)]
+struct LimitsJson<'a> {
+    probability: f64,
+    method: &'static str,
+    particles: u32,
+    draws: usize,
+    floor: f64,
+    limits: Vec<LimitJson>,
+    skipped: &'a [String],
+}
+
+#[derive(Serialize)]
+struct LimitJson {
+    effect: &'static str,
+    param: &'static str,
+    held: BTreeMap<&'static str, f64>,
+    limit: Option<f64>,
+    found: &'static str,
+    ladder: Vec<RungJson>,
+}
+
+#[derive(Serialize)]
+struct RungJson {
+    strength: f64,
+    probability: f64,
+    expected_gap: f64,
+}
+
+/// How the limits are found, in one line (src/diagnose/limits.rs has the method).
+pub const LIMITS_METHOD: &str = "the fitted baseline with the candidate at a ladder of strengths on common particle \
+     streams; the part of its signature no linearised refit of the baseline (nor a handling loss) removes, with \
+     Gaussian draws of the measured means' and the fresh streams' noise; detected where the judged gap exceeds \
+     3x its floor";
+
+impl<'a> LimitsJson<'a> {
+    fn new(l: &'a DetectionLimits) -> Self {
+        LimitsJson {
+            probability: PROBABILITY,
+            method: LIMITS_METHOD,
+            particles: l.particles,
+            draws: l.draws,
+            floor: l.floor,
+            limits: l
+                .limits
+                .iter()
+                .map(|d| LimitJson {
+                    effect: d.effect.name(),
+                    param: d.param,
+                    held: d.held.iter().copied().collect(),
+                    limit: d.limit,
+                    found: d.found,
+                    ladder: d
+                        .ladder
+                        .iter()
+                        .map(|r| RungJson {
+                            strength: r.strength,
+                            probability: r.probability,
+                            expected_gap: r.expected_gap,
+                        })
+                        .collect(),
+                })
+                .collect(),
+            skipped: &l.skipped,
+        }
+    }
+}
+
+/// `suggestions` (`--suggest`): the models left to separate, why those, what the campaign
+/// already separates, and every proposed condition, best first.
+#[derive(Serialize)]
+struct SuggestionsJson<'a> {
+    models: &'a [String],
+    why: &'a str,
+    current: Vec<SeparationJson<'a>>,
+    proposals: Vec<ProposalJson<'a>>,
+}
+
+#[derive(Serialize)]
+struct SeparationJson<'a> {
+    a: &'a str,
+    b: &'a str,
+    sse: f64,
+    floor: f64,
+    separation: f64,
+}
+
+impl<'a> From<&'a Separation> for SeparationJson<'a> {
+    fn from(s: &'a Separation) -> Self {
+        SeparationJson { a: &s.a, b: &s.b, sse: s.sse, floor: s.floor, separation: s.ratio() }
+    }
+}
+
+#[derive(Serialize)]
+struct ProposalJson<'a> {
+    condition: &'a str,
+    change: BTreeMap<&'static str, f64>,
+    label: String,
+    separation: f64,
+    separates: bool,
+    pairs: Vec<SeparationJson<'a>>,
+}
+
+impl<'a> SuggestionsJson<'a> {
+    fn new(s: &'a Suggestions) -> Self {
+        SuggestionsJson {
+            models: &s.models,
+            why: &s.why,
+            current: s.current.iter().map(Into::into).collect(),
+            proposals: s
+                .proposals
+                .iter()
+                .map(|p| ProposalJson {
+                    condition: &p.base,
+                    change: std::iter::once(p.change.field()).collect(),
+                    label: p.change.label(),
+                    separation: p.worst(),
+                    separates: p.separates(),
+                    pairs: p.pairs.iter().map(Into::into).collect(),
+                })
+                .collect(),
+        }
+    }
 }

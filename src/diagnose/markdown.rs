@@ -5,6 +5,7 @@
 use std::fmt::Write as _;
 
 use super::diagnose::{Diagnosis, ModelResult, Residual, INTERVAL, Z_FLAG};
+use super::limits::{sig3, PROBABILITY};
 
 pub(super) fn f(v: f64, d: usize) -> String {
     if v.is_finite() {
@@ -55,7 +56,7 @@ fn residual_row(label: &str, r: &Residual, d: usize) -> String {
 /// report.md.
 pub fn to_markdown(d: &Diagnosis) -> String {
     let mut s = String::new();
-    for section in [conditions, verdict, where_, which, how_far, pair, plots] {
+    for section in [conditions, verdict, limits, where_, which, how_far, pair, next_measurement, plots] {
         section(&mut s, d);
     }
     s
@@ -429,6 +430,80 @@ fn pair(s: &mut String, d: &Diagnosis) {
             let _ = writeln!(s, "{}\n", row(&m.name(), &m.full.bins[ci]));
         }
     }
+}
+
+/// Detection limits: the smallest strength of each candidate these data detect, and the
+/// ladder it was read from.
+fn limits(s: &mut String, d: &Diagnosis) {
+    let Some(l) = &d.limits else { return };
+    let _ = writeln!(s, "## Detection limits\n");
+    let _ = writeln!(
+        s,
+        "The smallest strength of each candidate at which this campaign's baseline gap would be well above its \
+         noise floor (not `no-gap`) with {:.0} % probability: the fitted baseline with the candidate at a ladder of \
+         strengths ({} particles, common random numbers), less what a refit of the baseline and a handling loss \
+         absorb (linearised), against {} Gaussian draws of the measured means' and the fresh streams' noise \
+         (floor {} %²).\n",
+        100.0 * PROBABILITY,
+        l.particles,
+        l.draws,
+        f(l.floor, 2)
+    );
+    let _ = writeln!(s, "| candidate | parameter | held | limit | P(detect) on the ladder (strength: probability) |");
+    let _ = writeln!(s, "|---|---|---|---|---|");
+    for x in &l.limits {
+        let held: Vec<String> = x.held.iter().map(|(n, v)| format!("{n} {}", sig3(*v))).collect();
+        let ladder: Vec<String> =
+            x.ladder.iter().map(|r| format!("{}: {:.2}", sig3(r.strength), r.probability)).collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} |",
+            x.effect.name(),
+            x.param,
+            if held.is_empty() { "–".to_string() } else { held.join(", ") },
+            x.limit.map_or("above the search box".to_string(), sig3),
+            ladder.join(", ")
+        );
+    }
+    for k in &l.skipped {
+        let _ = writeln!(s, "\n> Note: {k}");
+    }
+    let _ = writeln!(s);
+}
+
+/// The next measurement (`--suggest`): the proposed conditions that would separate what the
+/// diagnosis leaves, best first.
+fn next_measurement(s: &mut String, d: &Diagnosis) {
+    let Some(g) = &d.suggestions else { return };
+    let _ = writeln!(s, "## Next measurement\n");
+    let _ = writeln!(
+        s,
+        "Separating {}: {}. Each proposal is one condition of this campaign with one thing changed, every model \
+         simulated there from its own fit; the separation of two models is the SSE between their predictions over \
+         the noise floor such a condition would have (× floor; above {} separates them). Not refitted: an upper \
+         bound of what the new data would show.\n",
+        g.models.iter().map(|m| format!("`{m}`")).collect::<Vec<_>>().join(", "),
+        g.why,
+        super::verdict::FLOOR_FACTOR
+    );
+    let current: Vec<String> = g.current.iter().map(|c| format!("{} / {} {}×", c.a, c.b, f(c.ratio(), 1))).collect();
+    let _ = writeln!(s, "In the campaign's own conditions: {}.\n", current.join(", "));
+    let _ = writeln!(s, "| rank | condition | change | worst pair (× floor) | every pair |");
+    let _ = writeln!(s, "|---|---|---|---|---|");
+    for (i, p) in g.proposals.iter().take(10).enumerate() {
+        let pairs: Vec<String> = p.pairs.iter().map(|c| format!("{} / {} {}×", c.a, c.b, f(c.ratio(), 1))).collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {}{} | {} |",
+            i + 1,
+            p.base,
+            p.change.label(),
+            f(p.worst(), 1),
+            if p.separates() { " (separates)" } else { "" },
+            pairs.join(", ")
+        );
+    }
+    let _ = writeln!(s, "\nEvery proposal: `diagnosis.json`'s `suggestions`.\n");
 }
 
 /// Where the figures and numbers are.

@@ -9,6 +9,7 @@ pub mod candidates;
 #[allow(clippy::module_inception)]
 pub mod diagnose;
 pub mod json;
+pub mod limits;
 pub mod locate;
 pub mod markdown;
 pub mod model_result;
@@ -18,5 +19,6 @@ pub mod render;
 pub mod request;
 pub mod run;
 pub mod scoring;
+pub mod suggest;
 pub mod synth;
 pub mod verdict;

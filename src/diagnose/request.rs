@@ -41,6 +41,10 @@ pub struct DiagnoseRequest {
     pub rescore_streams: usize,
     /// Bootstrap replicates for the intervals.
     pub bootstrap: usize,
+    /// Each candidate's detection limit for this campaign.
+    pub detection_limits: bool,
+    /// Which additional condition would separate the candidates the diagnosis leaves.
+    pub suggest: bool,
     /// report.md, diagnosis.json and the figures go here.
     pub out: PathBuf,
     /// How the user spelled the fields, for the errors.
@@ -50,6 +54,17 @@ pub struct DiagnoseRequest {
 impl DiagnoseRequest {
     pub const DEFAULT_RESCORE_STREAMS: usize = 4;
     pub const DEFAULT_BOOTSTRAP: usize = 400;
+    /// The effort of a diagnosis: the calibration's, with half its generations of
+    /// differential evolution — every candidate's population starts from the baseline's
+    /// optimum (the effect off, and its own parameters spread over their box), and the
+    /// Levenberg–Marquardt polish takes it from there (docs/diagnosis-report.md, "Time").
+    pub const DEFAULT_EFFORT: EffortSettings = EffortSettings {
+        particles: None,
+        max_particles: EffortSettings::DEFAULT_MAX_PARTICLES,
+        pop: EffortSettings::DEFAULT_POP,
+        generations: 10,
+        polish: EffortSettings::DEFAULT_POLISH,
+    };
 
     pub fn new(data: Vec<PathBuf>, setup: Vec<PathBuf>, out: PathBuf, spelling: Spelling) -> Self {
         DiagnoseRequest {
@@ -58,10 +73,12 @@ impl DiagnoseRequest {
             effects: EffectKind::ALL.to_vec(),
             seed: None,
             engine: EngineKind::Cpu,
-            effort: EffortSettings::default(),
+            effort: Self::DEFAULT_EFFORT,
             normalise: None,
             rescore_streams: Self::DEFAULT_RESCORE_STREAMS,
             bootstrap: Self::DEFAULT_BOOTSTRAP,
+            detection_limits: true,
+            suggest: false,
             out,
             spelling,
         }
@@ -146,8 +163,9 @@ pub fn run(r: &DiagnoseRequest, log: &mut dyn FnMut(String)) -> anyhow::Result<(
         }
         conditions.push(c);
     }
-    if applicable_effects(&r.effects, &conditions).0.is_empty() {
-        bail!("{}: {NO_EFFECT_APPLIES}", name("effects"));
+    let (applicable, left_out) = applicable_effects(&r.effects, &conditions);
+    if applicable.is_empty() {
+        bail!("{}: {NO_EFFECT_APPLIES} ({})", name("effects"), left_out.join("; "));
     }
     let seed = conditions[0].base.sim.seed;
     // the output folder is owned before the work, so a busy or foreign folder costs nothing
@@ -158,6 +176,8 @@ pub fn run(r: &DiagnoseRequest, log: &mut dyn FnMut(String)) -> anyhow::Result<(
         effort: r.effort.with_seed(seed),
         rescore_streams: r.rescore_streams,
         bootstrap: r.bootstrap,
+        detection_limits: r.detection_limits,
+        suggest: r.suggest,
     };
     let started = std::time::Instant::now();
     let d = diagnose(engine.as_ref(), conditions, settings, log)?;

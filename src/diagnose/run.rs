@@ -4,7 +4,7 @@
 
 use anyhow::bail;
 
-use crate::calibrate::{Condition, Effort, ObjectiveKind, Param, Simulator, Solver, Target};
+use crate::calibrate::{Condition, Effort, ObjectiveKind, Param, PolishMethod, Simulator, Solver, Target};
 use crate::engine::BatchEvaluator;
 use crate::model::effects::{known_effects, EffectKind};
 
@@ -39,21 +39,46 @@ pub struct Settings {
     /// Fresh particle streams every fitted model is re-scored with.
     pub rescore_streams: usize,
     pub bootstrap: usize,
+    /// Each candidate's detection limit for this campaign ([`super::limits`]).
+    pub detection_limits: bool,
+    /// The additional conditions that would separate what the diagnosis leaves
+    /// ([`super::suggest`]).
+    pub suggest: bool,
 }
 
 /// What is said when none of the candidate effects can act on the setups.
-pub const NO_EFFECT_APPLIES: &str =
-    "no candidate effect applies to these setups (those asked for change only drag, and every setup is in vacuum, k_drag 0)";
+pub const NO_EFFECT_APPLIES: &str = "no candidate effect applies to these setups";
+
+/// A sled motion that sets in this late after the launch is no motion for the flights: the
+/// top of the sled-motion candidate's delay box ("a delay beyond the flights is the same as no
+/// motion", `EffectKind::search_bounds`).
+pub fn motion_past_the_flights_s() -> f64 {
+    EffectKind::SledMotion.search_bounds()[0].1
+}
 
 /// The candidate effects that can change these setups' outcome, and a note for each left out:
-/// an effect that only changes drag does nothing when every setup is in vacuum. The CLI asks
-/// this before any simulation, so that an empty list is an error about its own flag.
+/// an effect that only changes drag does nothing when every setup is in vacuum, and the
+/// sled-motion candidate is the baseline itself when every setup states a motion that sets in
+/// only after the flights (the practice rig's sled rests 5 s: fitting it again costs a sixth of
+/// the candidates' simulations, each flight searched in pieces, for the baseline's answer).
+/// The CLI asks this before any simulation, so that an empty list is an error about its own
+/// flag.
 pub fn applicable_effects(candidates: &[EffectKind], conditions: &[Condition]) -> (Vec<EffectKind>, Vec<String>) {
     let any_drag = conditions.iter().any(Condition::has_drag);
+    let late = motion_past_the_flights_s();
+    let inert_motion = !conditions.is_empty()
+        && conditions
+            .iter()
+            .all(|c| c.motion.return_speed_m_s.is_some() && c.motion.delay_s.is_some_and(|d| d >= late));
     let (mut effects, mut notes) = (Vec::new(), Vec::new());
     for e in candidates {
         if e.needs_air() && !any_drag {
             notes.push(format!("{} skipped: it only changes drag, and every setup is in vacuum (k_drag 0)", e.name()));
+        } else if *e == EffectKind::SledMotion && inert_motion {
+            notes.push(format!(
+                "sled-motion skipped: every setup states a sled that rests at least {late} s after the launch, past the \
+                 flights, so the candidate is the baseline"
+            ));
         } else {
             effects.push(*e);
         }
@@ -158,7 +183,7 @@ impl<'a> Run<'a> {
         let (effects, skipped) = applicable_effects(&settings.effects, conditions);
         notes.extend(skipped);
         if effects.is_empty() {
-            bail!("settings.effects: {NO_EFFECT_APPLIES}");
+            bail!("settings.effects: {NO_EFFECT_APPLIES} ({})", notes.join("; "));
         }
         if effects.contains(&EffectKind::SledMotion) {
             notes.extend(sled_motion_notes(conditions));
@@ -170,8 +195,11 @@ impl<'a> Run<'a> {
                     .to_string(),
             );
         }
-        let (solver, budget_note) = settings.effort.solver(ObjectiveKind::Sse, conditions);
+        let (mut solver, budget_note) = settings.effort.solver(ObjectiveKind::Sse, conditions);
         notes.extend(budget_note);
+        // the SSE is a sum of squares of the bins: Levenberg-Marquardt steps polish it with
+        // a fraction of the compass search's simulations (docs/diagnosis-report.md, "Time")
+        solver.polish_method = PolishMethod::LevenbergMarquardt;
         let run = Run {
             sim: Simulator { engine, conditions },
             solver,

@@ -395,6 +395,7 @@ pub fn verdict(
     shown: &[usize],
     layers: &[Vec<DepthLayer>],
     particles: u32,
+    limits: Option<&str>,
 ) -> Verdict {
     let base = judge(conds, baseline, particles);
     // the best effect, else the candidate that comes closest to the data once judged
@@ -447,7 +448,7 @@ pub fn verdict(
     let mut models: Vec<&ModelResult> = vec![baseline];
     models.extend(ranking.iter());
     let persistent = persistent(conds, &models, shown, layers, particles);
-    let mut text = describe(kind, &base, &remaining, &partial, demoted, &persistent, conds);
+    let mut text = describe(kind, &base, &remaining, &partial, demoted, &persistent, conds, limits);
     if let (Some(e), VerdictKind::Explained | VerdictKind::PartlyExplained) = (best, kind) {
         text.push_str(&alike_clause(e, indistinguishable));
     }
@@ -475,6 +476,7 @@ fn alike_clause(best: EffectKind, indistinguishable: &[EffectKind]) -> String {
     )
 }
 
+#[allow(clippy::too_many_arguments)]
 fn describe(
     kind: VerdictKind,
     base: &Judged,
@@ -483,36 +485,44 @@ fn describe(
     demoted: Option<EffectKind>,
     persistent: &[PersistentCondition],
     conds: &[Condition],
+    limits: Option<&str>,
 ) -> String {
     let floor_words =
         |j: &Judged| format!("{:.1} %² against a noise floor of {:.1} %² ({:.1}×)", j.gap, j.floor, j.ratio());
-    let mut s = match kind {
-        VerdictKind::NoGap => format!(
+    let mut s = match (kind, limits.filter(|l| !l.is_empty())) {
+        // what "no gap" cannot rule out: each candidate below its detection limit
+        (VerdictKind::NoGap, Some(limits)) => format!(
+            "no gap that these data resolve: {limits} (each detected with 90 % probability only above that); the \
+             baseline's loss-adjusted gap is {} — within {FLOOR_FACTOR}× of what the runs' spread, the scale and the \
+             simulation's noise explain",
+            floor_words(base)
+        ),
+        (VerdictKind::NoGap, None) => format!(
             "no gap to explain: the baseline's loss-adjusted gap is {} — within {FLOOR_FACTOR}× of what the runs' \
              spread, the scale and the simulation's noise explain",
             floor_words(base)
         ),
-        VerdictKind::Explained => format!(
+        (VerdictKind::Explained, _) => format!(
             "explained by `{}`: it leaves {}, within {FLOOR_FACTOR}× of the floor (baseline {})",
             remaining.model,
             floor_words(remaining),
             floor_words(base)
         ),
-        VerdictKind::PartlyExplained => format!(
+        (VerdictKind::PartlyExplained, _) => format!(
             "partly explained by `{}`: the baseline's {} falls to {} — the rest is well above the noise and no \
              candidate removes it",
             remaining.model,
             floor_words(base),
             floor_words(remaining)
         ),
-        VerdictKind::Undecided => format!(
+        (VerdictKind::Undecided, _) => format!(
             "undecided: the baseline's {} is well above the noise, and `{}` would leave {} — within {FLOOR_FACTOR}× \
              of its floor — but no candidate beats the baseline beyond the uncertainty by a material share",
             floor_words(base),
             remaining.model,
             floor_words(remaining)
         ),
-        VerdictKind::Unexplained => format!(
+        (VerdictKind::Unexplained, _) => format!(
             "none of these: the baseline's {} and the best candidate (`{}`) still leaves {} — no candidate explains \
              the gap",
             floor_words(base),

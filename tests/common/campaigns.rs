@@ -42,12 +42,17 @@ pub fn synth(setup: &str, effect: Option<&str>, seed: u64, out: &Path) {
 /// diagnosis is not told which one made the data) at the CI budget; the printed JSON is
 /// diagnosis.json's and report.md states its verdict. Returns diagnosis.json.
 pub fn diagnose(pairs: &[(impl AsRef<Path>, impl AsRef<str>)], out: &Path) -> Value {
+    diagnose_with(pairs, out, &[])
+}
+
+/// [`diagnose`] with `extra` flags (`--suggest`).
+pub fn diagnose_with(pairs: &[(impl AsRef<Path>, impl AsRef<str>)], out: &Path, extra: &[&str]) -> Value {
     let mut c = sawtooth();
     c.arg("diagnose");
     for (data, setup) in pairs {
         c.arg("--data").arg(data.as_ref()).args(["--setup", setup.as_ref()]);
     }
-    let o = c.args(CI_BUDGET).arg("--json").arg("--out").arg(out).output().unwrap();
+    let o = c.args(CI_BUDGET).args(extra).arg("--json").arg("--out").arg(out).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     let file: Value = serde_json::from_str(&std::fs::read_to_string(out.join("diagnosis.json")).unwrap()).unwrap();

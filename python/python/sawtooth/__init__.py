@@ -98,7 +98,8 @@ def diagnose(
     and the SVG plots; without it they go to a temporary directory that is removed.
     Keyword options are the command's flags with underscores (``effects``, ``seed``,
     ``engine``, ``particles``, ``max_particles``, ``pop``, ``generations``, ``polish``,
-    ``normalise``, ``rescore_streams``, ``bootstrap``).
+    ``normalise``, ``rescore_streams``, ``bootstrap``); ``detection_limits=False`` leaves out
+    each candidate's detection limit, ``suggest=True`` ranks the next measurement.
     """
     datas = [data] if isinstance(data, (str, os.PathLike)) else list(data)
     setups = [setup] if isinstance(setup, (str, os.PathLike)) else list(setup)
