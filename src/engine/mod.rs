@@ -50,7 +50,7 @@ impl Context {
             mode: s.mode,
             g: s.environment.g,
             k_drag: s.environment.k_drag.unwrap_or(0.0),
-            restitution: Restitution::new(s.mode, s.collision.k_elastic, s.collision.mu_friction, &s.material),
+            restitution: Restitution::new(s.mode, &s.collision, &s.material),
             randomise,
             band: s.sim.random_band,
             seed: s.sim.seed,
