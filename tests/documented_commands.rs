@@ -16,27 +16,7 @@ use sawtooth::cli::Cli;
 fn documented_commands(file: &str) -> Vec<(usize, Vec<String>)> {
     let text = std::fs::read_to_string(format!("{}/{file}", env!("CARGO_MANIFEST_DIR"))).unwrap();
     let mut commands = Vec::new();
-    let (mut in_shell, mut pending, mut start) = (false, String::new(), 0);
-    for (i, line) in text.lines().enumerate() {
-        let trimmed = line.trim();
-        if let Some(lang) = trimmed.strip_prefix("```") {
-            in_shell = !in_shell && (lang == "sh" || lang == "bash");
-            continue;
-        }
-        if !in_shell {
-            continue;
-        }
-        if pending.is_empty() {
-            start = i + 1;
-        }
-        let code = strip_comment(line);
-        if let Some(head) = code.trim_end().strip_suffix('\\') {
-            pending.push_str(head);
-            pending.push(' ');
-            continue;
-        }
-        pending.push_str(&code);
-        let joined = std::mem::take(&mut pending);
+    for (start, joined) in shell_lines(&text) {
         for runner in ["cargo run --release -- ", "$S ", "$st ", "target/release/sawtooth ", "sawtooth "] {
             // the command starts the line, or follows `time`, `&&`, `;` or `$(`
             let Some(at) = joined.find(runner) else { continue };
@@ -62,6 +42,66 @@ fn documented_commands(file: &str) -> Vec<(usize, Vec<String>)> {
         }
     }
     commands
+}
+
+/// The command lines of a Markdown page's shell blocks (```sh, ```bash): continuation lines
+/// joined, comments dropped. Returns (the line the command starts on, the command).
+fn shell_lines(text: &str) -> Vec<(usize, String)> {
+    let mut lines = Vec::new();
+    let (mut in_shell, mut pending, mut start) = (false, String::new(), 0);
+    for (i, line) in text.lines().enumerate() {
+        if let Some(lang) = line.trim().strip_prefix("```") {
+            in_shell = !in_shell && (lang == "sh" || lang == "bash");
+            continue;
+        }
+        if !in_shell {
+            continue;
+        }
+        if pending.is_empty() {
+            start = i + 1;
+        }
+        let code = strip_comment(line);
+        if let Some(head) = code.trim_end().strip_suffix('\\') {
+            pending.push_str(head);
+            pending.push(' ');
+            continue;
+        }
+        pending.push_str(&code);
+        lines.push((start, std::mem::take(&mut pending)));
+    }
+    lines
+}
+
+/// The inline code spans of a page's prose (outside fenced blocks), each with the line it
+/// starts on; a span may wrap onto the next line of its paragraph.
+fn inline_code(text: &str) -> Vec<(usize, String)> {
+    let mut spans = Vec::new();
+    let (mut fenced, mut paragraph, mut first_line) = (false, String::new(), 0);
+    let mut end_paragraph = |paragraph: &mut String, first_line: usize| {
+        let text = std::mem::take(paragraph);
+        let mut offset = 0;
+        for (k, piece) in text.split('`').enumerate() {
+            if k % 2 == 1 {
+                spans.push((first_line + text[..offset].matches('\n').count(), piece.replace('\n', " ")));
+            }
+            offset += piece.len() + 1;
+        }
+    };
+    for (i, line) in text.lines().enumerate() {
+        let fence = line.trim().starts_with("```");
+        if fence || (!fenced && line.trim().is_empty()) {
+            end_paragraph(&mut paragraph, first_line);
+            fenced ^= fence;
+        } else if !fenced {
+            if paragraph.is_empty() {
+                first_line = i + 1;
+            }
+            paragraph.push_str(line);
+            paragraph.push('\n');
+        }
+    }
+    end_paragraph(&mut paragraph, first_line);
+    spans
 }
 
 /// A shell variable's name: letters, digits and underscores, not starting with a digit.
@@ -279,64 +319,11 @@ fn all_pages() -> Vec<String> {
     ["README.md", "BENCHMARKS.md", "CHANGELOG.md"].map(String::from).into_iter().chain(docs_pages()).collect()
 }
 
-/// The cargo invocations a Markdown page shows: in its shell blocks (continuations joined,
-/// comments dropped) and in the inline code of its prose (a span may wrap onto the next line
-/// of its paragraph). Returns (line number, the words after `cargo`).
+/// The cargo invocations a Markdown page shows, in its shell blocks and in the inline code
+/// of its prose. Returns (line number, the words after `cargo`).
 fn cargo_invocations(text: &str) -> Vec<(usize, Vec<String>)> {
-    let mut snippets: Vec<(usize, String)> = Vec::new();
-    // Some(true): in a shell block; Some(false): in another fenced block; None: prose
-    let mut fence: Option<bool> = None;
-    let (mut pending, mut start) = (String::new(), 0);
-    let (mut paragraph, mut paragraph_start) = (String::new(), 0);
-    let inline_spans = |paragraph: &mut String, first_line: usize, snippets: &mut Vec<(usize, String)>| {
-        let text = std::mem::take(paragraph);
-        let mut offset = 0;
-        for (k, piece) in text.split('`').enumerate() {
-            if k % 2 == 1 {
-                let line = first_line + text[..offset].matches('\n').count();
-                snippets.push((line, piece.replace('\n', " ")));
-            }
-            offset += piece.len() + 1;
-        }
-    };
-    for (i, line) in text.lines().enumerate() {
-        let trimmed = line.trim();
-        if let Some(lang) = trimmed.strip_prefix("```") {
-            inline_spans(&mut paragraph, paragraph_start, &mut snippets);
-            fence = match fence {
-                None => Some(lang == "sh" || lang == "bash"),
-                Some(_) => None,
-            };
-            continue;
-        }
-        match fence {
-            Some(true) => {
-                if pending.is_empty() {
-                    start = i + 1;
-                }
-                let code = strip_comment(line);
-                if let Some(head) = code.trim_end().strip_suffix('\\') {
-                    pending.push_str(head);
-                    pending.push(' ');
-                    continue;
-                }
-                pending.push_str(&code);
-                snippets.push((start, std::mem::take(&mut pending)));
-            }
-            Some(false) => {}
-            None if trimmed.is_empty() => inline_spans(&mut paragraph, paragraph_start, &mut snippets),
-            None => {
-                if paragraph.is_empty() {
-                    paragraph_start = i + 1;
-                }
-                paragraph.push_str(line);
-                paragraph.push('\n');
-            }
-        }
-    }
-    inline_spans(&mut paragraph, paragraph_start, &mut snippets);
     let mut invocations = Vec::new();
-    for (line, snippet) in snippets {
+    for (line, snippet) in shell_lines(text).into_iter().chain(inline_code(text)) {
         for command in snippet.replace("&&", ";").split(['|', ';', '(', ')']) {
             let w = words(command);
             if let Some(at) = w.iter().position(|x| x == "cargo") {
