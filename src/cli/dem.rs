@@ -205,7 +205,7 @@ fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     plan.case(0).map_err(anyhow::Error::msg)?;
     let _owned = RunDir::acquire(&a.out, "dem", Access::Exclusive).context("--out")?;
     let results = campaign::run(&a.out, &plan, jobs, &|line| eprintln!("dem: {line}"))?;
-    let c = compare(&plan.scenario, &plan.design, &results)?;
+    let c = compare(&plan.scenario, &plan.design, &results, None)?;
     write_table(out, &c)?;
     writeln!(
         out,
@@ -237,7 +237,7 @@ fn load_campaign(dir: &Path) -> anyhow::Result<(Plan, Vec<crate::dem::gather::Ru
 
 fn compare_cmd(a: CompareArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let (plan, results) = load_campaign(&a.dir)?;
-    let c = compare(&plan.scenario, &plan.design, &results)?;
+    let c = compare(&plan.scenario, &plan.design, &results, None)?;
     let _owned = RunDir::acquire(&a.dir, "dem", Access::Exclusive).context("DIR")?;
     let json = serde_json::to_string_pretty(&c)?;
     write_atomic(&a.dir.join("compare.json"), json.as_bytes())?;
@@ -283,9 +283,25 @@ fn write_table(out: &mut dyn Write, c: &Comparison) -> anyhow::Result<()> {
     )?;
     writeln!(
         out,
+        "model variants (d_avg): on a {}-tooth conveyor {:.2} mm{}{}",
+        crate::dem::case::REACH_CONVEYOR_TEETH,
+        c.model_untruncated_d_avg_mm,
+        c.model_from_bed_d_avg_mm.map_or(String::new(), |d| format!("; from the DEM's settled bed {d:.2} mm")),
+        c.model_dem_law_d_avg_mm.map_or(String::new(), |d| format!("; with the DEM's restitution law {d:.2} mm"))
+    )?;
+    writeln!(
+        out,
+        "past the mesh's last tooth: model {:.2} %, DEM {:.2} ± {:.2} %",
+        c.model_past_end_pct, c.dem_past_end_pct.mean, c.dem_past_end_pct.sd
+    )?;
+    writeln!(
+        out,
         "cost per design: model {:.4} s ({} particles, cpu), DEM {:.1} ± {:.1} s per run",
         c.model_s, c.model_particles, c.dem_s.mean, c.dem_s.sd
     )?;
+    for w in &c.warnings {
+        writeln!(out, "warning: {w}")?;
+    }
     Ok(())
 }
 

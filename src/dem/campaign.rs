@@ -12,8 +12,8 @@ use std::sync::Mutex;
 use anyhow::{bail, Context as _};
 use serde::{Deserialize, Serialize};
 
-use super::case::{Case, DUMP, STROKE_TIME};
-use super::gather::{measured_csv, parse_dump, reduce, setup_toml, RunResult};
+use super::case::{Case, DUMP, SETTLED, STROKE_TIME};
+use super::gather::{measured_csv, parse_dump, parse_positions, reduce, setup_toml, RunResult};
 use super::run::{find_liggghts, run_case};
 use super::settings::DemSettings;
 use crate::io::atomic::write_atomic;
@@ -203,7 +203,11 @@ fn one_run(dir: &Path, plan: &Plan, r: u32, binary: &Path, say: &(dyn Fn(String)
         Ok(t) => t.trim().parse::<f64>().with_context(|| format!("reading {}", rd.join(STROKE_TIME).display()))?,
         Err(_) => f64::INFINITY,
     };
-    let result = reduce(&case, &parse_dump(&dump)?, stroke_time, finished.wall_s);
+    let mut result = reduce(&case, &parse_dump(&dump)?, stroke_time, finished.wall_s);
+    // the bed before the stroke (cases written before it was dumped have none)
+    if let Ok(text) = std::fs::read_to_string(rd.join(SETTLED)) {
+        result.settled_xy_m = parse_positions(&text)?.into_iter().map(|p| [p[0], p[1]]).collect();
+    }
     write_atomic(&rd.join(RESULT), serde_json::to_string_pretty(&result)?.as_bytes())?;
     say(format!(
         "run {} done in {:.1} s: d_avg {:.2} mm, {} of {} grains lost, {} still moving",

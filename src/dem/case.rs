@@ -31,6 +31,8 @@ pub const MESH: &str = "sled.stl";
 pub const GRAINS: &str = "grains.data";
 pub const MANIFEST: &str = "case.json";
 pub const DUMP: &str = "final.dump";
+/// The grains' positions after settling, before the stroke (the bed the model can be told).
+pub const SETTLED: &str = "settled.dump";
 /// The stroke time at which the run ended, s (the mesh's position then is the binning frame).
 pub const STROKE_TIME: &str = "stroke_time.txt";
 
@@ -40,6 +42,9 @@ const CHUNK_S: f64 = 0.02;
 const MAX_SETTLE_S: f64 = 1.0;
 /// Teeth the mesh keeps beyond the model's farthest resting grain (and at least this many).
 const REACH_MARGIN_TEETH: u32 = 3;
+/// The conveyor the model's reach is measured on, teeth: longer than any flight of the
+/// optimiser's range (lunar pick B, v0 1.93 m/s, rests within 40 teeth).
+pub const REACH_CONVEYOR_TEETH: u32 = 400;
 
 /// Everything the case is made of; `case.json` is this, serialised.
 #[derive(Clone, Debug, Serialize)]
@@ -310,6 +315,7 @@ impl Case {
              thermo_style custom step atoms ke v_vrms v_t\nthermo {chunk}\nthermo_modify lost ignore norm no\n\
              # settle\nvariable settle loop {settle_chunks}\nlabel settling\nrun {chunk}\n\
              if \"${{vrms}} < {rest:e}\" then \"jump SELF settled\"\nnext settle\njump SELF settling\nlabel settled\n\
+             write_dump all custom {SETTLED} id x y z\n\
              variable now equal step\nvariable s0 equal ${{now}}\nprint \"sawtooth: stroke starts at step ${{s0}}\"\n\
              # the stroke\nrun {stroke}\n\
              # until the grains rest (and a return is not under way)\nvariable rest loop {rest_chunks}\nlabel resting\nrun {chunk}\n\
@@ -324,13 +330,18 @@ impl Case {
     }
 }
 
-/// Teeth the mesh needs: the model's farthest resting grain plus a margin, at most
-/// `sim.teeth` (a longer mesh costs LIGGGHTS bins and facets for nothing; a DEM grain that
-/// goes past the end is counted lost and warned about, and `[dem] teeth` lengthens it).
+/// Teeth the mesh needs: the model's farthest resting grain on a conveyor long enough that
+/// none of its grains leaves past the end ([`REACH_CONVEYOR_TEETH`]), plus a margin, so that
+/// neither side truncates (issue 42: a 20-tooth mesh cut the lunar rig's flights short, and
+/// compared one truncation with another). `[dem] teeth` states the mesh instead; `dem
+/// compare` judges the model on the DEM's mesh and warns where either side loses grains
+/// past its end.
 fn model_reach(s: &Scenario, d: &Design) -> Result<u32, String> {
     let engine = make_engine(EngineKind::Cpu).map_err(|e| e.to_string())?;
-    let det =
-        evaluate_detailed(engine.as_ref(), s, d, false).map_err(|e| format!("invalid design ({}): {e}", e.rule()))?;
+    let mut long = s.clone();
+    long.sim.teeth = long.sim.teeth.max(REACH_CONVEYOR_TEETH);
+    let det = evaluate_detailed(engine.as_ref(), &long, d, false)
+        .map_err(|e| format!("invalid design ({}): {e}", e.rule()))?;
     let far = det
         .particles
         .iter()
@@ -338,7 +349,7 @@ fn model_reach(s: &Scenario, d: &Design) -> Result<u32, String> {
         .map(|p| crate::model::outcome::end_tooth(&det.prepared.profile, p.end))
         .max()
         .unwrap_or(1);
-    Ok((far + REACH_MARGIN_TEETH).max(2 + REACH_MARGIN_TEETH).min(s.sim.teeth))
+    Ok((far + REACH_MARGIN_TEETH).max(2 + REACH_MARGIN_TEETH).min(crate::schema::DEM_TEETH.max as u32))
 }
 
 /// The box: the mesh over its whole motion, room behind tooth 0 and below the profile for
