@@ -12,6 +12,7 @@ use clap::{Args, Subcommand};
 use super::args::ScenarioArgs;
 use crate::dem::campaign::{self, Plan};
 use crate::dem::compare::{compare, shown_teeth, Comparison, ComparisonPlot};
+use crate::dem::impact;
 use crate::dem::{Case, DemSettings};
 use crate::io::atomic::write_atomic;
 use crate::io::config::ConfigFile;
@@ -28,6 +29,34 @@ pub enum DemCommand {
     Compare(CompareArgs),
     /// An optimisation's picks and front designs in DEM: d_avg, mass flow, W_spec, verdicts.
     Check(CheckArgs),
+    /// Single grains of a case in LIGGGHTS beside the model's restitution law: normal COR,
+    /// tangential ratio and spin per impact speed and angle; --law-out writes the DEM's law.
+    Impact(ImpactArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct ImpactArgs {
+    #[command(flatten)]
+    pub case: CaseArgs,
+    /// Impact speeds, m/s (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "0.02,0.3,1.0,1.5")]
+    pub speeds: Vec<f64>,
+    /// Impact angles from the surface normal, degrees (comma-separated; 0 = head-on).
+    #[arg(long, value_delimiter = ',', default_value = "0,5,10,20,30,45,60,75")]
+    pub angles: Vec<f64>,
+    /// Also measure the DEM's restitution law for the model (k_t at each psi node) and write
+    /// it as a `[collision]` table (`law = "dem"`) to this file.
+    #[arg(long)]
+    pub law_out: Option<PathBuf>,
+    /// LIGGGHTS processes at a time [default: the cores].
+    #[arg(long)]
+    pub jobs: Option<usize>,
+    /// Where the impacts' folders, impact.json and the figure go.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// What a case is built from: the scenario as `simulate` takes it, a design, and the DEM's
@@ -113,7 +142,73 @@ pub fn run(c: DemCommand, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         DemCommand::Run(a) => run_campaign(a, out),
         DemCommand::Compare(a) => compare_cmd(a, out),
         DemCommand::Check(a) => check(a, out),
+        DemCommand::Impact(a) => impact_cmd(a, out),
     }
+}
+
+fn impact_cmd(a: ImpactArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    let jobs = jobs(a.jobs)?;
+    for &v in &a.speeds {
+        if !(v.is_finite() && (1e-3..=20.0).contains(&v)) {
+            bail!("--speeds: each impact speed must lie in [0.001, 20] m/s, got {v}");
+        }
+    }
+    for &d in &a.angles {
+        if !(d.is_finite() && (0.0..=89.0).contains(&d)) {
+            bail!("--angles: each angle from the normal must lie in [0, 89] deg, got {d}");
+        }
+    }
+    if a.speeds.len() * a.angles.len() > 400 {
+        bail!("--speeds x --angles: at most 400 impacts, got {}", a.speeds.len() * a.angles.len());
+    }
+    let (scenario, design, settings, known) = resolve(&a.case)?;
+    let case = Case::build(&scenario, &design, &settings, scenario.sim.seed, known).map_err(anyhow::Error::msg)?;
+    let binary = crate::dem::run::find_liggghts()?;
+    let _owned = RunDir::acquire(&a.out, "dem-impact", Access::Exclusive).context("--out")?;
+    let impacts = impact::measure(&case, &binary, &a.out, &a.speeds, &a.angles, jobs)?;
+    let json = serde_json::to_string_pretty(&impacts)?;
+    write_atomic(&a.out.join("impact.json"), json.as_bytes())?;
+    crate::plot::write_figure_files(&a.out, "impact", &impact::ImpactPlot::new(&impacts, &case))?;
+    let law = match &a.law_out {
+        Some(path) => {
+            let law = impact::measure_law(&case, &binary, &a.out.join("law"), jobs)?;
+            write_atomic(path, impact::law_toml(&law, &case).as_bytes())
+                .with_context(|| format!("--law-out {}", path.display()))?;
+            Some(law)
+        }
+        None => None,
+    };
+    if a.json {
+        writeln!(out, "{json}")?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    writeln!(out, "speed m/s  angle deg    psi   DEM k_n  model k_n   DEM k_t  model k_t  DEM spin")?;
+    let opt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.3}"));
+    for i in &impacts {
+        writeln!(
+            out,
+            "{:>9.3} {:>10.1} {:>6.2} {:>9.3} {:>10.3} {:>9} {:>10} {:>9}",
+            i.speed_m_s,
+            i.angle_deg,
+            i.psi,
+            i.dem_normal_cor,
+            i.model_normal_cor,
+            opt(i.dem_tangential_ratio),
+            opt(i.model_tangential_ratio),
+            opt(i.dem_spin_ratio)
+        )?;
+    }
+    if let (Some(law), Some(path)) = (law, &a.law_out) {
+        writeln!(
+            out,
+            "\nthe DEM's law (k_t at psi {:?}): {:?}\nwrote {}",
+            crate::model::collision::TANGENTIAL_PSI,
+            law.tangential_ratio.iter().map(|v| (v * 1000.0).round() / 1000.0).collect::<Vec<_>>(),
+            path.display()
+        )?;
+    }
+    writeln!(out, "wrote {0}/impact.json, {0}/impact.svg, {0}/impact.png", a.out.display())?;
+    Ok(ExitCode::SUCCESS)
 }
 
 /// A setup's stated sled return: delay (s), speed (m/s).
@@ -205,7 +300,7 @@ fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     plan.case(0).map_err(anyhow::Error::msg)?;
     let _owned = RunDir::acquire(&a.out, "dem", Access::Exclusive).context("--out")?;
     let results = campaign::run(&a.out, &plan, jobs, &|line| eprintln!("dem: {line}"))?;
-    let c = compare(&plan.scenario, &plan.design, &results, None)?;
+    let c = compare(&plan.scenario, &plan.design, &results, campaign::law(&a.out)?.as_ref())?;
     write_table(out, &c)?;
     writeln!(
         out,
@@ -237,7 +332,7 @@ fn load_campaign(dir: &Path) -> anyhow::Result<(Plan, Vec<crate::dem::gather::Ru
 
 fn compare_cmd(a: CompareArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let (plan, results) = load_campaign(&a.dir)?;
-    let c = compare(&plan.scenario, &plan.design, &results, None)?;
+    let c = compare(&plan.scenario, &plan.design, &results, campaign::law(&a.dir)?.as_ref())?;
     let _owned = RunDir::acquire(&a.dir, "dem", Access::Exclusive).context("DIR")?;
     let json = serde_json::to_string_pretty(&c)?;
     write_atomic(&a.dir.join("compare.json"), json.as_bytes())?;

@@ -23,6 +23,9 @@ pub const PLAN: &str = "plan.json";
 pub const RESULT: &str = "result.json";
 pub const CSV: &str = "dem.csv";
 pub const SETUP: &str = "setup.toml";
+/// The DEM's restitution law measured on single grains of the campaign's case
+/// (`super::impact::measure_law`), as a `[collision]` table; `dem compare` runs the model with it.
+pub const LAW: &str = "law.toml";
 
 /// What determines a campaign; a folder holds one plan.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -122,6 +125,11 @@ pub fn run(dir: &Path, plan: &Plan, jobs: usize, say: &(dyn Fn(String) + Sync)) 
         bail!("{} of {} runs failed (rerun the same command to resume); first: {f}", failures.len(), todo.len());
     }
     let all = gather(dir, plan)?;
+    if !dir.join(LAW).is_file() {
+        say("measuring the DEM's restitution law on single grains of the case (dem impact)".into());
+        let law = super::impact::measure_law(&first, &binary, &dir.join("law"), jobs)?;
+        write_atomic(&dir.join(LAW), super::impact::law_toml(&law, &first).as_bytes())?;
+    }
     let lost: usize = all.iter().map(|r| r.lost).sum();
     if lost > 0 {
         let grains: usize = all.iter().map(|r| r.grains).sum();
@@ -149,6 +157,18 @@ pub fn run_one(dir: &Path, plan: &Plan, r: u32, say: &(dyn Fn(String) + Sync)) -
     let binary = find_liggghts()?;
     one_run(dir, plan, r, &binary, say)?;
     Ok(true)
+}
+
+/// The campaign's measured DEM law ([`LAW`]), if it has one.
+pub fn law(dir: &Path) -> anyhow::Result<Option<crate::model::Collision>> {
+    let path = dir.join(LAW);
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let file = crate::io::config::ConfigFile::parse(&text).with_context(|| format!("reading {}", path.display()))?;
+    let collision = file.scenario().with_context(|| format!("reading {}", path.display()))?.collision;
+    Ok(Some(collision))
 }
 
 /// Every run's result, once all are in, and the campaign's `dem.csv` and `setup.toml` written

@@ -15,7 +15,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::contact::{contact, Contact};
+use super::contact::{contact, property_commands, Contact, CONTACT_MODEL};
 use super::grains::{mass_matching_diameter, place, place_sized, Placement};
 use super::motion::SledMotion;
 use super::settings::{check_representable, DemSettings};
@@ -215,7 +215,6 @@ impl Case {
         // the largest grain sets the neighbour skin and the bins
         let d = self.placement.classes.iter().map(|c| c.diameter_m).fold(self.placement.diameter_m, f64::max);
         let dt = c.timestep_s;
-        let pair = |v: f64| format!("{v} {v} {v} {v}");
         let [vx, vy] = self.motion.velocity_expressions("t");
         let chunk = self.steps(CHUNK_S);
         let settle_chunks = (MAX_SETTLE_S / CHUNK_S).ceil() as u64;
@@ -248,23 +247,11 @@ impl Case {
         let _ = writeln!(
             s,
             "# material (Table 4.1) with the softened moduli (factor {:.3e}), collision k_elastic and mu_friction, [dem] rolling_friction\n\
-             fix m1 all property/global youngsModulus peratomtype {:e} {:e}\n\
-             fix m2 all property/global poissonsRatio peratomtype {} {}\n\
-             fix m3 all property/global coefficientRestitution peratomtypepair 2 {}\n\
-             fix m4 all property/global coefficientFriction peratomtypepair 2 {}\n\
-             fix m5 all property/global coefficientRollingFriction peratomtypepair 2 {}\n\
-             pair_style gran model hertz tangential history rolling_friction cdt\npair_coeff * *\n\
-             timestep {dt:e}\nfix gravity all gravity {} vector 0.0 -1.0 0.0\n\
+             {}fix gravity all gravity {} vector 0.0 -1.0 0.0\n\
              fix sled all mesh/surface file {MESH} type 2\n\
-             fix walls all wall/gran model hertz tangential history rolling_friction cdt mesh n_meshes 1 meshes sled",
+             fix walls all wall/gran {CONTACT_MODEL} mesh n_meshes 1 meshes sled",
             c.softening,
-            c.grain_youngs_pa,
-            c.wall_youngs_pa,
-            c.grain_poisson,
-            c.wall_poisson,
-            pair(c.restitution),
-            pair(c.sliding_friction),
-            pair(c.rolling_friction),
+            property_commands(c),
             self.scenario.environment.g,
         );
         let k_drag = self.scenario.environment.k_drag.unwrap_or(0.0);

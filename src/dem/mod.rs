@@ -13,7 +13,9 @@
 //! - [`case`]: the LIGGGHTS input script and the case folder;
 //! - [`run`]: finding and running LIGGGHTS, progress, errors;
 //! - [`gather`]: the dump read back, grains assigned to teeth, the campaign's CSV and setup;
-//! - [`compare`]: the model beside the DEM.
+//! - [`compare`]: the model beside the DEM;
+//! - [`impact`]: single grains in LIGGGHTS beside the model's restitution law, and the DEM's
+//!   law measured for the model (`ContactLaw::Dem`).
 //!
 //! Coordinates: the model's global frame (x along the horizontal, y up, tooth 0's p1 at the
 //! origin, the conveyor tilted by α as in Eq. 4.21), and z the periodic depth. Gravity is
@@ -26,6 +28,7 @@ pub mod compare;
 pub mod contact;
 pub mod gather;
 pub mod grains;
+pub mod impact;
 pub mod motion;
 pub mod run;
 pub mod settings;
