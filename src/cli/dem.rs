@@ -11,7 +11,7 @@ use clap::{Args, Subcommand};
 
 use super::args::ScenarioArgs;
 use crate::dem::campaign::{self, Plan};
-use crate::dem::compare::{compare, shown_teeth, Comparison, ComparisonPlot};
+use crate::dem::compare::{compare, compare_steady, shown_teeth, Comparison, ComparisonPlot, SteadyComparison};
 use crate::dem::impact;
 use crate::dem::{Case, DemSettings};
 use crate::io::atomic::write_atomic;
@@ -93,6 +93,15 @@ pub struct RunArgs {
     /// LIGGGHTS processes at a time [default: the cores].
     #[arg(long)]
     pub jobs: Option<usize>,
+    /// Steady conveying: each run is K cycles of the sled (stroke, stop, rest, return at the
+    /// downstroke speed, rest) on a periodic conveyor of full teeth, and reports the advance
+    /// per stroke once steady, beside the model's d_avg and feed rate (K >= 3; the first
+    /// stroke is a transient) [default: one stroke from a full tooth onto bare teeth].
+    #[arg(long)]
+    pub strokes: Option<u32>,
+    /// Teeth of the periodic conveyor of --strokes, each with a full fill.
+    #[arg(long, default_value_t = 3)]
+    pub period_teeth: u32,
     /// The campaign folder; the same command into it again resumes a killed campaign.
     #[arg(long)]
     pub out: PathBuf,
@@ -295,9 +304,35 @@ fn jobs(j: Option<usize>) -> anyhow::Result<usize> {
 fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let jobs = jobs(a.jobs)?;
     let (scenario, design, settings, known) = resolve(&a.case)?;
-    let plan = Plan { first_seed: scenario.sim.seed, scenario, design, settings, runs: a.runs, known_return: known };
+    if let Some(k) = a.strokes {
+        if !(3..=200).contains(&k) {
+            bail!("--strokes must lie in [3, 200] (the first stroke is a transient), got {k}");
+        }
+        if !(2..=64).contains(&a.period_teeth) {
+            bail!("--period-teeth must lie in [2, 64], got {}", a.period_teeth);
+        }
+    }
+    let plan = Plan {
+        first_seed: scenario.sim.seed,
+        scenario,
+        design,
+        settings,
+        runs: a.runs,
+        known_return: known,
+        strokes: a.strokes.unwrap_or(0),
+        period_teeth: if a.strokes.is_some() { a.period_teeth } else { 0 },
+    };
     // the case must build before the folder is taken
     plan.case(0).map_err(anyhow::Error::msg)?;
+    if plan.is_steady() {
+        plan.conveyor(0).map_err(anyhow::Error::msg)?;
+        let _owned = RunDir::acquire(&a.out, "dem", Access::Exclusive).context("--out")?;
+        let runs = campaign::run_steady(&a.out, &plan, jobs, &|line| eprintln!("dem: {line}"))?;
+        let report = steady_report(&plan, &runs)?;
+        write_atomic(&a.out.join("steady.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
+        write_steady(out, &report)?;
+        return Ok(ExitCode::SUCCESS);
+    }
     let _owned = RunDir::acquire(&a.out, "dem", Access::Exclusive).context("--out")?;
     let results = campaign::run(&a.out, &plan, jobs, &|line| eprintln!("dem: {line}"))?;
     let c = compare(&plan.scenario, &plan.design, &results, campaign::law(&a.out)?.as_ref())?;
@@ -310,6 +345,14 @@ fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         campaign::SETUP
     )?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// The plan of a steady campaign in `dir`, or None for a single-stroke one.
+fn steady_plan(dir: &Path) -> anyhow::Result<Option<Plan>> {
+    let path = dir.join(campaign::PLAN);
+    let Ok(text) = std::fs::read_to_string(&path) else { return Ok(None) };
+    let plan: Plan = serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
+    Ok(plan.is_steady().then_some(plan))
 }
 
 /// Read a campaign folder back: its plan and every run's result.
@@ -331,6 +374,28 @@ fn load_campaign(dir: &Path) -> anyhow::Result<(Plan, Vec<crate::dem::gather::Ru
 }
 
 fn compare_cmd(a: CompareArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    if let Some(plan) = steady_plan(&a.dir)? {
+        let found = campaign::steady_results(&a.dir, plan.runs)?;
+        let missing = found.iter().filter(|r| r.is_none()).count();
+        if missing > 0 {
+            bail!(
+                "{}: {missing} of {} runs have no result yet; run the same `sawtooth dem run` command again to finish the campaign",
+                a.dir.display(),
+                plan.runs
+            );
+        }
+        let runs: Vec<_> = found.into_iter().flatten().collect();
+        let report = steady_report(&plan, &runs)?;
+        let _owned = RunDir::acquire(&a.dir, "dem", Access::Exclusive).context("DIR")?;
+        let json = serde_json::to_string_pretty(&report)?;
+        write_atomic(&a.dir.join("steady.json"), json.as_bytes())?;
+        if a.json {
+            writeln!(out, "{json}")?;
+        } else {
+            write_steady(out, &report)?;
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
     let (plan, results) = load_campaign(&a.dir)?;
     let c = compare(&plan.scenario, &plan.design, &results, campaign::law(&a.dir)?.as_ref())?;
     let _owned = RunDir::acquire(&a.dir, "dem", Access::Exclusive).context("DIR")?;
@@ -345,6 +410,50 @@ fn compare_cmd(a: CompareArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> 
         writeln!(out, "\nwrote {0}/compare.json, {0}/compare.svg, {0}/compare.png", a.dir.display())?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+fn steady_report(plan: &Plan, runs: &[crate::dem::conveyor::SteadyRun]) -> anyhow::Result<SteadyComparison> {
+    compare_steady(&plan.scenario, &plan.design, runs)
+}
+
+fn write_steady(out: &mut dyn Write, c: &SteadyComparison) -> anyhow::Result<()> {
+    let d = &c.dem;
+    writeln!(
+        out,
+        "steady conveying: {} runs of {} strokes on a periodic conveyor of {} full teeth",
+        c.runs, c.strokes, c.period_teeth
+    )?;
+    writeln!(
+        out,
+        "advance per stroke along the conveyor: DEM {:.1} ± {:.1} mm (steady, strokes 2-{}; first half {:.1}, second half {:.1}; first stroke {:.1}), model {:.1} mm{}",
+        d.advance_m * 1e3,
+        d.advance_sd_m * 1e3,
+        c.strokes,
+        d.first_half_m * 1e3,
+        d.second_half_m * 1e3,
+        d.first_stroke_m * 1e3,
+        c.model_advance_mm,
+        c.advance_error_pct.map_or(String::new(), |e| format!(" ({e:+.1} %)"))
+    )?;
+    writeln!(
+        out,
+        "feed rate at {:.4} Hz (Eq. 5.16): DEM {:.1} ± {:.1} kg/h; model {:.1} kg/h with its d_avg {:.1} mm (D.7), {:.1} kg/h with its advance",
+        c.f_stroke_hz,
+        c.dem_m_dot_kg_h,
+        c.dem_m_dot_sd_kg_h,
+        c.model_m_dot_kg_h,
+        c.model_d_avg_mm,
+        c.model_m_dot_advance_kg_h
+    )?;
+    let per_run: Vec<String> = c.dem_per_run_mm.iter().map(|x| format!("{x:.1}")).collect();
+    writeln!(
+        out,
+        "DEM runs' steady advance: {} mm; {:.0} ± {:.0} s per run",
+        per_run.join(", "),
+        c.dem_s.mean,
+        c.dem_s.sd
+    )?;
+    Ok(())
 }
 
 fn write_table(out: &mut dyn Write, c: &Comparison) -> anyhow::Result<()> {

@@ -254,43 +254,7 @@ impl Case {
             property_commands(c),
             self.scenario.environment.g,
         );
-        let k_drag = self.scenario.environment.k_drag.unwrap_or(0.0);
-        match self.placement.classes.as_slice() {
-            [one] => {
-                if let Some(gamma) = one.drag_gamma_kg_s {
-                    let _ = writeln!(
-                        s,
-                        "# Stokes drag, gamma = m k_drag (Eq. 4.20, k_drag {k_drag} 1/s)\nfix drag all viscous {gamma:e}"
-                    );
-                }
-            }
-            classes => {
-                // one group per size class (its grains' ids are one range) with its own gamma
-                let _ = writeln!(
-                    s,
-                    "# size classes of the polydisperse law (sizes.rs); Stokes drag per class, gamma = m k_drag (d_ref/d)^2 (Eq. 4.16, 4.20, k_drag {k_drag} 1/s at d_ref {:e} m)",
-                    self.placement.diameter_m
-                );
-                let mut first = 1;
-                for (k, c) in classes.iter().enumerate() {
-                    if c.grains == 0 {
-                        continue;
-                    }
-                    let last = first + c.grains as usize - 1;
-                    let _ = writeln!(
-                        s,
-                        "group size{k} id {first}:{last}  # {} grains of {:e} m, {:.1} % of the mass",
-                        c.grains,
-                        c.diameter_m,
-                        100.0 * c.mass_fraction
-                    );
-                    if let Some(gamma) = c.drag_gamma_kg_s {
-                        let _ = writeln!(s, "fix drag{k} size{k} viscous {gamma:e}");
-                    }
-                    first = last + 1;
-                }
-            }
-        }
+        s.push_str(&drag_commands(&self.placement, self.scenario.environment.k_drag.unwrap_or(0.0)));
         let _ = writeln!(
             s,
             "# the stroke starts at step s0 (set after settling); t is the stroke time\n\
@@ -315,6 +279,50 @@ impl Case {
         );
         s
     }
+}
+
+/// Stokes drag (`fix viscous`, γ = m k_drag, Eq. 4.20) on the grains of `placement`, whose
+/// LIGGGHTS ids run class by class from 1: one fix on every grain for one size, one group of
+/// ids and one fix per class for a size law. Nothing in vacuum.
+pub fn drag_commands(placement: &Placement, k_drag: f64) -> String {
+    let mut s = String::new();
+    match placement.classes.as_slice() {
+        [one] => {
+            if let Some(gamma) = one.drag_gamma_kg_s {
+                let _ = writeln!(
+                    s,
+                    "# Stokes drag, gamma = m k_drag (Eq. 4.20, k_drag {k_drag} 1/s)\nfix drag all viscous {gamma:e}"
+                );
+            }
+        }
+        classes => {
+            // one group per size class (its grains' ids are one range) with its own gamma
+            let _ = writeln!(
+                s,
+                "# size classes of the polydisperse law (sizes.rs); Stokes drag per class, gamma = m k_drag (d_ref/d)^2 (Eq. 4.16, 4.20, k_drag {k_drag} 1/s at d_ref {:e} m)",
+                placement.diameter_m
+            );
+            let mut first = 1;
+            for (k, c) in classes.iter().enumerate() {
+                if c.grains == 0 {
+                    continue;
+                }
+                let last = first + c.grains as usize - 1;
+                let _ = writeln!(
+                    s,
+                    "group size{k} id {first}:{last}  # {} grains of {:e} m, {:.1} % of the mass",
+                    c.grains,
+                    c.diameter_m,
+                    100.0 * c.mass_fraction
+                );
+                if let Some(gamma) = c.drag_gamma_kg_s {
+                    let _ = writeln!(s, "fix drag{k} size{k} viscous {gamma:e}");
+                }
+                first = last + 1;
+            }
+        }
+    }
+    s
 }
 
 /// Teeth the mesh needs: the model's farthest resting grain on a conveyor long enough that

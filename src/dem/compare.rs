@@ -202,6 +202,69 @@ pub fn compare(
     })
 }
 
+/// Steady conveying beside the model (`dem run --strokes K`): the DEM's advance per stroke
+/// once steady, the model's single-stroke advance (teeth advanced × pitch, along the conveyor,
+/// the same measure) and d_avg (D.7's horizontal, p4-credited distance, erratum 16), and the
+/// feed rates they give by Eq. 5.16 at the design's full stroke frequency.
+#[derive(Clone, Debug, Serialize)]
+pub struct SteadyComparison {
+    pub runs: usize,
+    pub strokes: u32,
+    pub period_teeth: u32,
+    pub dem: super::conveyor::Steady,
+    /// Each run's mean advance over its steady cycles, mm.
+    pub dem_per_run_mm: Vec<f64>,
+    pub model_advance_mm: f64,
+    pub model_d_avg_mm: f64,
+    pub f_stroke_hz: f64,
+    /// Eq. 5.16 with the model's d_avg: what the optimiser designs with, kg/h.
+    pub model_m_dot_kg_h: f64,
+    /// Eq. 5.16 with the model's advance along the conveyor, kg/h.
+    pub model_m_dot_advance_kg_h: f64,
+    /// Eq. 5.16 with the DEM's steady advance: the DEM's own feed rate, kg/h.
+    pub dem_m_dot_kg_h: f64,
+    pub dem_m_dot_sd_kg_h: f64,
+    /// (DEM steady advance − model advance) / model advance, %.
+    pub advance_error_pct: Option<f64>,
+    pub dem_s: Spread,
+}
+
+/// The steady runs of a `dem run --strokes` campaign beside the model on `scenario`.
+pub fn compare_steady(
+    scenario: &Scenario,
+    design: &Design,
+    runs: &[super::conveyor::SteadyRun],
+) -> anyhow::Result<SteadyComparison> {
+    let st = super::conveyor::steady(runs)?;
+    let mut s = scenario.clone();
+    s.sim.particles = s.sim.particles.max(COMPARE_PARTICLES);
+    s.sim.teeth = s.sim.teeth.max(super::case::REACH_CONVEYOR_TEETH);
+    let sim = model_run(&s, design, None)?;
+    let prep = crate::model::prepare(&s, design).map_err(|e| anyhow::anyhow!("invalid design ({}): {e}", e.rule()))?;
+    let perf = crate::model::performance::performance(&s, design, sim.d_avg_m, prep.fill.area);
+    let feed = |x: f64| perf.regolith_mass_kg * (x / s.performance.conveyor_length) * perf.f_stroke_hz * 3600.0;
+    let per_run: Vec<f64> = runs
+        .iter()
+        .map(|r| r.cycles[1..].iter().map(|c| c.advance_m).sum::<f64>() / (r.cycles.len() - 1) as f64)
+        .collect();
+    Ok(SteadyComparison {
+        runs: runs.len(),
+        strokes: runs[0].cycles.len() as u32,
+        period_teeth: runs[0].period_teeth,
+        dem_per_run_mm: per_run.iter().map(|x| x * 1e3).collect(),
+        model_advance_mm: sim.advance_m * 1e3,
+        model_d_avg_mm: sim.d_avg_m * 1e3,
+        f_stroke_hz: perf.f_stroke_hz,
+        model_m_dot_kg_h: perf.m_dot_kg_s * 3600.0,
+        model_m_dot_advance_kg_h: feed(sim.advance_m),
+        dem_m_dot_kg_h: feed(st.advance_m),
+        dem_m_dot_sd_kg_h: feed(st.advance_sd_m),
+        advance_error_pct: (sim.advance_m > 0.0).then(|| 100.0 * (st.advance_m - sim.advance_m) / sim.advance_m),
+        dem: st,
+        dem_s: spread(&runs.iter().map(|r| r.wall_s).collect::<Vec<_>>()),
+    })
+}
+
 /// The teeth a table or figure shows: up to the last tooth either side fills ≥ 0.5 %.
 pub fn shown_teeth(c: &Comparison) -> usize {
     let last = (0..c.teeth).rev().find(|&j| c.model_pct[j] >= 0.5 || c.dem_pct[j].mean >= 0.5).unwrap_or(0);

@@ -11,6 +11,7 @@
 //! - [`contact`]: contact parameters from the material, the softened modulus, the time step;
 //! - [`motion`]: the sled's motion (stroke, optional return) as mesh velocities;
 //! - [`case`]: the LIGGGHTS input script and the case folder;
+//! - [`conveyor`]: steady conveying, K cycles on a periodic conveyor of full teeth;
 //! - [`run`]: finding and running LIGGGHTS, progress, errors;
 //! - [`gather`]: the dump read back, grains assigned to teeth, the campaign's CSV and setup;
 //! - [`compare`]: the model beside the DEM;
@@ -26,6 +27,7 @@ pub mod case;
 pub mod check;
 pub mod compare;
 pub mod contact;
+pub mod conveyor;
 pub mod gather;
 pub mod grains;
 pub mod impact;
