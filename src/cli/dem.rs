@@ -102,6 +102,12 @@ pub struct RunArgs {
     /// Teeth of the periodic conveyor of --strokes, each with a full fill.
     #[arg(long, default_value_t = 3)]
     pub period_teeth: u32,
+    /// Convergence: after the campaign, run its seeds again at half the allowed overlap and at
+    /// twice the grains (each a campaign in DIR/refine-*), and repeat from both at once for up
+    /// to this many levels until neither moves d_avg by more than max(3 %, 2 seed spreads);
+    /// the levels and the verdict go to DIR/refine.json [default without a value: 1].
+    #[arg(long, num_args = 0..=1, default_missing_value = "1")]
+    pub refine: Option<u32>,
     /// The campaign folder; the same command into it again resumes a killed campaign.
     #[arg(long)]
     pub out: PathBuf,
@@ -304,6 +310,9 @@ fn jobs(j: Option<usize>) -> anyhow::Result<usize> {
 fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let jobs = jobs(a.jobs)?;
     let (scenario, design, settings, known) = resolve(&a.case)?;
+    if a.strokes.is_some() && a.refine.is_some() {
+        bail!("--refine refines single strokes (d_avg); refine a steady campaign by running it again with another [dem] max_overlap_fraction and --particles");
+    }
     if let Some(k) = a.strokes {
         if !(3..=200).contains(&k) {
             bail!("--strokes must lie in [3, 200] (the first stroke is a transient), got {k}");
@@ -334,6 +343,14 @@ fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
     let _owned = RunDir::acquire(&a.out, "dem", Access::Exclusive).context("--out")?;
+    if let Some(levels) = a.refine {
+        if !(1..=3).contains(&levels) {
+            bail!("--refine must lie in [1, 3] levels, got {levels}");
+        }
+        if a.runs < 2 {
+            bail!("--refine needs --runs >= 2: a refinement is judged against the seeds' spread");
+        }
+    }
     let results = campaign::run(&a.out, &plan, jobs, &|line| eprintln!("dem: {line}"))?;
     let c = compare(&plan.scenario, &plan.design, &results, campaign::law(&a.out)?.as_ref())?;
     write_table(out, &c)?;
@@ -344,6 +361,26 @@ fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         campaign::CSV,
         campaign::SETUP
     )?;
+    if let Some(levels) = a.refine {
+        let r = crate::dem::refine::refine(&a.out, &plan, &results, levels, jobs, &|line| eprintln!("dem: {line}"))?;
+        writeln!(out, "\nconvergence (half the overlap, twice the grains; allowed: max(3 %, 2 seed spreads)):")?;
+        for (i, l) in r.levels.iter().enumerate() {
+            writeln!(
+                out,
+                "level {}: overlap {} x {} grains: d_avg {:.2} ± {:.2} mm; half the overlap {:+.2} mm, twice the grains {:+.2} mm (allowed {:.2}): {}",
+                i + 1,
+                l.base.max_overlap_fraction,
+                l.base.particles,
+                l.base.d_avg_mm,
+                l.base.d_avg_sd_mm,
+                l.overlap_move_mm,
+                l.grains_move_mm,
+                l.allowed_mm,
+                if l.converged { "converged" } else { "not converged" }
+            )?;
+        }
+        writeln!(out, "wrote {}/{}", a.out.display(), crate::dem::refine::REFINE)?;
+    }
     Ok(ExitCode::SUCCESS)
 }
 

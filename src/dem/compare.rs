@@ -76,6 +76,8 @@ pub struct Comparison {
     /// The model with the DEM's restitution law, launched from the settled beds where the
     /// runs kept them (else from the polygon), mm; None without a measured law.
     pub model_dem_law_d_avg_mm: Option<f64>,
+    /// Its share of the mass per tooth, %, tooth 1 first (the mesh's teeth).
+    pub model_dem_law_pct: Option<Vec<f64>>,
     /// Why this comparison may not be like for like (a mesh too short, ...).
     pub warnings: Vec<String>,
 }
@@ -136,15 +138,18 @@ pub fn compare(
         Some(b) => Some(model_run(scenario, design, Some(b))?.d_avg_m * 1e3),
         None => None,
     };
-    let model_dem_law_d_avg_mm = match dem_law {
+    let with_law = match dem_law {
         Some(law) => {
             let mut s = scenario.clone();
             s.collision = law.clone();
             s.validate().map_err(|e| anyhow::anyhow!("the DEM's restitution law: {e}"))?;
-            Some(model_run(&s, design, bed.as_deref())?.d_avg_m * 1e3)
+            Some(model_run(&s, design, bed.as_deref())?)
         }
         None => None,
     };
+    let model_dem_law_d_avg_mm = with_law.as_ref().map(|o| o.d_avg_m * 1e3);
+    let model_dem_law_pct =
+        with_law.as_ref().map(|o| (0..teeth).map(|j| 100.0 * o.distribution.get(j).copied().unwrap_or(0.0)).collect());
     let model: Vec<f64> = (0..teeth).map(|j| sim.distribution.get(j).copied().unwrap_or(0.0)).collect();
     let fractions: Vec<Vec<f64>> =
         runs.iter().map(|r| r.teeth_g.iter().map(|m| m / r.input_mass_g).collect()).collect();
@@ -198,6 +203,7 @@ pub fn compare(
         model_untruncated_d_avg_mm,
         model_from_bed_d_avg_mm,
         model_dem_law_d_avg_mm,
+        model_dem_law_pct,
         warnings,
     })
 }

@@ -12,6 +12,7 @@
 //! - [`motion`]: the sled's motion (stroke, optional return) as mesh velocities;
 //! - [`case`]: the LIGGGHTS input script and the case folder;
 //! - [`conveyor`]: steady conveying, K cycles on a periodic conveyor of full teeth;
+//! - [`refine`]: convergence, the campaign again at half the overlap and twice the grains;
 //! - [`run`]: finding and running LIGGGHTS, progress, errors;
 //! - [`gather`]: the dump read back, grains assigned to teeth, the campaign's CSV and setup;
 //! - [`compare`]: the model beside the DEM;
@@ -32,6 +33,7 @@ pub mod gather;
 pub mod grains;
 pub mod impact;
 pub mod motion;
+pub mod refine;
 pub mod run;
 pub mod settings;
 pub mod sizes;
