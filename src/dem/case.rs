@@ -15,7 +15,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::contact::{contact, property_commands, Contact, CONTACT_MODEL};
+use super::contact::{contact, model_normal_cor, property_commands, Contact, CONTACT_MODEL};
 use super::grains::{mass_matching_diameter, place, place_sized, Placement};
 use super::motion::SledMotion;
 use super::settings::{check_representable, DemSettings};
@@ -23,6 +23,7 @@ use super::sizes::{reference_diameter, size_classes};
 use super::stl::{extrude, profile_polyline, stl_text, subdivide, MAX_FACET_M};
 use crate::engine::{evaluate_detailed, make_engine, EngineKind};
 use crate::io::atomic::write_atomic;
+use crate::io::config::DemRestitution;
 use crate::model::geometry::Profile;
 use crate::model::{prepare, Design, ParticleState, Scenario};
 
@@ -135,7 +136,11 @@ impl Case {
         // tooth's height onto the next; the smallest grain has the shortest contact (t_c ∝ d)
         let design_speed = 1.5 * design.v0;
         let d_min = placement.classes.iter().map(|c| c.diameter_m).fold(f64::INFINITY, f64::min);
-        let contact = contact(scenario, d_min, design_speed, settings.rolling_friction, settings.max_overlap_fraction);
+        let mut contact =
+            contact(scenario, d_min, design_speed, settings.rolling_friction, settings.max_overlap_fraction);
+        if settings.restitution == DemRestitution::Model {
+            contact.restitution = model_normal_cor(scenario, design.v0).clamp(0.01, 1.0);
+        }
         let drag_gamma_kg_s = k_drag.map(|k| placement.grain_mass_kg * k);
         let profile = Profile::new(design, prep.profile.local, scenario.environment.alpha_deg, teeth);
         let line = subdivide(&profile_polyline(&profile, teeth), MAX_FACET_M);
@@ -379,6 +384,23 @@ mod tests {
 
     fn settings(particles: u32) -> DemSettings {
         DemSettings { particles, teeth: Some(8), ..Default::default() }
+    }
+
+    #[test]
+    fn the_model_restitution_gives_the_dem_the_thesis_laws_cor_at_the_launch_speed() {
+        let s = Scenario::lunar();
+        let d = Design::lunar_solution_c();
+        let plain = Case::build(&s, &d, &settings(60), 0, None).unwrap();
+        assert_eq!(plain.contact.restitution, s.collision.k_elastic);
+        let model = DemSettings { restitution: DemRestitution::Model, ..settings(60) };
+        let case = Case::build(&s, &d, &model, 0, None).unwrap();
+        // Eq. 4.9 at |v_n| = v0, above the limit velocity: k_el (v_limit / v0)^(1/4)
+        let v_limit = crate::model::collision::limit_velocity(&s.material);
+        let expect = s.collision.k_elastic * (v_limit / d.v0).powf(0.25);
+        assert!((case.contact.restitution - expect).abs() < 1e-12, "{} vs {expect}", case.contact.restitution);
+        assert!(case
+            .script()
+            .contains(&format!("coefficientRestitution peratomtypepair 2 {0} {0} {0} {0}", case.contact.restitution)));
     }
 
     #[test]

@@ -62,6 +62,21 @@ pub struct DemTable {
     pub rest_speed_m_s: Option<f64>,
     /// Teeth of the mesh; absent: the model's reach plus a margin (at most `sim.teeth`).
     pub teeth: Option<u32>,
+    /// Where the DEM's constant normal COR comes from: `"k_elastic"` (the default) or
+    /// `"model"` (the thesis law's k_n at the design's launch speed).
+    pub restitution: Option<DemRestitution>,
+}
+
+/// The source of a DEM case's normal coefficient of restitution (LIGGGHTS's is one constant).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DemRestitution {
+    /// `[collision] k_elastic` itself, the law's elastic limit (4.1.2).
+    #[default]
+    KElastic,
+    /// The thesis law's k_n (Eq. 4.9) at a normal speed equal to the design's launch speed v0:
+    /// the DEM's constant closest to the model's law at the impacts that carry the grains.
+    Model,
 }
 
 #[derive(Clone, Debug, Default, Deserialize)]
