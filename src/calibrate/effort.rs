@@ -3,7 +3,7 @@
 
 use super::condition::Condition;
 use super::fields::Spelling;
-use super::solver::{Solver, FIRST_STEP, MIN_STEP};
+use super::solver::{PolishMethod, Solver, FIRST_STEP, MIN_STEP};
 use super::target::ObjectiveKind;
 
 /// Fewest particles per simulation a calibration uses at the full budget, and while
@@ -127,6 +127,7 @@ impl Effort {
             first_step: FIRST_STEP,
             min_step: MIN_STEP,
             seed: self.seed,
+            polish_method: PolishMethod::Compass,
         };
         (solver, note)
     }

@@ -14,6 +14,12 @@
 //!    every model is one engine call. [`Solver::polish`] runs this stage alone (the
 //!    bootstrap refits of `fit`, each replicate a model of its own).
 //!
+//!    With [`PolishMethod::LevenbergMarquardt`] and the SSE objective the polish takes
+//!    Levenberg–Marquardt steps instead ([`super::levenberg`]): a Jacobian of the bins by
+//!    forward differences (d simulations), then three damped steps tried at once, the best
+//!    that improves kept; a model stops once a step gains less than [`LM_MIN_GAIN`] or two
+//!    in a row fail.
+//!
 //! The objective ([`ObjectiveKind`]) is summed over the conditions: the SSE of Eq. 4.62 or
 //! the Dirichlet-multinomial likelihood of the runs. Every point of a stage sees the same
 //! particle streams (common random numbers), so differences between points are differences
@@ -25,6 +31,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::batch::{Bins, Simulator};
+use super::levenberg;
 use super::objective;
 use super::space::Space;
 use super::target::{ObjectiveKind, Target};
@@ -54,6 +61,16 @@ pub enum Search {
     FromStarts,
 }
 
+/// How the polish at the full budget searches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PolishMethod {
+    /// Compass search: ±step along each axis (any objective).
+    Compass,
+    /// Levenberg–Marquardt steps on the bins' residuals (the SSE objective; the likelihood
+    /// is polished by the compass search).
+    LevenbergMarquardt,
+}
+
 /// The solver's settings: what it minimises and how hard it works.
 #[derive(Clone, Copy, Debug)]
 pub struct Solver {
@@ -73,6 +90,8 @@ pub struct Solver {
     pub first_step: f64,
     pub min_step: f64,
     pub seed: u64,
+    /// The polish's search.
+    pub polish_method: PolishMethod,
 }
 
 /// One point simulated at the full budget, with its bins per condition.
@@ -144,10 +163,21 @@ impl Solver {
     }
 }
 
-/// The compass search's default first and smallest steps in the unit box, and its largest.
+/// The compass search's default first and smallest steps in the unit box, and its largest
+/// (also the largest move of one Levenberg–Marquardt step in each coordinate).
 pub const FIRST_STEP: f64 = 0.05;
 pub const MIN_STEP: f64 = 0.05 / 32.0;
 const MAX_STEP: f64 = 0.2;
+
+/// The Levenberg–Marquardt polish: the forward-difference step of its Jacobian in the unit
+/// box (wide enough that, with common random numbers, many particles change their tooth), the
+/// damping it starts with (relative to diag(JᵀJ)), the damping factors tried at once around
+/// the current one, and the smallest gain (%²) of an accepted step that does not stop the
+/// model: below it the steps fit the particle streams' noise, not the physics.
+const LM_DIFF_STEP: f64 = 0.01;
+const LM_LAMBDA0: f64 = 0.01;
+const LM_TRIALS: [f64; 3] = [0.1, 1.0, 10.0];
+pub const LM_MIN_GAIN: f64 = 0.05;
 
 impl Solver {
     fn check(&self, sim: &Simulator, models: &[Model]) -> anyhow::Result<()> {
@@ -312,17 +342,38 @@ impl Solver {
             }
             current.push(best.expect("at least one start"));
         }
-        // compass search
+        if self.polish_method == PolishMethod::LevenbergMarquardt && self.objective == ObjectiveKind::Sse {
+            self.levenberg_marquardt(sim, models, &mut current, &mut evaluations, &mut record, log);
+        } else {
+            self.compass(sim, models, &mut current, &mut evaluations, &mut record, log);
+        }
+        let mut fits = Vec::with_capacity(n);
+        for (((u, value, bins), model), (evaluations, archive)) in
+            current.into_iter().zip(models).zip(evaluations.into_iter().zip(archives))
+        {
+            let Some(bins) = bins.filter(|_| value.is_finite()) else {
+                bail!("no candidate could be simulated (every evaluation was rejected by the engine)");
+            };
+            fits.push(Fit { x: model.space.from_unit(&u), value, bins, evaluations, archive });
+        }
+        Ok(fits)
+    }
+
+    /// The compass search from each model's current point, every iteration of every model one
+    /// engine call.
+    fn compass(
+        &self,
+        sim: &Simulator,
+        models: &[Model],
+        current: &mut [(Vec<f64>, f64, Bins)],
+        evaluations: &mut [u64],
+        record: &mut dyn FnMut(usize, &Model, &[f64], &Bins),
+        log: &mut dyn FnMut(String),
+    ) {
+        let n = models.len();
         let mut steps = vec![self.first_step; n];
         let (polish_start, mut lines) = (std::time::Instant::now(), crate::io::progress::Lines::new());
         let total = self.polish_iterations as u64;
-        let best_of = |current: &[(Vec<f64>, f64, Bins)]| {
-            let mut b: Vec<String> = current.iter().take(6).map(|c| format!("{:.1}", c.1)).collect();
-            if current.len() > 6 {
-                b.push(format!("... {} models", current.len()));
-            }
-            b.join(", ")
-        };
         let mut done = 0;
         for k in 1..=total {
             let probes: Vec<Vec<Vec<f64>>> = current
@@ -333,7 +384,7 @@ impl Solver {
             if probes.iter().all(Vec::is_empty) {
                 log(format!(
                     "calibrate: polish done after {done}/{total} iterations (every step below the minimum, best {}), {}",
-                    best_of(&current),
+                    best_of(current),
                     crate::io::progress::eta(polish_start.elapsed(), 0, 0)
                 ));
                 break;
@@ -357,23 +408,158 @@ impl Solver {
             if lines.due(k, total) {
                 log(format!(
                     "calibrate: polish iteration {k}/{total} (best {}), {}{}",
-                    best_of(&current),
+                    best_of(current),
                     crate::io::progress::eta(polish_start.elapsed(), k, total),
                     if k < total { " (at most: the search stops once every step is below the minimum)" } else { "" }
                 ));
             }
         }
-        let mut fits = Vec::with_capacity(n);
-        for (((u, value, bins), model), (evaluations, archive)) in
-            current.into_iter().zip(models).zip(evaluations.into_iter().zip(archives))
-        {
-            let Some(bins) = bins.filter(|_| value.is_finite()) else {
-                bail!("no candidate could be simulated (every evaluation was rejected by the engine)");
-            };
-            fits.push(Fit { x: model.space.from_unit(&u), value, bins, evaluations, archive });
-        }
-        Ok(fits)
     }
+
+    /// Levenberg–Marquardt steps from each model's current point ([`super::levenberg`]), in
+    /// lockstep: per iteration one engine call for the Jacobians of the models that moved and
+    /// one for every model's three damped trial steps.
+    fn levenberg_marquardt(
+        &self,
+        sim: &Simulator,
+        models: &[Model],
+        current: &mut [(Vec<f64>, f64, Bins)],
+        evaluations: &mut [u64],
+        record: &mut dyn FnMut(usize, &Model, &[f64], &Bins),
+        log: &mut dyn FnMut(String),
+    ) {
+        let n = models.len();
+        let measured: Vec<Vec<&[f64]>> =
+            models.iter().map(|m| m.targets.iter().map(|t| t.bins.as_slice()).collect()).collect();
+        let residuals = |m: usize, b: &Bins| b.as_ref().map(|b| levenberg::residuals(b, &measured[m]));
+        let mut lambda = vec![LM_LAMBDA0; n];
+        let mut failures = vec![0usize; n];
+        let mut active: Vec<bool> = current.iter().map(|c| c.2.is_some() && !c.0.is_empty()).collect();
+        let mut normal: Vec<Option<(Vec<Vec<f64>>, Vec<f64>)>> = vec![None; n];
+        let (started, mut lines) = (std::time::Instant::now(), crate::io::progress::Lines::new());
+        let total = self.polish_iterations as u64;
+        for k in 1..=total {
+            // the Jacobians of the models whose point moved: one forward step per coordinate,
+            // backwards where the box ends
+            let probes: Vec<Vec<Vec<f64>>> = (0..n)
+                .map(|m| if active[m] && normal[m].is_none() { forward_points(&current[m].0) } else { Vec::new() })
+                .collect();
+            if probes.iter().any(|p| !p.is_empty()) {
+                let scored = self.score(sim, models, &probes, self.particles);
+                for (m, (p, scored)) in probes.into_iter().zip(scored).enumerate() {
+                    if p.is_empty() {
+                        continue;
+                    }
+                    evaluations[m] += p.len() as u64;
+                    let r0 = residuals(m, &current[m].2).expect("an active model's point was simulated");
+                    let columns: Vec<Vec<f64>> = p
+                        .iter()
+                        .zip(scored)
+                        .enumerate()
+                        .map(|(j, (y, (_, b)))| {
+                            record(m, &models[m], y, &b);
+                            let h = y[j] - current[m].0[j];
+                            match residuals(m, &b) {
+                                Some(r) => r.iter().zip(&r0).map(|(a, q)| (a - q) / h).collect(),
+                                // a neighbour the engine refused: this parameter holds still
+                                None => vec![0.0; r0.len()],
+                            }
+                        })
+                        .collect();
+                    normal[m] = Some(levenberg::normal_equations(&columns, &r0));
+                }
+            }
+            // three damped steps per model, tried at once
+            let trials: Vec<Vec<(Vec<f64>, f64)>> = (0..n)
+                .map(|m| {
+                    let Some((a, g)) = normal[m].as_ref().filter(|_| active[m]) else { return Vec::new() };
+                    let mut t: Vec<(Vec<f64>, f64)> = Vec::new();
+                    for f in LM_TRIALS {
+                        let Some(du) = levenberg::step(a, g, lambda[m] * f, MAX_STEP) else { continue };
+                        let u: Vec<f64> = current[m].0.iter().zip(&du).map(|(x, d)| (x + d).clamp(0.0, 1.0)).collect();
+                        if u != current[m].0 && !t.iter().any(|(v, _)| *v == u) {
+                            t.push((u, f));
+                        }
+                    }
+                    t
+                })
+                .collect();
+            if trials.iter().all(Vec::is_empty) {
+                break;
+            }
+            let points: Vec<Vec<Vec<f64>>> =
+                trials.iter().map(|t| t.iter().map(|(u, _)| u.clone()).collect()).collect();
+            let scored = self.score(sim, models, &points, self.particles);
+            for (m, (t, scored)) in trials.into_iter().zip(scored).enumerate() {
+                if t.is_empty() {
+                    // no step leaves the point (every one clamped back onto it): done
+                    active[m] = false;
+                    continue;
+                }
+                evaluations[m] += t.len() as u64;
+                let mut best: Option<(Vec<f64>, f64, Bins, f64)> = None;
+                for ((u, f), (v, b)) in t.into_iter().zip(scored) {
+                    record(m, &models[m], &u, &b);
+                    if v < current[m].1 && best.as_ref().is_none_or(|best| v < best.1) {
+                        best = Some((u, v, b, f));
+                    }
+                }
+                match best {
+                    Some((u, v, b, f)) => {
+                        let gain = current[m].1 - v;
+                        current[m] = (u, v, b);
+                        normal[m] = None;
+                        failures[m] = 0;
+                        lambda[m] *= f;
+                        if gain < LM_MIN_GAIN {
+                            active[m] = false;
+                        }
+                    }
+                    None => {
+                        // every trial worse: damp harder (beyond the largest tried), same Jacobian
+                        lambda[m] *= 100.0;
+                        failures[m] += 1;
+                        if failures[m] >= 2 {
+                            active[m] = false;
+                        }
+                    }
+                }
+            }
+            let left = active.iter().filter(|a| **a).count();
+            if lines.due(k, total) || left == 0 {
+                log(format!(
+                    "calibrate: polish (Levenberg-Marquardt) iteration {k}/{total} (best {}; {left} of {n} models still \
+                     moving), {}",
+                    best_of(current),
+                    crate::io::progress::eta(started.elapsed(), k, total),
+                ));
+            }
+            if left == 0 {
+                break;
+            }
+        }
+    }
+}
+
+/// The best values of the first models, for progress lines.
+fn best_of(current: &[(Vec<f64>, f64, Bins)]) -> String {
+    let mut b: Vec<String> = current.iter().take(6).map(|c| format!("{:.1}", c.1)).collect();
+    if current.len() > 6 {
+        b.push(format!("... {} models", current.len()));
+    }
+    b.join(", ")
+}
+
+/// The forward-difference neighbours of `u`: one step along each axis, backwards where the
+/// unit box ends.
+fn forward_points(u: &[f64]) -> Vec<Vec<f64>> {
+    (0..u.len())
+        .map(|j| {
+            let mut y = u.to_vec();
+            y[j] = if u[j] + LM_DIFF_STEP <= 1.0 { u[j] + LM_DIFF_STEP } else { u[j] - LM_DIFF_STEP };
+            y
+        })
+        .collect()
 }
 
 /// The compass points around `u`: ±`step` along each axis, clamped to the unit box (points
@@ -489,6 +675,7 @@ mod tests {
             first_step: FIRST_STEP,
             min_step: MIN_STEP,
             seed,
+            polish_method: PolishMethod::Compass,
         }
     }
 
@@ -576,6 +763,35 @@ mod tests {
         assert!(solver.fit(&sim, &[bare], &mut |_| {}).unwrap_err().to_string().contains("starts"));
     }
 
+    /// The Levenberg–Marquardt polish starts where the compass search would, never ends worse
+    /// than that start, stays in the box, and says it is the one polishing; the likelihood,
+    /// no sum of squares, keeps the compass search.
+    #[test]
+    fn a_levenberg_marquardt_polish_never_ends_worse_than_its_start() {
+        let conditions = vec![test3()];
+        let engine = make_engine(EngineKind::Cpu).unwrap();
+        let sim = Simulator { engine: &*engine, conditions: &conditions };
+        let space = Space::new(shared_params(&conditions), &[], &conditions);
+        let targets: Vec<Target> = conditions.iter().map(Condition::target_all).collect();
+        let start = vec![0.5, 0.5, 5.0];
+        let model =
+            || Model { space: &space, targets: &targets, starts: vec![start.clone()], search: Search::FromStarts };
+        let lm = Solver { polish_method: PolishMethod::LevenbergMarquardt, particles: 400, ..small_solver(7) };
+        let at_start = Solver { polish_iterations: 0, ..lm };
+        let before = at_start.polish(&sim, &[model()], &mut |_| {}).unwrap().remove(0);
+        let mut lines = Vec::new();
+        let fit = lm.polish(&sim, &[model()], &mut |l| lines.push(l)).unwrap().remove(0);
+        assert!(fit.value <= before.value, "{} > {}", fit.value, before.value);
+        assert!(fit.x.iter().zip(space.bounds()).all(|(x, (lo, hi))| (lo..=hi).contains(&x)), "{:?}", fit.x);
+        assert!(lines.iter().any(|l| l.contains("Levenberg-Marquardt")), "{lines:?}");
+        // a Jacobian (3 neighbours) and up to three trials per iteration, after the start
+        assert!(fit.evaluations <= 1 + lm.polish_iterations as u64 * 6, "{}", fit.evaluations);
+        let likelihood = Solver { objective: ObjectiveKind::Likelihood, ..lm };
+        let mut lines = Vec::new();
+        likelihood.polish(&sim, &[model()], &mut |l| lines.push(l)).unwrap();
+        assert!(lines.iter().all(|l| !l.contains("Levenberg-Marquardt")), "{lines:?}");
+    }
+
     #[test]
     fn polish_refits_many_targets_in_lockstep() {
         let conditions = vec![test3()];
@@ -597,6 +813,7 @@ mod tests {
             first_step: FIRST_STEP,
             min_step: MIN_STEP,
             seed: 2,
+            polish_method: PolishMethod::Compass,
         };
         let mut lines = Vec::new();
         let fits = solver.polish(&sim, &models, &mut |l| lines.push(l)).unwrap();

@@ -4,11 +4,19 @@
 //! synthetic measurement campaigns from the extended model (`synth`), the data that checks a
 //! diagnosis whose true effect is known.
 
+pub mod baseline;
+pub mod candidates;
 #[allow(clippy::module_inception)]
 pub mod diagnose;
+pub mod json;
+pub mod locate;
+pub mod markdown;
 pub mod model_result;
 pub mod motion_screen;
+pub mod pair;
 pub mod render;
 pub mod request;
+pub mod run;
+pub mod scoring;
 pub mod synth;
 pub mod verdict;

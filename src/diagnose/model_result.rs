@@ -1,9 +1,7 @@
-//! What one fitted model of a diagnosis leaves ([`ModelResult`]), where the grains of each
-//! layer of the fill come to rest ([`DepthLayer`]), and the JSON number rule: the vocabulary
+//! What one fitted model of a diagnosis leaves ([`ModelResult`]) and where the grains of each
+//! layer of the fill come to rest ([`DepthLayer`]): the vocabulary
 //! that the diagnosis (`diagnose`) builds and its verdict (`verdict`) judges, in a module of
 //! its own so that neither of the two imports the other.
-
-use serde_json::{json, Map, Value};
 
 use crate::calibrate::Fit;
 use crate::model::effects::EffectKind;
@@ -84,13 +82,6 @@ impl ModelResult {
             })
             .collect()
     }
-    pub fn params_object(&self) -> Value {
-        let mut m = Map::new();
-        for (n, v) in self.names.iter().zip(&self.full.x) {
-            m.insert((*n).to_string(), num(*v));
-        }
-        Value::Object(m)
-    }
 }
 
 /// The simulated grains launched from one layer of the fill (equal particle counts, by depth
@@ -105,13 +96,4 @@ pub struct DepthLayer {
     pub teeth_percent: Vec<f64>,
     /// % of the layer's particles resting beyond the shown teeth or lost.
     pub further_or_lost_percent: f64,
-}
-
-/// JSON numbers cannot be NaN/inf: those become null.
-pub fn num(v: f64) -> Value {
-    if v.is_finite() {
-        json!(v)
-    } else {
-        Value::Null
-    }
 }

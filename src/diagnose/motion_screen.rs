@@ -43,6 +43,8 @@
 //!
 //! Costs nothing when every setup states its motion.
 
+use super::baseline::Baseline;
+use super::run::Run;
 use super::verdict::loss_adjusted_sse;
 use crate::calibrate::{Fit, Model, Search, Simulator, Solver, Space, Target};
 use crate::model::effects::EffectKind;
@@ -98,6 +100,21 @@ pub(crate) fn halton_point(i: usize, bounds: &[(f64, f64)]) -> Vec<f64> {
 /// The loss-adjusted SSE (%²) of a fit's bins, summed over the conditions.
 fn adjusted(sim: &Simulator, targets: &[Target], fit: &Fit) -> f64 {
     sim.conditions.iter().zip(targets).zip(&fit.bins).map(|((c, t), b)| loss_adjusted_sse(c, &t.bins, b)).sum()
+}
+
+/// The motion-screen stage of a diagnosis: where the sled-motion candidate is tried and
+/// some setup leaves the motion out, the start of its fit ([`motion_start`]); None where
+/// it is not tried or every setup states the motion.
+pub fn screen_motion(
+    run: &Run,
+    baseline: &Baseline,
+    log: &mut dyn FnMut(String),
+) -> anyhow::Result<Option<MotionStart>> {
+    if !run.effects.contains(&EffectKind::SledMotion) {
+        return Ok(None);
+    }
+    let space = Space::new(run.shared.clone(), &[EffectKind::SledMotion], run.conditions());
+    motion_start(&run.solver, &run.sim, &space, &run.targets, &baseline.fit.x, log)
 }
 
 /// The start for the sled-motion candidate's fit in `space` when some setup leaves the

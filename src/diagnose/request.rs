@@ -9,9 +9,8 @@ use std::path::PathBuf;
 use anyhow::{bail, Context as _};
 use serde_json::Value;
 
-use super::diagnose::{
-    applicable_effects, diagnose, to_json, Condition, Diagnosis, EffectKind, Settings, NO_EFFECT_APPLIES,
-};
+use super::diagnose::{applicable_effects, diagnose, Condition, Diagnosis, EffectKind, Settings, NO_EFFECT_APPLIES};
+use super::json::to_json;
 use super::render;
 use crate::calibrate::measured::{self, stem};
 use crate::calibrate::{EffortSettings, Normalise, Spelling};

@@ -39,9 +39,7 @@
 //!   against the bin's noise and, per tooth, which third of the fill (by launch depth) the
 //!   baseline's grains there come from.
 
-use serde_json::{json, Value};
-
-use super::model_result::{num, DepthLayer, ModelResult, Z_FLAG};
+use super::model_result::{DepthLayer, ModelResult, Z_FLAG};
 use crate::calibrate::{Condition, Normalise};
 use crate::model::effects::EffectKind;
 
@@ -103,21 +101,6 @@ impl Judged {
     }
     pub fn well_above(&self) -> bool {
         self.gap > FLOOR_FACTOR * self.floor
-    }
-    fn json(&self, names: &[String]) -> Value {
-        json!({
-            "model": self.model,
-            "gap": num(self.gap),
-            "floor": num(self.floor),
-            "gap_over_floor": num(self.ratio()),
-            "by_condition": names.iter().enumerate().map(|(c, n)| json!({
-                "name": n,
-                "gap": num(self.gap_by_condition[c]),
-                "floor": num(self.floor_by_condition[c]),
-                "gap_over_floor": num(self.gap_by_condition[c] / self.floor_by_condition[c]),
-                "handling_loss_percent": num(100.0 * self.handling_loss[c]),
-            })).collect::<Vec<_>>(),
-        })
     }
 }
 
@@ -578,49 +561,6 @@ fn describe(
         }
     }
     s
-}
-
-impl Verdict {
-    pub fn json(&self, conds: &[Condition]) -> Value {
-        let names: Vec<String> = conds.iter().map(|c| c.name.clone()).collect();
-        json!({
-            "verdict": self.kind.name(),
-            "text": self.text,
-            "floor_factor": FLOOR_FACTOR,
-            "cause_share": CAUSE_SHARE,
-            "baseline": self.baseline.json(&names),
-            "remaining": self.remaining.json(&names),
-            "by_condition": self.conditions.iter().map(|c| json!({
-                "name": c.name,
-                "model": c.model,
-                "gap": num(c.gap),
-                "floor": num(c.floor),
-                "gap_over_floor": num(c.ratio()),
-                "well_above": c.well_above(),
-            })).collect::<Vec<_>>(),
-            "conditions_well_above": self.conditions.iter().filter(|c| c.well_above()).map(|c| c.name.clone()).collect::<Vec<_>>(),
-            "demoted": self.demoted.map(|e| e.name()),
-            "partial": self.partial.iter().map(|p| json!({
-                "effect": p.effect.name(),
-                "reduction": num(p.reduction),
-                "excess_share": num(p.excess_share),
-                "improvement_interval": [num(p.improvement_interval[0]), num(p.improvement_interval[1])],
-            })).collect::<Vec<_>>(),
-            "not_removed": conds.iter().zip(&self.persistent).map(|(c, p)| json!({
-                "name": c.name,
-                "sse": num(p.sse),
-                "floor": num(p.floor),
-                "bins": p.bins.iter().map(|b| json!({
-                    "bin": b.label,
-                    "residual": num(b.residual),
-                    "uncertainty": num(b.uncertainty),
-                    "z": num(b.z),
-                    "flag": b.flagged(),
-                    "from_depth_percent": b.from_depth.iter().map(|(l, v)| (l.to_string(), num(*v))).collect::<serde_json::Map<String, Value>>(),
-                })).collect::<Vec<_>>(),
-            })).collect::<Vec<_>>(),
-        })
-    }
 }
 
 #[cfg(test)]
