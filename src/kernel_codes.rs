@@ -103,11 +103,7 @@ pub fn wgsl_constants() -> String {
     }
     out.push_str(&format!("const RUN_CLEARANCE_PITCHES: f32 = {RUN_CLEARANCE_PITCHES:?};\n"));
     let psi: Vec<String> = TANGENTIAL_PSI.iter().map(|p| format!("{p:?}")).collect();
-    out.push_str(&format!(
-        "const TANGENTIAL_PSI = array<f32, {}>({});\n",
-        TANGENTIAL_PSI.len(),
-        psi.join(", ")
-    ));
+    out.push_str(&format!("const TANGENTIAL_PSI = array<f32, {}>({});\n", TANGENTIAL_PSI.len(), psi.join(", ")));
     for name in WGSL_PATH_SWITCHES {
         out.push_str(&format!("override {name}: bool = true;\n"));
     }

@@ -20,10 +20,10 @@ use std::path::{Path, PathBuf};
 /// its own rank or below, never above; cycles are refused separately, so two modules of one
 /// rank may not use each other either.
 const LAYERS: &[&[&str]] = &[
-    // leaf helpers every layer may use: vector math (`lane_math`), the switch for the hot loops compiled a second time for AVX2 CPUs,
-    // the integer codes the Rust and WGSL kernels share, and `schema` (the input bounds of
-    // issue 34's parallel branch; it imports nothing)
-    &["lane_math", "x86_64_v3", "kernel_codes", "schema"],
+    // leaf helpers every layer may use: the lane type (`lane`) and the vector math over it
+    // (`lane_math`), the SIMD path the cpu engine takes (`simd`), the integer codes the Rust
+    // and WGSL kernels share, and `schema` (the input bounds; it imports nothing)
+    &["lane", "lane_math", "simd", "kernel_codes", "schema"],
     &["model"],
     &["engine"],
     // files, tables and figures: serve every layer above the engine

@@ -396,14 +396,15 @@ pub fn launch_points(
     seed: u64,
 ) -> Result<Vec<V2>, Invalid> {
     #[cfg(target_arch = "x86_64")]
-    if crate::x86_64_v3::available() {
-        // SAFETY: the CPU has every feature the function is compiled for (checked above).
+    if crate::simd::selected().x86_64_v3() {
+        // SAFETY: the CPU has every feature the function is compiled for (the path is one
+        // this CPU has).
         return unsafe { x86_64_v3_launch_points(fill, n, mode, sampling, seed) };
     }
     launch_points_inlined(fill, n, mode, sampling, seed)
 }
 
-/// [`launch_points`] compiled for x86-64-v3 ([`crate::x86_64_v3`]): the candidate tests run
+/// [`launch_points`] compiled for x86-64-v3 ([`crate::simd`]): the candidate tests run
 /// on four f64 lanes instead of two (preparation 14–16 % faster, `cargo bench -p
 /// sawtooth-benches --bench engines -- prepare`), to the same bits (tested below).
 #[cfg(target_arch = "x86_64")]
@@ -584,7 +585,7 @@ mod tests {
                     };
                     let mut builds = vec![("baseline", launch_points_inlined(fill, n, *mode, sampling, 5))];
                     #[cfg(target_arch = "x86_64")]
-                    if crate::x86_64_v3::available() {
+                    if crate::simd::Simd::Avx2.supported() {
                         // SAFETY: the CPU has x86-64-v3 (checked above).
                         builds.push(("x86-64-v3", unsafe { x86_64_v3_launch_points(fill, n, *mode, sampling, 5) }));
                     }

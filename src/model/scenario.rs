@@ -407,15 +407,15 @@ impl Scenario {
     fn validate_law(&self) -> Result<(), String> {
         let c = &self.collision;
         match c.law {
-            ContactLaw::Thesis if !c.tangential_ratio.is_empty() => Err(
-                "`[collision] tangential_ratio` belongs to `law = \"dem\"`; the thesis's law (Eq. 4.14) takes none"
-                    .into(),
-            ),
+            ContactLaw::Thesis if !c.tangential_ratio.is_empty() => {
+                Err("`[collision] tangential_ratio` belongs to `law = \"dem\"`; the thesis's law (Eq. 4.14) takes none"
+                    .into())
+            }
             ContactLaw::Thesis => Ok(()),
-            ContactLaw::Dem if self.mode == PhysicsMode::Listing => Err(
-                "`[collision] law = \"dem\"` runs in the physical mode only (the listing mode is the thesis's law)"
-                    .into(),
-            ),
+            ContactLaw::Dem if self.mode == PhysicsMode::Listing => {
+                Err("`[collision] law = \"dem\"` runs in the physical mode only (the listing mode is the thesis's law)"
+                    .into())
+            }
             ContactLaw::Dem => super::collision::check_tangential_table(&c.tangential_ratio),
         }
     }
