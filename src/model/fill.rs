@@ -583,6 +583,7 @@ mod tests {
                         Ok(ps) => Ok(ps.iter().map(|p| [p[0].to_bits(), p[1].to_bits()]).collect::<Vec<_>>()),
                         Err(e) => Err(e.to_string()),
                     };
+                    #[allow(unused_mut)] // the x86-64-v3 build joins it on x86-64 only
                     let mut builds = vec![("baseline", launch_points_inlined(fill, n, *mode, sampling, 5))];
                     #[cfg(target_arch = "x86_64")]
                     if crate::simd::Simd::Avx2.supported() {
