@@ -10,8 +10,8 @@
 //!
 //! Every path gives the same results to the bit (`engine::lanes` and `tests/cli.rs`).
 //! The hot loops compiled a second time for x86-64-v3 (the cpu engine's bounce loop,
-//! `engine::cpu::run_design`, and the launch points' candidate tests,
-//! `model::fill::launch_points`) carry `#[target_feature(enable = …)]` with
+//! `engine::cpu::run_design`, the launch points' candidate tests and the fill arc's sines and
+//! cosines, `model::fill`) carry `#[target_feature(enable = …)]` with
 //! [`X86_64_V3_FEATURES`] (an attribute takes a literal, so it is spelled out there; a test
 //! below holds every copy to this one) and inline everything they call, so all of it gets
 //! three-operand and 256-bit instructions and inline `floor`/`ceil`: Rust never contracts
@@ -263,6 +263,6 @@ mod tests {
                 seen += 1;
             }
         }
-        assert_eq!(seen, 4, "the bounce loop, the launch points, the AVX2 and the AVX-512 lanes");
+        assert_eq!(seen, 5, "the bounce loop, the launch points, the fill arc, the AVX2 and the AVX-512 lanes");
     }
 }

@@ -5,7 +5,7 @@
 use super::real::Real;
 use super::scenario::{Collision, ContactLaw, Material, PhysicsMode};
 pub use crate::kernel_codes::TANGENTIAL_PSI;
-use crate::lane::Lane;
+use crate::lane::{Lane, LaneMask};
 
 /// Nodes of the DEM law's tangential table.
 pub const TANGENTIAL_NODES: usize = TANGENTIAL_PSI.len();
@@ -147,8 +147,10 @@ impl<S: Copy + Into<f64>> Restitution<S> {
         let vn_abs = vn_s.abs();
         let vt_abs = (vt[0] * vt[0] + vt[1] * vt[1]).sqrt();
         // Eq. 4.9: k_plastic = k_elastic (v_limit / |v_n|)^(1/4) above the limit velocity.
-        let k_norm = if self.plastic {
-            L::select(vn_abs.gt(v_limit), k_elastic * (v_limit / vn_abs).sqrt().sqrt(), k_elastic)
+        // (a side no lane takes is not computed: one number's bounce stays a branch)
+        let above = vn_abs.gt(v_limit);
+        let k_norm = if self.plastic && above.any() {
+            L::select(above, k_elastic * (v_limit / vn_abs).sqrt().sqrt(), k_elastic)
         } else {
             k_elastic
         };
@@ -158,8 +160,12 @@ impl<S: Copy + Into<f64>> Restitution<S> {
             let impulse = mu * (k_norm + one) * vn_abs;
             self.dem_tangential_on(L::select(impulse.gt(zero), vt_abs / impulse, L::splat(f64::INFINITY)))
         } else {
-            let slip = tangential_factor * mu * (k_norm + one) * vn_abs / vt_abs;
-            let k_tang = L::select(vt_abs.gt(zero), one - slip, zero);
+            let sliding = vt_abs.gt(zero);
+            let k_tang = if sliding.any() {
+                L::select(sliding, one - tangential_factor * mu * (k_norm + one) * vn_abs / vt_abs, zero)
+            } else {
+                zero
+            };
             if self.clamp_tangential {
                 k_tang.max(zero).min(one)
             } else {

@@ -285,7 +285,8 @@ fn stokes_crossings<L: F64Lane>(
     // the extremum t* = ln(1 + x)/k, where x = n·v/(-a) > 0
     let x = L::select(ca.ne(zero), (nv + nw) / -ca, zero);
     let has_star = mask & x.gt(zero) & x.abs().lt(inf);
-    let t_star = ln_1p(x) / f.k;
+    // (each function of the lanes below is taken only where some lane needs it)
+    let t_star = if has_star.any() { ln_1p(x) / f.k } else { zero };
     let horizon = stokes_horizon(coef, f.k);
     let t_end = t_max.min(horizon);
     let active = mask & !t_min.gt(t_end);
@@ -294,7 +295,7 @@ fn stokes_crossings<L: F64Lane>(
     }
     let mut lo = t_min.max(zero);
     let from_zero = lo.eq(zero);
-    let mut f_lo = L::select(from_zero, c0, stokes_f(f, coef, lo));
+    let mut f_lo = if (active & !from_zero).any() { L::select(from_zero, c0, stokes_f(f, coef, lo)) } else { c0 };
     for (present, hi) in [(has_star, t_star), (L::Mask::splat(true), t_end)] {
         let go = active & present & !hi.le(lo);
         if !go.any() {
