@@ -3,27 +3,9 @@
 //! another k_n and k_t.
 
 use super::real::Real;
+pub use super::scenario::{check_tangential_table, TANGENTIAL_NODES, TANGENTIAL_PSI};
 use super::scenario::{Collision, ContactLaw, Material, PhysicsMode};
-pub use crate::kernel_codes::TANGENTIAL_PSI;
 use crate::lane::{Lane, LaneMask};
-
-/// Nodes of the DEM law's tangential table.
-pub const TANGENTIAL_NODES: usize = TANGENTIAL_PSI.len();
-
-/// A measured tangential table: one finite ratio per node of [`TANGENTIAL_PSI`], each in
-/// [-1, 1] (a rebound keeps at most its tangential speed, and reverses at most all of it).
-pub fn check_tangential_table(t: &[f64]) -> Result<(), String> {
-    if t.len() != TANGENTIAL_NODES {
-        return Err(format!(
-            "`[collision] tangential_ratio` must hold {TANGENTIAL_NODES} values (k_t at psi = {TANGENTIAL_PSI:?}; `sawtooth dem impact --law-out` measures them), got {}",
-            t.len()
-        ));
-    }
-    match t.iter().position(|v| !(v.is_finite() && (-1.0..=1.0).contains(v))) {
-        Some(i) => Err(format!("`[collision] tangential_ratio` value {} must lie in [-1, 1], got {}", i + 1, t[i])),
-        None => Ok(()),
-    }
-}
 
 /// Plastic limit velocity v_limit, m/s (Eq. 4.7 as repaired by erratum 1):
 /// v_limit = π² p_limit^(5/2) / (sqrt(40 ρ_particle) E*²), with E* from Eq. 4.4 and

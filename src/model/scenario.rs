@@ -3,6 +3,26 @@
 
 use serde::{Deserialize, Serialize};
 
+pub use crate::kernel_codes::TANGENTIAL_PSI;
+
+/// Nodes of the DEM law's tangential table.
+pub const TANGENTIAL_NODES: usize = TANGENTIAL_PSI.len();
+
+/// A measured tangential table: one finite ratio per node of [`TANGENTIAL_PSI`], each in
+/// [-1, 1] (a rebound keeps at most its tangential speed, and reverses at most all of it).
+pub fn check_tangential_table(t: &[f64]) -> Result<(), String> {
+    if t.len() != TANGENTIAL_NODES {
+        return Err(format!(
+            "`[collision] tangential_ratio` must hold {TANGENTIAL_NODES} values (k_t at psi = {TANGENTIAL_PSI:?}; `sawtooth dem impact --law-out` measures them), got {}",
+            t.len()
+        ));
+    }
+    match t.iter().position(|v| !(v.is_finite() && (-1.0..=1.0).contains(v))) {
+        Some(i) => Err(format!("`[collision] tangential_ratio` value {} must lie in [-1, 1], got {}", i + 1, t[i])),
+        None => Ok(()),
+    }
+}
+
 /// Which physics the engines run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
@@ -416,7 +436,7 @@ impl Scenario {
                 Err("`[collision] law = \"dem\"` runs in the physical mode only (the listing mode is the thesis's law)"
                     .into())
             }
-            ContactLaw::Dem => super::collision::check_tangential_table(&c.tangential_ratio),
+            ContactLaw::Dem => check_tangential_table(&c.tangential_ratio),
         }
     }
 }
