@@ -638,12 +638,12 @@ mod tests {
     /// The fill arc's sines and cosines in the x86-64-v3 build (vectorised by the compiler)
     /// are the scalar `lane_math::sin_cos`'s to the bit, over the arcs' angles and beyond.
     #[test]
+    #[cfg(target_arch = "x86_64")]
     fn the_arcs_sines_and_cosines_are_the_same_in_both_builds() {
         if !crate::simd::Simd::Avx2.supported() {
             eprintln!("skipped: this CPU lacks x86-64-v3, so only the baseline build runs here");
             return;
         }
-        #[cfg(target_arch = "x86_64")]
         for n in [1, 3, 4, 5, 512, 1003] {
             let angles: Vec<f64> = (0..n).map(|k| -7.0 + 14.0 * ((k as f64 * 0.618_033_988_749_895) % 1.0)).collect();
             let (mut s, mut c) = (vec![0.0; n], vec![0.0; n]);
