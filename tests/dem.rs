@@ -358,7 +358,7 @@ fn the_same_case_twice_gives_the_same_files_and_the_same_tooth_masses() {
             "dem",
             "run",
             "--config",
-            config.to_str().unwrap(),
+            &config,
             "--particles",
             "40",
             "--seed",
