@@ -91,13 +91,6 @@ pub fn parse_plan(text: &str, name: &str) -> anyhow::Result<Plan> {
         bail!("{name}: plan format {} (this sawtooth reads format {PLAN_FORMAT})", plan.format);
     }
     validate_plan(&plan).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-    for (i, m) in plan.members.iter().enumerate() {
-        let p = Path::new(&m.dir);
-        if m.dir.is_empty() || p.is_absolute() || p.components().any(|c| !matches!(c, std::path::Component::Normal(_)))
-        {
-            bail!("{name}: member {i}: dir `{}` must be a plain folder name inside the campaign", m.dir);
-        }
-    }
     Ok(plan)
 }
 
@@ -261,6 +254,21 @@ pub fn execute(root: &Path, plan: &Plan) -> anyhow::Result<bool> {
 /// rules as a new run's settings (`Manifest::validate`, `schema`).
 pub fn validate_plan(plan: &Plan) -> Result<(), String> {
     PLAN_MEMBERS.check_usize("`members` (their number)", plan.members.len())?;
+    // the command is copied into the Slurm scripts' comments: a line break there would be a command
+    crate::schema::one_line("`command`", &plan.command)?;
+    match &plan.study {
+        Study::Sweep => {}
+        Study::Repeatability { target_mass_flow } | Study::Sensitivity { target_mass_flow, .. } => {
+            crate::schema::TARGET_MASS_FLOW.check("`study.target_mass_flow`", *target_mass_flow)?;
+        }
+    }
+    if let Study::Sensitivity { repeatability_ci: Some((mean, half)), .. } = &plan.study {
+        if !(mean.is_finite() && half.is_finite() && *half >= 0.0) {
+            return Err(format!(
+                "`study.repeatability_ci` ({mean}, {half}) must be a finite mean and a half-width >= 0"
+            ));
+        }
+    }
     CHECKPOINT_EVERY.check("`checkpoint_every`", plan.checkpoint_every)?;
     let mut dirs = HashSet::new();
     for (i, m) in plan.members.iter().enumerate() {
@@ -272,6 +280,19 @@ pub fn validate_plan(plan: &Plan) -> Result<(), String> {
                 m.manifest.engine, plan.engine
             )));
         }
+        // the folder is named in messages, Slurm scripts and paths: a plain name inside the
+        // campaign, no separator, no `..`, no newline or NUL
+        let plain = !m.dir.is_empty()
+            && m.dir.len() <= 128
+            && !m.dir.starts_with('.')
+            && m.dir.chars().all(|c| c.is_ascii_alphanumeric() || "._+-=".contains(c));
+        if !plain {
+            return Err(at(format!(
+                "`dir` {:?} must be a plain folder name inside the campaign (at most 128 letters, digits, `._+-=`, not starting with `.`)",
+                m.dir
+            )));
+        }
+        crate::schema::one_line("`label`", &m.label).map_err(at)?;
         if !dirs.insert(m.dir.as_str()) {
             return Err(at(format!("`dir` `{}` is another member's too; each member has its own folder", m.dir)));
         }
