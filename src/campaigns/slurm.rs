@@ -10,6 +10,7 @@ use anyhow::{bail, Context as _};
 
 use super::plan::{member_state, read_plan, MemberState};
 use crate::io::atomic::write_atomic;
+use crate::io::run_dir::mark_subfolder;
 
 /// What the array asks of Slurm (`campaign slurm`'s flags).
 #[derive(Clone, Debug, PartialEq)]
@@ -223,13 +224,14 @@ pub fn write_scripts(dir: &Path, s: &SlurmSettings, exe: &Path) -> anyhow::Resul
     let (root_s, exe_s) = (root.to_string_lossy().into_owned(), exe.to_string_lossy().into_owned());
     let (array, gather) = scripts(s, &command, finished.len(), &root_s, &exe_s, &tasks)?;
     let sdir = root.join("slurm");
-    std::fs::create_dir_all(&sdir).with_context(|| format!("creating {}", sdir.display()))?;
-    std::fs::create_dir_all(root.join("logs")).with_context(|| format!("creating {}", root.join("logs").display()))?;
+    // folders of the campaign's own, marked so that the campaign's folder counts them as its
+    mark_subfolder(&sdir, "slurm")?;
+    mark_subfolder(&root.join("logs"), "slurm-logs")?;
     let (array_path, gather_path) = (sdir.join("array.sbatch"), sdir.join("gather.sbatch"));
     write_atomic(&array_path, array.as_bytes())?;
     write_atomic(&gather_path, gather.as_bytes())?;
     let stale_gather = if s.unfinished {
-        std::fs::read_to_string(sdir.join(LAST_SUBMIT))
+        crate::io::bounded::read_text(&sdir.join(LAST_SUBMIT), &crate::schema::SUBMISSION_FILE)
             .ok()
             .and_then(|t| t.split_whitespace().find_map(|w| w.strip_prefix("gather=").map(String::from)))
     } else {

@@ -63,13 +63,13 @@ pub struct SlurmArgs {
     #[arg(long)]
     pub time: Option<String>,
     /// CPU cores per task (the CPU engine's threads).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = super::args::count::<u32>(&crate::schema::SLURM_CPUS_PER_TASK))]
     pub cpus_per_task: u32,
     /// GPUs per task (for --engine gpu/auto plans).
-    #[arg(long)]
+    #[arg(long, value_parser = super::args::count::<u32>(&crate::schema::SLURM_GPUS_PER_TASK))]
     pub gpus_per_task: Option<u32>,
     /// At most K tasks of the array running at once (`--array=…%K`).
-    #[arg(long)]
+    #[arg(long, value_parser = super::args::count::<u32>(&crate::schema::SLURM_MAX_PARALLEL))]
     pub max_parallel: Option<u32>,
     /// Only the members that are not finished (to resubmit after a cancel or a failure).
     #[arg(long)]
@@ -170,10 +170,18 @@ fn run_cmd(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     if i >= n {
         bail!("--task {i}: the plan in {} has {n} members (tasks 0..={})", a.dir.display(), n.saturating_sub(1));
     }
-    // Shared: the other tasks run beside this one; a one-process run or a gather excludes them.
-    let _root = RunDir::acquire(&a.dir, CAMPAIGN_KIND, Access::Shared)?;
     let m = &plan.members[i];
     let dir = plan.member_dir(&a.dir, i);
+    if let Ok(target) = std::fs::read_link(&dir) {
+        bail!(
+            "member {i} ({}): its folder {} is a link to {}; a member's folder lies inside its campaign: remove the link and run the task again",
+            m.label,
+            dir.display(),
+            target.display()
+        );
+    }
+    // Shared: the other tasks run beside this one; a one-process run or a gather excludes them.
+    let _root = RunDir::acquire(&a.dir, CAMPAIGN_KIND, Access::Shared)?;
     if member_state(&dir) == MemberState::Finished {
         writeln!(out, "member {i} ({}) is already finished", m.label)?;
         return Ok(ExitCode::SUCCESS);
