@@ -31,8 +31,10 @@ pub enum DemCommand {
 }
 
 /// What a case is built from: the scenario as `simulate` takes it, a design, and the DEM's
-/// own settings (`[dem]` in the config; the flags override).
+/// own settings (`[dem]` in the config; the flags override). `--particles` is the DEM's grain
+/// count here (the model keeps the config's particle count).
 #[derive(Debug, Args)]
+#[command(mut_arg("particles", |a| a.help(dem_particles_help(true)).value_parser(super::args::count::<u32>(&crate::schema::DEM_PARTICLES))))]
 pub struct CaseArgs {
     #[command(flatten)]
     pub scenario: ScenarioArgs,
@@ -43,6 +45,15 @@ pub struct CaseArgs {
     /// which --particles grains hold the model's fill mass].
     #[arg(long, allow_negative_numbers = true)]
     pub grain_diameter_um: Option<f64>,
+}
+
+/// `--particles` of a DEM command: the grains of the case, with the DEM's own default
+/// (`config`: the command reads a --config file, whose `[dem] particles` comes first).
+fn dem_particles_help(config: bool) -> String {
+    let default = DemSettings::default().particles;
+    let default =
+        if config { format!("the --config file's [dem] particles, else {default}") } else { default.to_string() };
+    format!("DEM grains per run (LIGGGHTS particles in tooth 0's fill) [default: {default}]")
 }
 
 #[derive(Debug, Args)]
@@ -62,7 +73,7 @@ pub struct RunArgs {
     #[arg(long, default_value_t = 3, value_parser = super::args::count::<u32>(&crate::schema::DEM_RUNS))]
     pub runs: u32,
     /// LIGGGHTS processes at a time [default: the cores].
-    #[arg(long)]
+    #[arg(long, value_parser = super::args::count::<usize>(&crate::schema::JOBS))]
     pub jobs: Option<usize>,
     /// The campaign folder; the same command into it again resumes a killed campaign.
     #[arg(long)]
@@ -83,16 +94,15 @@ pub struct CheckArgs {
     /// An `optimize` run folder (run.toml, pareto.csv).
     pub run_dir: PathBuf,
     /// Front designs checked besides the picks A, B, C, spread over the front's mass flow.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, value_parser = super::args::count::<usize>(&crate::schema::DEM_FRONT))]
     pub front: usize,
     /// DEM seeds per design.
-    #[arg(long, default_value_t = 3, value_parser = super::args::count::<u32>(&crate::schema::DEM_RUNS))]
+    #[arg(long, default_value_t = 3, value_parser = super::args::count::<u32>(&crate::schema::DEM_SEEDS))]
     pub seeds: u32,
-    /// Grains per DEM run [default: [dem]'s default].
-    #[arg(long)]
+    #[arg(long, help = dem_particles_help(false), value_parser = super::args::count::<u32>(&crate::schema::DEM_PARTICLES))]
     pub particles: Option<u32>,
     /// LIGGGHTS processes at a time [default: the cores].
-    #[arg(long)]
+    #[arg(long, value_parser = super::args::count::<usize>(&crate::schema::JOBS))]
     pub jobs: Option<usize>,
     /// Where the campaigns and check.json go.
     #[arg(long)]
@@ -189,12 +199,9 @@ fn write(a: WriteArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// `--jobs` (bounded by its parser), else the cores.
 fn jobs(j: Option<usize>) -> anyhow::Result<usize> {
-    match j {
-        Some(0) => bail!("--jobs must be at least 1"),
-        Some(j) => Ok(j),
-        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
-    }
+    Ok(j.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())))
 }
 
 fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
@@ -203,7 +210,7 @@ fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let plan = Plan { first_seed: scenario.sim.seed, scenario, design, settings, runs: a.runs, known_return: known };
     // the case must build before the folder is taken
     plan.case(0).map_err(anyhow::Error::msg)?;
-    let _owned = RunDir::acquire(&a.out, "dem", Access::Exclusive).context("--out")?;
+    let _owned = RunDir::acquire(&a.out, campaign::KIND, Access::Exclusive).context("--out")?;
     let results = campaign::run(&a.out, &plan, jobs, &|line| eprintln!("dem: {line}"))?;
     let c = compare(&plan.scenario, &plan.design, &results)?;
     write_table(out, &c)?;
@@ -219,11 +226,11 @@ fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
 
 /// Read a campaign folder back: its plan and every run's result.
 fn load_campaign(dir: &Path) -> anyhow::Result<(Plan, Vec<crate::dem::gather::RunResult>)> {
-    let path = dir.join(campaign::PLAN);
-    let text = std::fs::read_to_string(&path)
-        .with_context(|| format!("{} is not a `sawtooth dem run` campaign (no {})", dir.display(), campaign::PLAN))?;
-    let plan: Plan = serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
-    let results = campaign::results(dir, plan.runs)?;
+    if std::fs::symlink_metadata(dir.join(campaign::PLAN)).is_err() {
+        bail!("{} is not a `sawtooth dem run` campaign (no {})", dir.display(), campaign::PLAN);
+    }
+    let (plan, first) = campaign::read_plan(dir)?;
+    let results = campaign::results(dir, &plan, &first)?;
     let missing = results.iter().filter(|r| r.is_none()).count();
     if missing > 0 {
         bail!(
@@ -238,7 +245,7 @@ fn load_campaign(dir: &Path) -> anyhow::Result<(Plan, Vec<crate::dem::gather::Ru
 fn compare_cmd(a: CompareArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let (plan, results) = load_campaign(&a.dir)?;
     let c = compare(&plan.scenario, &plan.design, &results)?;
-    let _owned = RunDir::acquire(&a.dir, "dem", Access::Exclusive).context("DIR")?;
+    let _owned = RunDir::acquire(&a.dir, campaign::KIND, Access::Exclusive).context("DIR")?;
     let json = serde_json::to_string_pretty(&c)?;
     write_atomic(&a.dir.join("compare.json"), json.as_bytes())?;
     let figure = ComparisonPlot::new(&c, &plan.scenario, &plan.design, results.len());
@@ -296,9 +303,6 @@ fn check(a: CheckArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         settings.particles = n;
     }
     settings.validate().map_err(anyhow::Error::msg)?;
-    if a.seeds == 0 || a.seeds > 1000 {
-        bail!("--seeds must lie in [1, 1000], got {}", a.seeds);
-    }
     let command = format!(
         "sawtooth dem check {} --seeds {} --front {} --particles {} --out {}",
         a.run_dir.display(),

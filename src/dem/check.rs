@@ -22,7 +22,7 @@ use super::compare::Spread;
 use super::gather::RunResult;
 use super::settings::DemSettings;
 use crate::io::atomic::write_atomic;
-use crate::io::run_dir::{kind_of, Access, RunDir};
+use crate::io::run_dir::{kind_of, mark_subfolder, Access, RunDir};
 use crate::model::design::DesignRow;
 use crate::model::performance::performance;
 use crate::model::prepare;
@@ -143,8 +143,13 @@ impl CheckPlan {
         if self.format != CHECK_PLAN_FORMAT {
             return Err(format!("`format` {} (this sawtooth reads format {CHECK_PLAN_FORMAT})", self.format));
         }
-        if !(1..=1000).contains(&self.seeds) {
-            return Err(format!("`seeds` must lie in [1, 1000], got {}", self.seeds));
+        crate::schema::DEM_SEEDS.check_u32("`seeds`", self.seeds)?;
+        // printed in tables and copied into the Slurm scripts' comments
+        crate::schema::one_line("`command`", &self.command)?;
+        crate::schema::one_line("`run_dir`", &self.run_dir)?;
+        crate::schema::DEM_PARTICLES.check_u32("`particles`", self.particles)?;
+        if let Some(r) = &self.requirements {
+            r.validate().map_err(|e| format!("`requirements`: {e}"))?;
         }
         if self.finalists.is_empty() || self.members() > MAX_MEMBERS {
             return Err(format!(
@@ -168,8 +173,24 @@ impl CheckPlan {
             if f.campaign.runs != self.seeds {
                 return Err(at(format!("`campaign.runs` {} differs from `seeds` {}", f.campaign.runs, self.seeds)));
             }
-            f.campaign.settings.validate().map_err(|e| at(format!("`campaign.settings`: {e}")))?;
-            f.campaign.case(0).map_err(|e| at(format!("`campaign`: {e}")))?;
+            if f.campaign.settings.particles != self.particles {
+                return Err(at(format!(
+                    "`campaign.settings.particles` {} differs from `particles` {}",
+                    f.campaign.settings.particles, self.particles
+                )));
+            }
+            // the optimisation's figures are printed beside the DEM's: numbers, not NaN
+            for (name, v) in [
+                ("model_d_avg_m", Some(f.model_d_avg_m)),
+                ("model_m_dot_kg_s", Some(f.model_m_dot_kg_s)),
+                ("model_w_spec_j_kg", Some(f.model_w_spec_j_kg)),
+                ("model_m_dot_op_kg_h", f.model_m_dot_op_kg_h),
+            ] {
+                if let Some(v) = v.filter(|v| !(v.is_finite() && *v >= 0.0)) {
+                    return Err(at(format!("`{name}` is {v}; it is a finite number >= 0")));
+                }
+            }
+            f.campaign.check().map_err(|e| at(format!("`campaign`: {e}")))?;
         }
         Ok(())
     }
@@ -221,7 +242,7 @@ pub fn plan(run_dir: &Path, settings: &DemSettings, seeds: u32, k: usize, comman
             first_seed: manifest.seed,
             known_return: None,
         };
-        campaign.case(0).map_err(|e| anyhow::anyhow!("design {label}: {e}"))?;
+        campaign.check().map_err(|e| anyhow::anyhow!("design {label}: {e}"))?;
         finalists.push(Finalist {
             label,
             model_d_avg_m: p.d_avg_m,
@@ -276,8 +297,14 @@ pub fn write_plan(root: &Path, plan: &CheckPlan) -> anyhow::Result<RunDir> {
 pub fn read_plan(root: &Path) -> anyhow::Result<CheckPlan> {
     let path = root.join(CHECK_PLAN);
     let text = crate::io::bounded::read_text(&path, &crate::schema::PLAN_FILE)?;
-    let plan: CheckPlan = serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
-    plan.validate().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    parse_plan(&text, &path.display().to_string())
+}
+
+/// A check plan's text checked by every rule ([`CheckPlan::validate`]); `name` is the file
+/// named in messages.
+pub fn parse_plan(text: &str, name: &str) -> anyhow::Result<CheckPlan> {
+    let plan: CheckPlan = serde_json::from_str(text).with_context(|| format!("reading {name}"))?;
+    plan.validate().map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
     Ok(plan)
 }
 
@@ -294,7 +321,7 @@ pub fn run_member(root: &Path, plan: &CheckPlan, i: usize, say: &(dyn Fn(String)
     }
     let (f, r) = plan.member(i);
     let dir = plan.finalist_dir(root, f);
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    mark_subfolder(&dir, campaign::KIND)?;
     campaign::run_one(&dir, &plan.finalists[f].campaign, r, say)
 }
 
@@ -378,7 +405,7 @@ pub fn check(root: &Path, plan: &CheckPlan, jobs: usize, say: &(dyn Fn(String) +
     let mut report = empty_report(plan);
     for (i, f) in plan.finalists.iter().enumerate() {
         let dir = plan.finalist_dir(root, i);
-        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        mark_subfolder(&dir, campaign::KIND)?;
         say(format!("design {}: {}", f.label, DesignRow::of(&f.campaign.design)));
         let results = campaign::run(&dir, &f.campaign, jobs, say)?;
         report.designs.push(design_check(plan, f, &results)?);
