@@ -709,7 +709,7 @@ fn _fit<'py>(
     r.normalise = normalise.map(|n| choice("normalise", &n)).transpose()?;
     r.seed = seed;
     r.engine = engine_kind(engine)?;
-    r.holdout = holdout.unwrap_or(r.holdout);
+    r.holdout = holdout;
     r.bootstrap = bootstrap.unwrap_or(r.bootstrap);
     r.out = out;
     let outcome = py.detach(|| fit_request::run(&r, &mut |line| eprintln!("{line}"))).map_err(value_error)?;
