@@ -19,6 +19,8 @@ use crate::optim::lockstep::Lockstep;
 use crate::optim::manifest::{read_manifest, Manifest};
 use crate::optim::nsga2::load_checkpoint;
 use crate::optim::runner::{is_finished, run, RunOptions};
+pub use crate::protocol::MemberState;
+use crate::protocol::Ran;
 use crate::schema::{CHECKPOINT_EVERY, PLAN_MEMBERS};
 
 /// The plan's file in a campaign folder.
@@ -117,28 +119,7 @@ pub fn write_plan(root: &Path, plan: &Plan) -> anyhow::Result<RunDir> {
     Ok(owned)
 }
 
-/// Where a member stands.
-#[derive(Debug, Clone, PartialEq)]
-pub enum MemberState {
-    Finished,
-    /// A process holds its folder now.
-    Running,
-    /// Stopped (or pre-empted) with a checkpoint at this generation.
-    Checkpoint(u64),
-    NotStarted,
-}
-
-impl std::fmt::Display for MemberState {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            MemberState::Finished => write!(f, "finished"),
-            MemberState::Running => write!(f, "running"),
-            MemberState::Checkpoint(g) => write!(f, "stopped at generation {g} (checkpoint)"),
-            MemberState::NotStarted => write!(f, "not started"),
-        }
-    }
-}
-
+/// Where the member run in `dir` stands: running, finished, stopped at a checkpoint, or not started.
 pub fn member_state(dir: &Path) -> MemberState {
     if run_dir::is_held(dir) {
         MemberState::Running
@@ -193,6 +174,29 @@ pub fn finished_fronts(root: &Path, plan: &Plan) -> anyhow::Result<Vec<Vec<Front
         );
     }
     Ok(fronts)
+}
+
+/// Run member `i` alone in its folder (the caller holds the campaign's folder shared):
+/// resumed from its checkpoint where it has one, not run again once finished.
+pub fn run_member(root: &Path, plan: &Plan, i: usize) -> anyhow::Result<Ran> {
+    let m = &plan.members[i];
+    let dir = plan.member_dir(root, i);
+    if member_state(&dir) == MemberState::Finished {
+        return Ok(Ran::AlreadyFinished);
+    }
+    let engine = make_engine_for(plan.engine, &m.manifest.scenario)?;
+    let resume = dir.join("checkpoint.json").exists();
+    let opts = RunOptions {
+        checkpoint_every: plan.checkpoint_every,
+        progress: false,
+        label: format!("member {i} ({}) ", m.label),
+    };
+    let o = run(&dir, (!resume).then(|| m.manifest.clone()), resume, &engine, &opts)
+        .with_context(|| format!("member {i} ({})", m.label))?;
+    if o.interrupted {
+        return Ok(Ran::Interrupted);
+    }
+    Ok(Ran::Finished(format!("{} generations ({}), {} front points", o.generations, o.termination, o.front.len())))
 }
 
 /// Run every unfinished member in lockstep; `false` when interrupted (Ctrl-C / SIGTERM).

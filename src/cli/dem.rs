@@ -342,61 +342,7 @@ fn report_check(
     if json {
         writeln!(out, "{}", serde_json::to_string_pretty(report)?)?;
     } else {
-        crate::dem::check::write_table(out, report)?;
-        writeln!(out, "\nwrote {}/{}", dir.display(), crate::dem::check::CHECK_JSON)?;
+        crate::dem::check::write_summary(out, report, dir)?;
     }
-    Ok(ExitCode::SUCCESS)
-}
-
-/// `sawtooth campaign run DIR --task I` on a DEM check's folder: member I (one DEM run)
-/// alone, the folder shared with the other tasks.
-pub fn campaign_task(dir: &Path, task: usize, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    let plan = crate::dem::check::read_plan(dir)?;
-    let _shared = RunDir::acquire(dir, crate::dem::check::CHECK_KIND, Access::Shared)?;
-    let label = if task < plan.members() { plan.member_label(task) } else { String::new() };
-    let ran = crate::dem::check::run_member(dir, &plan, task, &|l| eprintln!("member {task} ({label}): {l}"))?;
-    if ran {
-        writeln!(out, "member {task} ({label}) finished: {}", plan.member_dir(dir, task).display())?;
-    } else {
-        writeln!(out, "member {task} ({label}) is already finished")?;
-    }
-    Ok(ExitCode::SUCCESS)
-}
-
-/// `sawtooth campaign run DIR` (no task) on a DEM check's folder: every member here, one
-/// design after another, then the report (what `dem check` does).
-pub fn campaign_run_all(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    let plan = crate::dem::check::read_plan(dir)?;
-    let jobs = jobs(None)?;
-    let report = crate::dem::check::check(dir, &plan, jobs, &|l| eprintln!("dem check: {l}"))?;
-    report_check(&report, dir, false, out)
-}
-
-/// `sawtooth campaign gather DIR` on a DEM check's folder: check.json from the members'
-/// results, refused while any is missing.
-pub fn campaign_gather(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    let plan = crate::dem::check::read_plan(dir)?;
-    let _owned = RunDir::acquire(dir, crate::dem::check::CHECK_KIND, Access::Exclusive)?;
-    let report = crate::dem::check::gather(dir, &plan)?;
-    report_check(&report, dir, false, out)
-}
-
-/// `sawtooth campaign status DIR` on a DEM check's folder: each member finished or not.
-pub fn campaign_status(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    let plan = crate::dem::check::read_plan(dir)?;
-    writeln!(out, "{} ({}, {} members)", dir.display(), plan.command, plan.members())?;
-    let mut finished = 0;
-    for i in 0..plan.members() {
-        let state = if plan.member_done(dir, i) {
-            finished += 1;
-            "finished"
-        } else if plan.member_dir(dir, i).is_dir() {
-            "started (running, or stopped: run it again)"
-        } else {
-            "not started"
-        };
-        writeln!(out, "{i:>5}  {:<16} {state}", plan.member_label(i))?;
-    }
-    writeln!(out, "finished {finished}, not finished {}", plan.members() - finished)?;
     Ok(ExitCode::SUCCESS)
 }

@@ -6,10 +6,11 @@
 //! Every design is run at the slope its front figures are at (the worst slope of a run over
 //! several). A check is a plan ([`CheckPlan`], `plan.json` in the check's folder): its
 //! finalists, each with the DEM campaign of its seeds in a folder of its own, and its members,
-//! one DEM run each (finalist × seed). The members run here one design after another
-//! ([`check`]) or one per process (`sawtooth campaign run DIR --task I`: a Slurm array task,
-//! [`run_member`]); either way [`gather`] builds `check.json` from the runs' result files, so
-//! both give the same report, and a killed check resumes run by run.
+//! one DEM run each (finalist × seed). It is a kind of `protocol::Campaign`: the members run
+//! here one design after another ([`check`], `campaign run DIR`) or one per process
+//! (`campaign run DIR --task I`: a Slurm array task, [`run_member`]); either way [`gather`]
+//! builds `check.json` from the runs' result files, so both give the same report, and a
+//! killed check resumes run by run.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -29,6 +30,7 @@ use crate::model::prepare;
 use crate::model::requirements::{Limit, Requirements};
 use crate::optim::front::{picks, read_pareto_csv, FrontPoint};
 use crate::optim::manifest::read_manifest;
+use crate::protocol::{Campaign, MemberState, Ran};
 
 /// The `io::run_dir` kind of a check's folder.
 pub const CHECK_KIND: &str = "dem-check";
@@ -402,6 +404,16 @@ pub fn gather(root: &Path, plan: &CheckPlan) -> anyhow::Result<CheckReport> {
 /// long check shows its first designs early); the final report is [`gather`]'s.
 pub fn check(root: &Path, plan: &CheckPlan, jobs: usize, say: &(dyn Fn(String) + Sync)) -> anyhow::Result<CheckReport> {
     let _owned = write_plan(root, plan)?;
+    check_owned(root, plan, jobs, say)
+}
+
+/// [`check`] in a folder the caller holds exclusively, its plan there.
+fn check_owned(
+    root: &Path,
+    plan: &CheckPlan,
+    jobs: usize,
+    say: &(dyn Fn(String) + Sync),
+) -> anyhow::Result<CheckReport> {
     let mut report = empty_report(plan);
     for (i, f) in plan.finalists.iter().enumerate() {
         let dir = plan.finalist_dir(root, i);
@@ -412,6 +424,69 @@ pub fn check(root: &Path, plan: &CheckPlan, jobs: usize, say: &(dyn Fn(String) +
         write_report(root, &report)?;
     }
     gather(root, plan)
+}
+
+/// The report's table and where its file is: what `dem check` and `campaign run/gather` print.
+pub fn write_summary(out: &mut dyn Write, r: &CheckReport, root: &Path) -> anyhow::Result<()> {
+    write_table(out, r)?;
+    writeln!(out, "\nwrote {}/{}", root.display(), CHECK_JSON)?;
+    Ok(())
+}
+
+/// A DEM check as a campaign: members are DEM runs (design x seed), each resumed run by run
+/// from the results its design's campaign holds.
+impl Campaign for CheckPlan {
+    fn kind(&self) -> &'static str {
+        CHECK_KIND
+    }
+    fn what(&self) -> &'static str {
+        "DEM check"
+    }
+    fn command(&self) -> &str {
+        &self.command
+    }
+    fn members(&self) -> usize {
+        CheckPlan::members(self)
+    }
+    fn label(&self, i: usize) -> String {
+        self.member_label(i)
+    }
+    fn member_dir(&self, root: &Path, i: usize) -> PathBuf {
+        CheckPlan::member_dir(self, root, i)
+    }
+    fn state(&self, root: &Path, i: usize) -> MemberState {
+        if self.member_done(root, i) {
+            MemberState::Finished
+        } else if CheckPlan::member_dir(self, root, i).is_dir() {
+            MemberState::Started
+        } else {
+            MemberState::NotStarted
+        }
+    }
+    fn run_member(&self, root: &Path, i: usize) -> anyhow::Result<Ran> {
+        let label = self.member_label(i);
+        Ok(if run_member(root, self, i, &|l| eprintln!("member {i} ({label}): {l}"))? {
+            Ran::Finished(CheckPlan::member_dir(self, root, i).display().to_string())
+        } else {
+            Ran::AlreadyFinished
+        })
+    }
+    fn run_all(&self, root: &Path, out: &mut dyn Write) -> anyhow::Result<Ran> {
+        let jobs = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let report = check_owned(root, self, jobs, &|l| eprintln!("dem check: {l}"))?;
+        write_summary(out, &report, root)?;
+        Ok(Ran::Finished(String::new()))
+    }
+    fn gather(&self, root: &Path, out: &mut dyn Write) -> anyhow::Result<()> {
+        write_summary(out, &gather(root, self)?, root)
+    }
+    fn label_width(&self) -> usize {
+        16
+    }
+    fn tally(&self, states: &[MemberState]) -> String {
+        let finished = states.iter().filter(|s| **s == MemberState::Finished).count();
+        format!("finished {finished}, not finished {}", states.len() - finished)
+    }
 }
 
 pub fn write_table(out: &mut dyn Write, r: &CheckReport) -> anyhow::Result<()> {
