@@ -10,7 +10,8 @@
 #
 # Usage: SAWTOOTH_BIN=PATH [SAWTOOTH_GPU_TESTS=PATH] bash scripts/gpu-hardware.sh OUT [REPEATS]
 #   SAWTOOTH_BIN: the sawtooth binary (default target/release/sawtooth)
-#   SAWTOOTH_GPU_TESTS: a built tests/gpu_conformance.rs binary to run with the full tier
+#   SAWTOOTH_GPU_TESTS: the built integration-test binary (tests/suite.rs, `cargo test --release
+#     --test suite --no-run` prints its path), whose gpu_conformance tests run with the full tier
 #   SAWTOOTH_QUICK=1: small batches, to try the script on a software adapter first
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -75,5 +76,5 @@ for engine in gpu cpu; do
     cp "$out/sweep-$engine.run/summary.csv" "$out/sweep-$engine-summary.csv" 2>/dev/null
 done
 if [[ -n ${SAWTOOTH_GPU_TESTS:-} ]]; then
-    step gpu-tests 200 env SAWTOOTH_TEST_TIER=full "$SAWTOOTH_GPU_TESTS" --skip the_gpu_table_script
+    step gpu-tests 200 env SAWTOOTH_TEST_TIER=full "$SAWTOOTH_GPU_TESTS" gpu_conformance:: --skip the_gpu_table_script --skip the_hardware_gpu_script
 fi

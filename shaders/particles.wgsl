@@ -362,9 +362,32 @@ fn bounce_velocity(d: Design, v: vec2<f32>, n: vec2<f32>) -> vec2<f32> {
     var k_norm = d.k_elastic;                  // Eq. 4.9 above v_limit
     if (d.plastic != 0u && vn_abs > d.v_limit) { k_norm = d.k_elastic * sqrt(sqrt(d.v_limit / vn_abs)); }
     var k_tang = 0.0;                          // Eq. 4.14
-    if (vt_abs > 0.0) { k_tang = 1.0 - d.tangential_factor * d.mu_friction * (k_norm + 1.0) * vn_abs / vt_abs; }
-    if (d.clamp_tangential != 0u) { k_tang = clamp(k_tang, 0.0, 1.0); }
+    if (d.dem_law != 0u) {
+        // the DEM's measured k_t(psi); a zero friction impulse makes psi infinite
+        let impulse = d.mu_friction * (k_norm + 1.0) * vn_abs;
+        var psi = bitcast<f32>(0x7f800000u);
+        if (impulse > 0.0) { psi = vt_abs / impulse; }
+        k_tang = dem_tangential(d, psi);
+    } else if (vt_abs > 0.0) {
+        k_tang = 1.0 - d.tangential_factor * d.mu_friction * (k_norm + 1.0) * vn_abs / vt_abs;
+    }
+    if (d.clamp_tangential != 0u && d.dem_law == 0u) { k_tang = clamp(k_tang, 0.0, 1.0); }
     return k_tang * vt - k_norm * vn;          // Eq. 4.49
+}
+
+// CPU twin: Restitution::dem_tangential (src/model/collision.rs): linear between the table's
+// nodes, Coulomb's 1 - c/psi through the last node past it.
+fn dem_tangential(d: Design, psi: f32) -> f32 {
+    let last = 11u;
+    let psi_last = TANGENTIAL_PSI[last];
+    if (!(psi < psi_last)) { return 1.0 - (1.0 - d.tangential_table[last]) * psi_last / psi; }
+    var i = 0u;
+    while (i + 1u < last && !(psi < TANGENTIAL_PSI[i + 1u])) { i++; }
+    let p0 = TANGENTIAL_PSI[i];
+    let p1 = TANGENTIAL_PSI[i + 1u];
+    let k0 = d.tangential_table[i];
+    let k1 = d.tangential_table[i + 1u];
+    return k0 + (k1 - k0) * (psi - p0) / (p1 - p0);
 }
 
 fn step_particle(d: Design, p: ptr<function, Particle>, index: u32, bounce: u32) {

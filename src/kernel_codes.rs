@@ -88,6 +88,12 @@ path_switches! {
 /// far more than rounding moves a height, so `flies_over` would say the same of each tooth.
 pub const RUN_CLEARANCE_PITCHES: f64 = 1e-3;
 
+/// The nodes ψ of the DEM restitution law's tangential table (`model::collision`,
+/// `ContactLaw::Dem`): ψ = |v_t| / (μ (1 + k_n) |v_n|), the tangential speed over the most a
+/// Coulomb contact can take from it. Dense below 2, where single impacts in LIGGGHTS change
+/// from sliding (k_t = 1 − 1/ψ) to sticking and tangential rebound.
+pub const TANGENTIAL_PSI: [f64; 12] = [0.0, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0];
+
 /// The generated WGSL: one `const` per shared constant, one `override` per path switch.
 pub fn wgsl_constants() -> String {
     let mut out =
@@ -96,6 +102,8 @@ pub fn wgsl_constants() -> String {
         out.push_str(&format!("const {name}: u32 = {value}u;\n"));
     }
     out.push_str(&format!("const RUN_CLEARANCE_PITCHES: f32 = {RUN_CLEARANCE_PITCHES:?};\n"));
+    let psi: Vec<String> = TANGENTIAL_PSI.iter().map(|p| format!("{p:?}")).collect();
+    out.push_str(&format!("const TANGENTIAL_PSI = array<f32, {}>({});\n", TANGENTIAL_PSI.len(), psi.join(", ")));
     for name in WGSL_PATH_SWITCHES {
         out.push_str(&format!("override {name}: bool = true;\n"));
     }

@@ -1125,8 +1125,9 @@ pub const GENERATIONS_FILE: FileLimit =
 /// A study's summary: a few rows per metric.
 pub const SUMMARY_FILE: FileLimit =
     FileLimit { what: "study summary (summary.csv)", flags: &["--repeatability"], max_bytes: 16 * MIB };
-/// One DEM run's result: tooth masses of at most 1000 teeth.
-pub const DEM_RESULT_FILE: FileLimit = FileLimit { what: "DEM result (result.json)", flags: &[], max_bytes: MIB };
+/// One DEM run's result: tooth masses of at most 1000 teeth and the settled bed's positions
+/// (two numbers of ~25 bytes pretty-printed for each of at most 200 000 grains).
+pub const DEM_RESULT_FILE: FileLimit = FileLimit { what: "DEM result (result.json)", flags: &[], max_bytes: 32 * MIB };
 /// The engine's end positions: at most 200 000 grains of ~250 bytes.
 pub const DEM_DUMP_FILE: FileLimit = FileLimit { what: "DEM dump (final.dump)", flags: &[], max_bytes: 128 * MIB };
 /// One number: the stroke time at which a DEM run ended.

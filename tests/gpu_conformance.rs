@@ -1,7 +1,7 @@
 //! The GPU engine against the CPU reference (issue 3 §2) on a few hundred random valid
 //! designs, both environments, drag on and off. Runs on any Vulkan adapter; in CI that is
 //! Mesa's lavapipe, installed by scripts/test.sh. With CI=true a missing adapter FAILS. The
-//! 240-design conformance and the GPU-table script belong to the full tier (docs/testing.md);
+//! 360-design conformance and the GPU-table script belong to the full tier (docs/testing.md);
 //! `cargo test` skips them.
 
 use sawtooth::engine::conformance::{run, run_merged, scenarios, Tolerances};
@@ -17,7 +17,7 @@ fn gpu() -> Option<GpuEngine> {
 
 #[test]
 fn gpu_conforms_to_the_cpu_reference() {
-    if !common::full_tier("gpu_conformance::gpu_conforms_to_the_cpu_reference", "240 designs through the kernel") {
+    if !common::full_tier("gpu_conformance::gpu_conforms_to_the_cpu_reference", "360 designs through the kernel") {
         return;
     }
     let Some(g) = gpu() else { return };
@@ -27,7 +27,8 @@ fn gpu_conforms_to_the_cpu_reference() {
         eprintln!("{}: {}", report.device, serde_json::to_string(r).unwrap());
     }
     assert!(report.passed, "{:#?}\nworst: {:#?}", report.failures, report.worst);
-    assert_eq!(report.scenarios.iter().map(|r| r.designs).sum::<usize>(), 240);
+    // three cases per environment (drag off, drag on, the DEM law), 60 designs each
+    assert_eq!(report.scenarios.iter().map(|r| r.designs).sum::<usize>(), 360);
 }
 
 #[test]

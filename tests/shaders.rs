@@ -125,7 +125,7 @@ fn shared_records_match_their_rust_twins_field_by_field() {
                 tangential_factor => ["tangential_factor"], plastic => ["plastic"], v_limit => ["v_limit"],
                 clamp_tangential => ["clamp_tangential"], scatter_sigma => ["scatter_sigma"],
                 launch_speed_spread => ["launch_speed_spread"], launch_angle_sigma => ["launch_angle_sigma"],
-                _pad => ["_pad0", "_pad1"],
+                dem_law => ["dem_law"], _pad => ["_pad0"], tangential_table => ["tangential_table"],
             }),
         ),
         (

@@ -54,7 +54,9 @@ struct Design {
     scatter_sigma: f32,      // impact normal tilt sigma, rad
     launch_speed_spread: f32,
     launch_angle_sigma: f32, // rad
-    _pad0: u32, _pad1: u32,
+    dem_law: u32,            // 1: the DEM's restitution law (ContactLaw::Dem), k_t from the table
+    _pad0: u32,
+    tangential_table: array<f32, 12>, // the DEM law's k_t at each TANGENTIAL_PSI
 }
 
 struct Particle {

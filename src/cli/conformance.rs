@@ -68,7 +68,7 @@ pub fn run_cli(a: ConformanceArgs, out: &mut dyn Write) -> anyhow::Result<ExitCo
         )?;
         writeln!(
             out,
-            "{:<18} {:>7} {:>9} {:>16} {:>14} {:>12} {:>9} {:>12} {:>10}",
+            "{:<24} {:>7} {:>9} {:>16} {:>14} {:>12} {:>9} {:>12} {:>10}",
             "scenario",
             "designs",
             "particles",
@@ -82,7 +82,7 @@ pub fn run_cli(a: ConformanceArgs, out: &mut dyn Write) -> anyhow::Result<ExitCo
         for r in &report.scenarios {
             writeln!(
                 out,
-                "{:<18} {:>7} {:>9} {:>16} {:>14.3e} {:>11.2}% {:>9.4} {:>12.2e} {:>10.4}",
+                "{:<24} {:>7} {:>9} {:>16} {:>14.3e} {:>11.2}% {:>9.4} {:>12.2e} {:>10.4}",
                 r.scenario,
                 r.designs,
                 r.particles,

@@ -11,7 +11,8 @@ use clap::{Args, Subcommand};
 
 use super::args::ScenarioArgs;
 use crate::dem::campaign::{self, Plan};
-use crate::dem::compare::{compare, shown_teeth, Comparison, ComparisonPlot};
+use crate::dem::compare::{compare, compare_steady, shown_teeth, Comparison, ComparisonPlot, SteadyComparison};
+use crate::dem::impact;
 use crate::dem::{Case, DemSettings};
 use crate::io::atomic::write_atomic;
 use crate::io::config::ConfigFile;
@@ -28,6 +29,34 @@ pub enum DemCommand {
     Compare(CompareArgs),
     /// An optimisation's picks and front designs in DEM: d_avg, mass flow, W_spec, verdicts.
     Check(CheckArgs),
+    /// Single grains of a case in LIGGGHTS beside the model's restitution law: normal COR,
+    /// tangential ratio and spin per impact speed and angle; --law-out writes the DEM's law.
+    Impact(ImpactArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct ImpactArgs {
+    #[command(flatten)]
+    pub case: CaseArgs,
+    /// Impact speeds, m/s (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "0.02,0.3,1.0,1.5")]
+    pub speeds: Vec<f64>,
+    /// Impact angles from the surface normal, degrees (comma-separated; 0 = head-on).
+    #[arg(long, value_delimiter = ',', default_value = "0,5,10,20,30,45,60,75")]
+    pub angles: Vec<f64>,
+    /// Also measure the DEM's restitution law for the model (k_t at each psi node) and write
+    /// it as a `[collision]` table (`law = "dem"`) to this file.
+    #[arg(long)]
+    pub law_out: Option<PathBuf>,
+    /// LIGGGHTS processes at a time [default: the cores].
+    #[arg(long)]
+    pub jobs: Option<usize>,
+    /// Where the impacts' folders, impact.json and the figure go.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// What a case is built from: the scenario as `simulate` takes it, a design, and the DEM's
@@ -75,6 +104,21 @@ pub struct RunArgs {
     /// LIGGGHTS processes at a time [default: the cores].
     #[arg(long, value_parser = super::args::count::<usize>(&crate::schema::JOBS))]
     pub jobs: Option<usize>,
+    /// Steady conveying: each run is K cycles of the sled (stroke, stop, rest, return at the
+    /// downstroke speed, rest) on a periodic conveyor of full teeth, and reports the advance
+    /// per stroke once steady, beside the model's d_avg and feed rate (K >= 3; the first
+    /// stroke is a transient) [default: one stroke from a full tooth onto bare teeth].
+    #[arg(long)]
+    pub strokes: Option<u32>,
+    /// Teeth of the periodic conveyor of --strokes, each with a full fill.
+    #[arg(long, default_value_t = 3)]
+    pub period_teeth: u32,
+    /// Convergence: after the campaign, run its seeds again at half the allowed overlap and at
+    /// twice the grains (each a campaign in DIR/refine-*), and repeat from both at once for up
+    /// to this many levels until neither moves d_avg by more than max(3 %, 2 seed spreads);
+    /// the levels and the verdict go to DIR/refine.json [default without a value: 1].
+    #[arg(long, num_args = 0..=1, default_missing_value = "1")]
+    pub refine: Option<u32>,
     /// The campaign folder; the same command into it again resumes a killed campaign.
     #[arg(long)]
     pub out: PathBuf,
@@ -123,7 +167,73 @@ pub fn run(c: DemCommand, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         DemCommand::Run(a) => run_campaign(a, out),
         DemCommand::Compare(a) => compare_cmd(a, out),
         DemCommand::Check(a) => check(a, out),
+        DemCommand::Impact(a) => impact_cmd(a, out),
     }
+}
+
+fn impact_cmd(a: ImpactArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    let jobs = jobs(a.jobs)?;
+    for &v in &a.speeds {
+        if !(v.is_finite() && (1e-3..=20.0).contains(&v)) {
+            bail!("--speeds: each impact speed must lie in [0.001, 20] m/s, got {v}");
+        }
+    }
+    for &d in &a.angles {
+        if !(d.is_finite() && (0.0..=89.0).contains(&d)) {
+            bail!("--angles: each angle from the normal must lie in [0, 89] deg, got {d}");
+        }
+    }
+    if a.speeds.len() * a.angles.len() > 400 {
+        bail!("--speeds x --angles: at most 400 impacts, got {}", a.speeds.len() * a.angles.len());
+    }
+    let (scenario, design, settings, known) = resolve(&a.case)?;
+    let case = Case::build(&scenario, &design, &settings, scenario.sim.seed, known).map_err(anyhow::Error::msg)?;
+    let binary = crate::dem::run::find_liggghts()?;
+    let _owned = RunDir::acquire(&a.out, "dem-impact", Access::Exclusive).context("--out")?;
+    let impacts = impact::measure(&case, &binary, &a.out, &a.speeds, &a.angles, jobs)?;
+    let json = serde_json::to_string_pretty(&impacts)?;
+    write_atomic(&a.out.join("impact.json"), json.as_bytes())?;
+    crate::plot::write_figure_files(&a.out, "impact", &impact::ImpactPlot::new(&impacts, &case))?;
+    let law = match &a.law_out {
+        Some(path) => {
+            let law = impact::measure_law(&case, &binary, &a.out.join("law"), jobs)?;
+            write_atomic(path, impact::law_toml(&law, &case).as_bytes())
+                .with_context(|| format!("--law-out {}", path.display()))?;
+            Some(law)
+        }
+        None => None,
+    };
+    if a.json {
+        writeln!(out, "{json}")?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    writeln!(out, "speed m/s  angle deg    psi   DEM k_n  model k_n   DEM k_t  model k_t  DEM spin")?;
+    let opt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.3}"));
+    for i in &impacts {
+        writeln!(
+            out,
+            "{:>9.3} {:>10.1} {:>6.2} {:>9.3} {:>10.3} {:>9} {:>10} {:>9}",
+            i.speed_m_s,
+            i.angle_deg,
+            i.psi,
+            i.dem_normal_cor,
+            i.model_normal_cor,
+            opt(i.dem_tangential_ratio),
+            opt(i.model_tangential_ratio),
+            opt(i.dem_spin_ratio)
+        )?;
+    }
+    if let (Some(law), Some(path)) = (law, &a.law_out) {
+        writeln!(
+            out,
+            "\nthe DEM's law (k_t at psi {:?}): {:?}\nwrote {}",
+            crate::model::collision::TANGENTIAL_PSI,
+            law.tangential_ratio.iter().map(|v| (v * 1000.0).round() / 1000.0).collect::<Vec<_>>(),
+            path.display()
+        )?;
+    }
+    writeln!(out, "wrote {0}/impact.json, {0}/impact.svg, {0}/impact.png", a.out.display())?;
+    Ok(ExitCode::SUCCESS)
 }
 
 /// A setup's stated sled return: delay (s), speed (m/s).
@@ -207,12 +317,49 @@ fn jobs(j: Option<usize>) -> anyhow::Result<usize> {
 fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let jobs = jobs(a.jobs)?;
     let (scenario, design, settings, known) = resolve(&a.case)?;
-    let plan = Plan { first_seed: scenario.sim.seed, scenario, design, settings, runs: a.runs, known_return: known };
+    if a.strokes.is_some() && a.refine.is_some() {
+        bail!("--refine refines single strokes (d_avg); refine a steady campaign by running it again with another [dem] max_overlap_fraction and --particles");
+    }
+    if let Some(k) = a.strokes {
+        if !(3..=200).contains(&k) {
+            bail!("--strokes must lie in [3, 200] (the first stroke is a transient), got {k}");
+        }
+        if !(2..=64).contains(&a.period_teeth) {
+            bail!("--period-teeth must lie in [2, 64], got {}", a.period_teeth);
+        }
+    }
+    let plan = Plan {
+        first_seed: scenario.sim.seed,
+        scenario,
+        design,
+        settings,
+        runs: a.runs,
+        known_return: known,
+        strokes: a.strokes.unwrap_or(0),
+        period_teeth: if a.strokes.is_some() { a.period_teeth } else { 0 },
+    };
     // the case must build before the folder is taken
     plan.case(0).map_err(anyhow::Error::msg)?;
+    if plan.is_steady() {
+        plan.conveyor(0).map_err(anyhow::Error::msg)?;
+        let _owned = RunDir::acquire(&a.out, campaign::KIND, Access::Exclusive).context("--out")?;
+        let runs = campaign::run_steady(&a.out, &plan, jobs, &|line| eprintln!("dem: {line}"))?;
+        let report = steady_report(&plan, &runs)?;
+        write_atomic(&a.out.join("steady.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
+        write_steady(out, &report)?;
+        return Ok(ExitCode::SUCCESS);
+    }
     let _owned = RunDir::acquire(&a.out, campaign::KIND, Access::Exclusive).context("--out")?;
+    if let Some(levels) = a.refine {
+        if !(1..=3).contains(&levels) {
+            bail!("--refine must lie in [1, 3] levels, got {levels}");
+        }
+        if a.runs < 2 {
+            bail!("--refine needs --runs >= 2: a refinement is judged against the seeds' spread");
+        }
+    }
     let results = campaign::run(&a.out, &plan, jobs, &|line| eprintln!("dem: {line}"))?;
-    let c = compare(&plan.scenario, &plan.design, &results)?;
+    let c = compare(&plan.scenario, &plan.design, &results, campaign::law(&a.out)?.as_ref())?;
     write_table(out, &c)?;
     writeln!(
         out,
@@ -221,7 +368,38 @@ fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         campaign::CSV,
         campaign::SETUP
     )?;
+    if let Some(levels) = a.refine {
+        let r = crate::dem::refine::refine(&a.out, &plan, &results, levels, jobs, &|line| eprintln!("dem: {line}"))?;
+        writeln!(out, "\nconvergence (half the overlap, twice the grains; allowed: max(3 %, 2 seed spreads)):")?;
+        for (i, l) in r.levels.iter().enumerate() {
+            writeln!(
+                out,
+                "level {}: overlap {} x {} grains: d_avg {:.2} ± {:.2} mm; half the overlap {:+.2} mm, twice the grains {:+.2} mm (allowed {:.2}): {}",
+                i + 1,
+                l.base.max_overlap_fraction,
+                l.base.particles,
+                l.base.d_avg_mm,
+                l.base.d_avg_sd_mm,
+                l.overlap_move_mm,
+                l.grains_move_mm,
+                l.allowed_mm,
+                if l.converged { "converged" } else { "not converged" }
+            )?;
+        }
+        writeln!(out, "wrote {}/{}", a.out.display(), crate::dem::refine::REFINE)?;
+    }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The plan of a steady campaign in `dir`, or None for a single-stroke one.
+fn steady_plan(dir: &Path) -> anyhow::Result<Option<Plan>> {
+    let path = dir.join(campaign::PLAN);
+    if std::fs::symlink_metadata(&path).is_err() {
+        return Ok(None);
+    }
+    // checked by every rule of a plan, as every plan read back is
+    let (plan, _) = campaign::read_plan(dir)?;
+    Ok(plan.is_steady().then_some(plan))
 }
 
 /// Read a campaign folder back: its plan and every run's result.
@@ -243,8 +421,30 @@ fn load_campaign(dir: &Path) -> anyhow::Result<(Plan, Vec<crate::dem::gather::Ru
 }
 
 fn compare_cmd(a: CompareArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    if let Some(plan) = steady_plan(&a.dir)? {
+        let found = campaign::steady_results(&a.dir, plan.runs)?;
+        let missing = found.iter().filter(|r| r.is_none()).count();
+        if missing > 0 {
+            bail!(
+                "{}: {missing} of {} runs have no result yet; run the same `sawtooth dem run` command again to finish the campaign",
+                a.dir.display(),
+                plan.runs
+            );
+        }
+        let runs: Vec<_> = found.into_iter().flatten().collect();
+        let report = steady_report(&plan, &runs)?;
+        let _owned = RunDir::acquire(&a.dir, "dem", Access::Exclusive).context("DIR")?;
+        let json = serde_json::to_string_pretty(&report)?;
+        write_atomic(&a.dir.join("steady.json"), json.as_bytes())?;
+        if a.json {
+            writeln!(out, "{json}")?;
+        } else {
+            write_steady(out, &report)?;
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
     let (plan, results) = load_campaign(&a.dir)?;
-    let c = compare(&plan.scenario, &plan.design, &results)?;
+    let c = compare(&plan.scenario, &plan.design, &results, campaign::law(&a.dir)?.as_ref())?;
     let _owned = RunDir::acquire(&a.dir, campaign::KIND, Access::Exclusive).context("DIR")?;
     let json = serde_json::to_string_pretty(&c)?;
     write_atomic(&a.dir.join("compare.json"), json.as_bytes())?;
@@ -257,6 +457,50 @@ fn compare_cmd(a: CompareArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> 
         writeln!(out, "\nwrote {0}/compare.json, {0}/compare.svg, {0}/compare.png", a.dir.display())?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+fn steady_report(plan: &Plan, runs: &[crate::dem::conveyor::SteadyRun]) -> anyhow::Result<SteadyComparison> {
+    compare_steady(&plan.scenario, &plan.design, runs)
+}
+
+fn write_steady(out: &mut dyn Write, c: &SteadyComparison) -> anyhow::Result<()> {
+    let d = &c.dem;
+    writeln!(
+        out,
+        "steady conveying: {} runs of {} strokes on a periodic conveyor of {} full teeth",
+        c.runs, c.strokes, c.period_teeth
+    )?;
+    writeln!(
+        out,
+        "advance per stroke along the conveyor: DEM {:.1} ± {:.1} mm (steady, strokes 2-{}; first half {:.1}, second half {:.1}; first stroke {:.1}), model {:.1} mm{}",
+        d.advance_m * 1e3,
+        d.advance_sd_m * 1e3,
+        c.strokes,
+        d.first_half_m * 1e3,
+        d.second_half_m * 1e3,
+        d.first_stroke_m * 1e3,
+        c.model_advance_mm,
+        c.advance_error_pct.map_or(String::new(), |e| format!(" ({e:+.1} %)"))
+    )?;
+    writeln!(
+        out,
+        "feed rate at {:.4} Hz (Eq. 5.16): DEM {:.1} ± {:.1} kg/h; model {:.1} kg/h with its d_avg {:.1} mm (D.7), {:.1} kg/h with its advance",
+        c.f_stroke_hz,
+        c.dem_m_dot_kg_h,
+        c.dem_m_dot_sd_kg_h,
+        c.model_m_dot_kg_h,
+        c.model_d_avg_mm,
+        c.model_m_dot_advance_kg_h
+    )?;
+    let per_run: Vec<String> = c.dem_per_run_mm.iter().map(|x| format!("{x:.1}")).collect();
+    writeln!(
+        out,
+        "DEM runs' steady advance: {} mm; {:.0} ± {:.0} s per run",
+        per_run.join(", "),
+        c.dem_s.mean,
+        c.dem_s.sd
+    )?;
+    Ok(())
 }
 
 fn write_table(out: &mut dyn Write, c: &Comparison) -> anyhow::Result<()> {
@@ -290,9 +534,25 @@ fn write_table(out: &mut dyn Write, c: &Comparison) -> anyhow::Result<()> {
     )?;
     writeln!(
         out,
+        "model variants (d_avg): on a {}-tooth conveyor {:.2} mm{}{}",
+        crate::dem::case::REACH_CONVEYOR_TEETH,
+        c.model_untruncated_d_avg_mm,
+        c.model_from_bed_d_avg_mm.map_or(String::new(), |d| format!("; from the DEM's settled bed {d:.2} mm")),
+        c.model_dem_law_d_avg_mm.map_or(String::new(), |d| format!("; with the DEM's restitution law {d:.2} mm"))
+    )?;
+    writeln!(
+        out,
+        "past the mesh's last tooth: model {:.2} %, DEM {:.2} ± {:.2} %",
+        c.model_past_end_pct, c.dem_past_end_pct.mean, c.dem_past_end_pct.sd
+    )?;
+    writeln!(
+        out,
         "cost per design: model {:.4} s ({} particles, cpu), DEM {:.1} ± {:.1} s per run",
         c.model_s, c.model_particles, c.dem_s.mean, c.dem_s.sd
     )?;
+    for w in &c.warnings {
+        writeln!(out, "warning: {w}")?;
+    }
     Ok(())
 }
 

@@ -51,7 +51,7 @@ pub struct GaArgs {
     #[arg(long, default_value_t = 1, value_parser = count::<u64>(&schema::CHECKPOINT_EVERY))]
     pub checkpoint_every: u64,
     /// Mating selection: `deb` (Deb et al. 2002) or `permutation` (pymoo's NSGA-II
-    /// tournaments; ahead of `deb` on the lunar problem, BENCHMARKS.md issue 14) [default: deb].
+    /// tournaments; ahead of `deb` on the lunar problem, docs/optimise.md) [default: deb].
     #[arg(long, value_enum)]
     pub selection: Option<Selection>,
     /// Print nothing while running (default: a progress bar on a terminal, else a line with

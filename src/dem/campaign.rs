@@ -18,8 +18,11 @@ use std::sync::Mutex;
 use anyhow::{bail, Context as _};
 use serde::{Deserialize, Serialize};
 
-use super::case::{Case, DUMP, STROKE_TIME};
-use super::gather::{check_dump, check_result, measured_csv, parse_dump, reduce, setup_toml, RunResult};
+use super::case::{Case, DUMP, SETTLED, STROKE_TIME};
+use super::conveyor::{Conveyor, SteadyRun};
+use super::gather::{
+    check_dump, check_result, measured_csv, parse_dump, parse_positions, reduce, setup_toml, RunResult,
+};
 use super::run::{find_liggghts, run_case};
 use super::settings::DemSettings;
 use crate::io::atomic::{clean_stale_temps, write_atomic};
@@ -38,6 +41,9 @@ pub const FAILURE: &str = "failure.txt";
 pub const KIND: &str = "dem";
 /// The `io::run_dir` kind of a run's folder inside a campaign.
 pub const RUN_KIND: &str = "dem-run";
+/// The DEM's restitution law measured on single grains of the campaign's case
+/// (`super::impact::measure_law`), as a `[collision]` table; `dem compare` runs the model with it.
+pub const LAW: &str = "law.toml";
 
 /// What determines a campaign; a folder holds one plan.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -49,6 +55,13 @@ pub struct Plan {
     pub first_seed: u64,
     /// A stated sled return (delay s, speed m/s) from the setup's `[measurement]`.
     pub known_return: Option<(f64, f64)>,
+    /// Steady conveying (`dem run --strokes K`, `super::conveyor`): K cycles on a periodic
+    /// conveyor of `period_teeth` full teeth per run; 0: one stroke from a full tooth onto
+    /// bare teeth (the model's d_avg).
+    #[serde(default)]
+    pub strokes: u32,
+    #[serde(default)]
+    pub period_teeth: u32,
 }
 
 impl Plan {
@@ -89,6 +102,103 @@ pub fn parse_plan(text: &str, name: &str) -> anyhow::Result<(Plan, Case)> {
     let plan: Plan = serde_json::from_str(text).with_context(|| format!("reading {name}"))?;
     let case = plan.check().map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
     Ok((plan, case))
+}
+
+impl Plan {
+    /// Run `run`'s periodic conveyor (a steady plan's).
+    pub fn conveyor(&self, run: u32) -> Result<Conveyor, String> {
+        Conveyor::build(&self.scenario, self.case(run)?, self.period_teeth, self.strokes)
+    }
+
+    /// Whether the runs are steady conveying rather than single strokes.
+    pub fn is_steady(&self) -> bool {
+        self.strokes > 0
+    }
+}
+
+/// A steady run's result file (in place of [`RESULT`]).
+pub const STEADY_RESULT: &str = "steady.json";
+
+/// The steady results present in `dir`, in run order (None where a run has none yet).
+pub fn steady_results(dir: &Path, runs: u32) -> anyhow::Result<Vec<Option<SteadyRun>>> {
+    (0..runs)
+        .map(|r| {
+            let p = run_dir(dir, r).join(STEADY_RESULT);
+            let Some(text) = read_text_if_present(&p, &schema::DEM_RESULT_FILE)? else { return Ok(None) };
+            Ok(Some(serde_json::from_str(&text).with_context(|| format!("reading {}", p.display()))?))
+        })
+        .collect()
+}
+
+/// Run the steady campaign in `dir` (owned by the caller): every run's conveyor, up to `jobs`
+/// at a time, skipping runs already done; every run's result once all are in.
+pub fn run_steady(
+    dir: &Path,
+    plan: &Plan,
+    jobs: usize,
+    say: &(dyn Fn(String) + Sync),
+) -> anyhow::Result<Vec<SteadyRun>> {
+    let first = plan.conveyor(0).map_err(anyhow::Error::msg)?;
+    let binary = find_liggghts()?;
+    record_plan(dir, plan)?;
+    let done = steady_results(dir, plan.runs)?;
+    let todo: Vec<u32> = (0..plan.runs).filter(|r| done[*r as usize].is_none()).collect();
+    if todo.len() < plan.runs as usize {
+        say(format!("resuming: {} of {} runs already done", plan.runs as usize - todo.len(), plan.runs));
+    }
+    say(format!(
+        "{} steady runs to do, {} at a time: {} cycles on a periodic conveyor of {} full teeth, {} grains of {:.0} um, time step {:.2e} s",
+        todo.len(),
+        jobs.max(1),
+        plan.strokes,
+        plan.period_teeth,
+        first.grains.len(),
+        first.tooth.placement.diameter_m * 1e6,
+        first.tooth.contact.timestep_s
+    ));
+    let next = AtomicUsize::new(0);
+    let failures: Mutex<Vec<String>> = Mutex::new(Vec::new());
+    std::thread::scope(|scope| {
+        for _ in 0..jobs.max(1).min(todo.len().max(1)) {
+            scope.spawn(|| loop {
+                let k = next.fetch_add(1, Ordering::SeqCst);
+                let Some(&r) = todo.get(k) else { break };
+                if let Err(e) = one_steady_run(dir, plan, r, &binary, say) {
+                    say(format!("run {} failed: {e:#}", r + 1));
+                    failures.lock().expect("no panic holds it").push(format!("run {}: {e:#}", r + 1));
+                }
+            });
+        }
+    });
+    let failures = failures.into_inner().expect("no panic holds it");
+    if let Some(f) = failures.first() {
+        bail!("{} of {} runs failed (rerun the same command to resume); first: {f}", failures.len(), todo.len());
+    }
+    let found = steady_results(dir, plan.runs)?;
+    let missing = found.iter().filter(|r| r.is_none()).count();
+    if missing > 0 {
+        bail!("{}: {missing} of {} runs have no result", dir.display(), plan.runs);
+    }
+    Ok(found.into_iter().flatten().collect())
+}
+
+fn one_steady_run(dir: &Path, plan: &Plan, r: u32, binary: &Path, say: &(dyn Fn(String) + Sync)) -> anyhow::Result<()> {
+    let conveyor = plan.conveyor(r).map_err(anyhow::Error::msg)?;
+    let rd = run_dir(dir, r);
+    std::fs::create_dir_all(&rd).with_context(|| format!("creating {}", rd.display()))?;
+    conveyor.write(&rd)?;
+    say(format!("run {} (seed {}) started", r + 1, conveyor.tooth.seed));
+    let mut lines = crate::io::progress::Lines::new();
+    let finished = run_case(binary, &rd, &mut |t| {
+        if lines.due(0, 1) {
+            say(format!("run {}: step {}, {} grains, rms speed {:.3} m/s", r + 1, t.step, t.atoms, t.rms_speed_m_s));
+        }
+    })?;
+    let result = super::conveyor::reduce(&rd, &conveyor, finished.wall_s)?;
+    write_atomic(&rd.join(STEADY_RESULT), serde_json::to_string_pretty(&result)?.as_bytes())?;
+    let advances: Vec<String> = result.cycles.iter().map(|c| format!("{:.1}", c.advance_m * 1e3)).collect();
+    say(format!("run {} done in {:.1} s: advance per stroke {} mm", r + 1, finished.wall_s, advances.join(", ")));
+    Ok(())
 }
 
 pub fn run_dir(dir: &Path, run: u32) -> PathBuf {
@@ -177,6 +287,11 @@ pub fn run(dir: &Path, plan: &Plan, jobs: usize, say: &(dyn Fn(String) + Sync)) 
         bail!("{} of {} runs failed (rerun the same command to resume); first: {f}", failures.len(), todo.len());
     }
     let all = gather_checked(dir, plan, &first)?;
+    if !dir.join(LAW).is_file() {
+        say("measuring the DEM's restitution law on single grains of the case (dem impact)".into());
+        let law = super::impact::measure_law(&first, &binary, &dir.join("law"), jobs)?;
+        write_atomic(&dir.join(LAW), super::impact::law_toml(&law, &first).as_bytes())?;
+    }
     let lost: usize = all.iter().map(|r| r.lost).sum();
     if lost > 0 {
         let grains: usize = all.iter().map(|r| r.grains).sum();
@@ -204,6 +319,15 @@ pub fn run_one(dir: &Path, plan: &Plan, r: u32, say: &(dyn Fn(String) + Sync)) -
     let binary = find_liggghts()?;
     one_run(dir, plan, &first, r, &binary, say)?;
     Ok(true)
+}
+
+/// The campaign's measured DEM law ([`LAW`]), if it has one.
+pub fn law(dir: &Path) -> anyhow::Result<Option<crate::model::Collision>> {
+    let path = dir.join(LAW);
+    let Some(text) = read_text_if_present(&path, &schema::CONFIG_FILE)? else { return Ok(None) };
+    let file = crate::io::config::ConfigFile::parse(&text).with_context(|| format!("reading {}", path.display()))?;
+    let collision = file.scenario().with_context(|| format!("reading {}", path.display()))?.collision;
+    Ok(Some(collision))
 }
 
 /// Every run's result, once all are in, and the campaign's `dem.csv` and `setup.toml` written
@@ -280,6 +404,16 @@ fn one_run(
     };
     check_result(&result, first, plan.first_seed, r)
         .map_err(|e| anyhow::anyhow!("the DEM result of {}: {e}", rd.display()))?;
+    let mut result = result;
+    // the bed before the stroke (cases written before it was dumped have none)
+    let settled = rd.join(SETTLED);
+    if let Some(text) = read_text_if_present(&settled, &schema::DEM_DUMP_FILE)? {
+        result.settled_xy_m = parse_positions(&text)
+            .with_context(|| format!("reading {}", settled.display()))?
+            .into_iter()
+            .map(|p| [p[0], p[1]])
+            .collect();
+    }
     write_atomic(&rd.join(RESULT), serde_json::to_string_pretty(&result)?.as_bytes())?;
     say(format!(
         "run {} done in {:.1} s: d_avg {:.2} mm, {} of {} grains lost, {} still moving",

@@ -15,7 +15,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::contact::{contact, Contact};
+use super::contact::{contact, property_commands, Contact, CONTACT_MODEL};
 use super::grains::{mass_matching_diameter, place, place_sized, Placement};
 use super::motion::SledMotion;
 use super::settings::{check_representable, DemSettings};
@@ -31,6 +31,8 @@ pub const MESH: &str = "sled.stl";
 pub const GRAINS: &str = "grains.data";
 pub const MANIFEST: &str = "case.json";
 pub const DUMP: &str = "final.dump";
+/// The grains' positions after settling, before the stroke (the bed the model can be told).
+pub const SETTLED: &str = "settled.dump";
 /// The stroke time at which the run ended, s (the mesh's position then is the binning frame).
 pub const STROKE_TIME: &str = "stroke_time.txt";
 
@@ -40,6 +42,9 @@ const CHUNK_S: f64 = 0.02;
 const MAX_SETTLE_S: f64 = 1.0;
 /// Teeth the mesh keeps beyond the model's farthest resting grain (and at least this many).
 const REACH_MARGIN_TEETH: u32 = 3;
+/// The conveyor the model's reach is measured on, teeth: longer than any flight of the
+/// optimiser's range (lunar pick B, v0 1.93 m/s, rests within 40 teeth).
+pub const REACH_CONVEYOR_TEETH: u32 = 400;
 
 /// Everything the case is made of; `case.json` is this, serialised.
 #[derive(Clone, Debug, Serialize)]
@@ -210,7 +215,6 @@ impl Case {
         // the largest grain sets the neighbour skin and the bins
         let d = self.placement.classes.iter().map(|c| c.diameter_m).fold(self.placement.diameter_m, f64::max);
         let dt = c.timestep_s;
-        let pair = |v: f64| format!("{v} {v} {v} {v}");
         let [vx, vy] = self.motion.velocity_expressions("t");
         let chunk = self.steps(CHUNK_S);
         let settle_chunks = (MAX_SETTLE_S / CHUNK_S).ceil() as u64;
@@ -243,62 +247,14 @@ impl Case {
         let _ = writeln!(
             s,
             "# material (Table 4.1) with the softened moduli (factor {:.3e}), collision k_elastic and mu_friction, [dem] rolling_friction\n\
-             fix m1 all property/global youngsModulus peratomtype {:e} {:e}\n\
-             fix m2 all property/global poissonsRatio peratomtype {} {}\n\
-             fix m3 all property/global coefficientRestitution peratomtypepair 2 {}\n\
-             fix m4 all property/global coefficientFriction peratomtypepair 2 {}\n\
-             fix m5 all property/global coefficientRollingFriction peratomtypepair 2 {}\n\
-             pair_style gran model hertz tangential history rolling_friction cdt\npair_coeff * *\n\
-             timestep {dt:e}\nfix gravity all gravity {} vector 0.0 -1.0 0.0\n\
+             {}fix gravity all gravity {} vector 0.0 -1.0 0.0\n\
              fix sled all mesh/surface file {MESH} type 2\n\
-             fix walls all wall/gran model hertz tangential history rolling_friction cdt mesh n_meshes 1 meshes sled",
+             fix walls all wall/gran {CONTACT_MODEL} mesh n_meshes 1 meshes sled",
             c.softening,
-            c.grain_youngs_pa,
-            c.wall_youngs_pa,
-            c.grain_poisson,
-            c.wall_poisson,
-            pair(c.restitution),
-            pair(c.sliding_friction),
-            pair(c.rolling_friction),
+            property_commands(c),
             self.scenario.environment.g,
         );
-        let k_drag = self.scenario.environment.k_drag.unwrap_or(0.0);
-        match self.placement.classes.as_slice() {
-            [one] => {
-                if let Some(gamma) = one.drag_gamma_kg_s {
-                    let _ = writeln!(
-                        s,
-                        "# Stokes drag, gamma = m k_drag (Eq. 4.20, k_drag {k_drag} 1/s)\nfix drag all viscous {gamma:e}"
-                    );
-                }
-            }
-            classes => {
-                // one group per size class (its grains' ids are one range) with its own gamma
-                let _ = writeln!(
-                    s,
-                    "# size classes of the polydisperse law (sizes.rs); Stokes drag per class, gamma = m k_drag (d_ref/d)^2 (Eq. 4.16, 4.20, k_drag {k_drag} 1/s at d_ref {:e} m)",
-                    self.placement.diameter_m
-                );
-                let mut first = 1;
-                for (k, c) in classes.iter().enumerate() {
-                    if c.grains == 0 {
-                        continue;
-                    }
-                    let last = first + c.grains as usize - 1;
-                    let _ = writeln!(
-                        s,
-                        "group size{k} id {first}:{last}  # {} grains of {:e} m, {:.1} % of the mass",
-                        c.grains,
-                        c.diameter_m,
-                        100.0 * c.mass_fraction
-                    );
-                    if let Some(gamma) = c.drag_gamma_kg_s {
-                        let _ = writeln!(s, "fix drag{k} size{k} viscous {gamma:e}");
-                    }
-                    first = last + 1;
-                }
-            }
-        }
+        s.push_str(&drag_commands(&self.placement, self.scenario.environment.k_drag.unwrap_or(0.0)));
         let _ = writeln!(
             s,
             "# the stroke starts at step s0 (set after settling); t is the stroke time\n\
@@ -310,6 +266,7 @@ impl Case {
              thermo_style custom step atoms ke v_vrms v_t\nthermo {chunk}\nthermo_modify lost ignore norm no\n\
              # settle\nvariable settle loop {settle_chunks}\nlabel settling\nrun {chunk}\n\
              if \"${{vrms}} < {rest:e}\" then \"jump SELF settled\"\nnext settle\njump SELF settling\nlabel settled\n\
+             write_dump all custom {SETTLED} id x y z\n\
              variable now equal step\nvariable s0 equal ${{now}}\nprint \"sawtooth: stroke starts at step ${{s0}}\"\n\
              # the stroke\nrun {stroke}\n\
              # until the grains rest (and a return is not under way)\nvariable rest loop {rest_chunks}\nlabel resting\nrun {chunk}\n\
@@ -324,13 +281,62 @@ impl Case {
     }
 }
 
-/// Teeth the mesh needs: the model's farthest resting grain plus a margin, at most
-/// `sim.teeth` (a longer mesh costs LIGGGHTS bins and facets for nothing; a DEM grain that
-/// goes past the end is counted lost and warned about, and `[dem] teeth` lengthens it).
+/// Stokes drag (`fix viscous`, γ = m k_drag, Eq. 4.20) on the grains of `placement`, whose
+/// LIGGGHTS ids run class by class from 1: one fix on every grain for one size, one group of
+/// ids and one fix per class for a size law. Nothing in vacuum.
+pub fn drag_commands(placement: &Placement, k_drag: f64) -> String {
+    let mut s = String::new();
+    match placement.classes.as_slice() {
+        [one] => {
+            if let Some(gamma) = one.drag_gamma_kg_s {
+                let _ = writeln!(
+                    s,
+                    "# Stokes drag, gamma = m k_drag (Eq. 4.20, k_drag {k_drag} 1/s)\nfix drag all viscous {gamma:e}"
+                );
+            }
+        }
+        classes => {
+            // one group per size class (its grains' ids are one range) with its own gamma
+            let _ = writeln!(
+                s,
+                "# size classes of the polydisperse law (sizes.rs); Stokes drag per class, gamma = m k_drag (d_ref/d)^2 (Eq. 4.16, 4.20, k_drag {k_drag} 1/s at d_ref {:e} m)",
+                placement.diameter_m
+            );
+            let mut first = 1;
+            for (k, c) in classes.iter().enumerate() {
+                if c.grains == 0 {
+                    continue;
+                }
+                let last = first + c.grains as usize - 1;
+                let _ = writeln!(
+                    s,
+                    "group size{k} id {first}:{last}  # {} grains of {:e} m, {:.1} % of the mass",
+                    c.grains,
+                    c.diameter_m,
+                    100.0 * c.mass_fraction
+                );
+                if let Some(gamma) = c.drag_gamma_kg_s {
+                    let _ = writeln!(s, "fix drag{k} size{k} viscous {gamma:e}");
+                }
+                first = last + 1;
+            }
+        }
+    }
+    s
+}
+
+/// Teeth the mesh needs: the model's farthest resting grain on a conveyor long enough that
+/// none of its grains leaves past the end ([`REACH_CONVEYOR_TEETH`]), plus a margin, so that
+/// neither side truncates (issue 42: a 20-tooth mesh cut the lunar rig's flights short, and
+/// compared one truncation with another). `[dem] teeth` states the mesh instead; `dem
+/// compare` judges the model on the DEM's mesh and warns where either side loses grains
+/// past its end.
 fn model_reach(s: &Scenario, d: &Design) -> Result<u32, String> {
     let engine = make_engine(EngineKind::Cpu).map_err(|e| e.to_string())?;
-    let det =
-        evaluate_detailed(engine.as_ref(), s, d, false).map_err(|e| format!("invalid design ({}): {e}", e.rule()))?;
+    let mut long = s.clone();
+    long.sim.teeth = long.sim.teeth.max(REACH_CONVEYOR_TEETH);
+    let det = evaluate_detailed(engine.as_ref(), &long, d, false)
+        .map_err(|e| format!("invalid design ({}): {e}", e.rule()))?;
     let far = det
         .particles
         .iter()
@@ -338,7 +344,7 @@ fn model_reach(s: &Scenario, d: &Design) -> Result<u32, String> {
         .map(|p| crate::model::outcome::end_tooth(&det.prepared.profile, p.end))
         .max()
         .unwrap_or(1);
-    Ok((far + REACH_MARGIN_TEETH).max(2 + REACH_MARGIN_TEETH).min(s.sim.teeth))
+    Ok((far + REACH_MARGIN_TEETH).max(2 + REACH_MARGIN_TEETH).min(crate::schema::DEM_TEETH.max as u32))
 }
 
 /// The box: the mesh over its whole motion, room behind tooth 0 and below the profile for

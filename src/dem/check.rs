@@ -243,6 +243,8 @@ pub fn plan(run_dir: &Path, settings: &DemSettings, seeds: u32, k: usize, comman
             runs: seeds,
             first_seed: manifest.seed,
             known_return: None,
+            strokes: 0,
+            period_teeth: 0,
         };
         campaign.check().map_err(|e| anyhow::anyhow!("design {label}: {e}"))?;
         finalists.push(Finalist {
@@ -538,6 +540,8 @@ mod tests {
             runs: 2,
             first_seed: 5,
             known_return: None,
+            strokes: 0,
+            period_teeth: 0,
         };
         let finalist = |label: &str| Finalist {
             label: label.into(),
@@ -603,6 +607,8 @@ mod tests {
             moving: 0,
             d_avg_m,
             wall_s: 10.0,
+            past_end: 0,
+            settled_xy_m: Vec::new(),
         };
         let c = design_check(&p, &p.finalists[0], &[run(5, 0.04), run(6, 0.06)]).unwrap();
         let json = serde_json::to_value(&c).unwrap();

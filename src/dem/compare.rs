@@ -2,18 +2,27 @@
 //! d_avg, centre of mass and dispersion (Eq. 4.56-4.59), with the DEM's spread over its
 //! seeds, and what each cost.
 //!
-//! The model's particles past the mesh's last tooth are what the DEM counts lost there, so
-//! the model's "lost" here is its own lost fraction plus its share beyond the mesh.
+//! Like for like (issue 42): the model is judged on the DEM's mesh (`sim.teeth` = the mesh's
+//! teeth, so a grain past the last tooth is lost on both sides and credited nothing), and a
+//! comparison warns where either side loses more than [`PAST_END_WARN`] of its mass past the
+//! end (a mesh too short for the flights: `[dem] teeth` lengthens it). Beside the model as
+//! configured, the model is also run
+//! - from the DEM's settled bed (its grains' positions after settling, before the stroke,
+//!   as launch points instead of the fill polygon's Halton points): what the fill moves;
+//! - with the DEM's restitution law (`ContactLaw::Dem`, when the caller has the table
+//!   `dem impact` measured at the case's contact), from the settled bed too: what the
+//!   contact law moves;
+//! - on a conveyor long enough to lose nothing: what the mesh's truncation moves.
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::Serialize;
 
 use super::gather::RunResult;
-use crate::engine::{evaluate_detailed, make_engine_for, EngineKind};
+use crate::engine::{evaluate_detailed, evaluate_detailed_from, make_engine_for, EngineKind};
 use crate::model::design::DesignRow;
 use crate::model::outcome::centre_and_dispersion;
-use crate::model::{Design, Scenario};
+use crate::model::{Collision, Design, Scenario};
 use crate::plot::{self, Drawn, Figure, Mark};
 
 #[derive(Clone, Debug, Serialize)]
@@ -54,29 +63,94 @@ pub struct Comparison {
     pub model_s: f64,
     pub dem_s: Spread,
     pub model_particles: u32,
+    /// The model's mass past the mesh's last tooth, % (counted in `model_lost_pct`).
+    pub model_past_end_pct: f64,
+    /// The DEM's mass past the mesh's last tooth, % (counted in `dem_lost_pct`).
+    pub dem_past_end_pct: Spread,
+    /// The model's d_avg on a conveyor of `case::REACH_CONVEYOR_TEETH` teeth (nothing lost
+    /// past its end), mm.
+    pub model_untruncated_d_avg_mm: f64,
+    /// The model launched from the DEM's settled beds (every run's grains, in turn), mm;
+    /// None when the runs kept no settled bed.
+    pub model_from_bed_d_avg_mm: Option<f64>,
+    /// The model with the DEM's restitution law, launched from the settled beds where the
+    /// runs kept them (else from the polygon), mm; None without a measured law.
+    pub model_dem_law_d_avg_mm: Option<f64>,
+    /// Its share of the mass per tooth, %, tooth 1 first (the mesh's teeth).
+    pub model_dem_law_pct: Option<Vec<f64>>,
+    /// Why this comparison may not be like for like (a mesh too short, ...).
+    pub warnings: Vec<String>,
 }
+
+/// Share of the loaded mass past the mesh's end above which a comparison warns.
+pub const PAST_END_WARN: f64 = 0.01;
 
 /// Fewest model particles a comparison uses: the model's launch randomisation (Eq. 4.38)
 /// makes its distribution a sample too, and at a setup's 100 particles its noise (a few
 /// percentage points per tooth) would count as model-vs-DEM error. 10 000 cost ~50 ms.
 pub const COMPARE_PARTICLES: u32 = 10_000;
 
-/// Compare the DEM `runs` (tooth masses over the mesh's teeth) with the model on `scenario`
-/// (at least [`COMPARE_PARTICLES`] particles).
-pub fn compare(scenario: &Scenario, design: &Design, runs: &[RunResult]) -> anyhow::Result<Comparison> {
-    anyhow::ensure!(!runs.is_empty(), "no DEM runs to compare");
-    let mut scenario = scenario.clone();
-    scenario.sim.particles = scenario.sim.particles.max(COMPARE_PARTICLES);
-    let scenario = &scenario;
-    let teeth = runs[0].teeth_g.len();
+/// The model's d_avg (m) and distribution over its teeth for `scenario`, launched from the
+/// fill polygon or from `launches` (cycled through for the scenario's particle count).
+fn model_run(
+    scenario: &Scenario,
+    design: &Design,
+    launches: Option<&[[f64; 2]]>,
+) -> anyhow::Result<crate::model::SimOutcome> {
     let engine = make_engine_for(EngineKind::Cpu, scenario)?;
+    let det = match launches {
+        Some(l) => evaluate_detailed_from(engine.as_ref(), scenario, design, l),
+        None => evaluate_detailed(engine.as_ref(), scenario, design, false),
+    }
+    .map_err(|e| anyhow::anyhow!("invalid design ({}): {e}", e.rule()))?;
+    Ok(det.evaluation.sim)
+}
+
+/// Compare the DEM `runs` (tooth masses over the mesh's teeth) with the model on `scenario`
+/// (at least [`COMPARE_PARTICLES`] particles), judged on the DEM's mesh; `dem_law` is the
+/// DEM's restitution law as `dem impact` measured it for the case, if known.
+pub fn compare(
+    scenario: &Scenario,
+    design: &Design,
+    runs: &[RunResult],
+    dem_law: Option<&Collision>,
+) -> anyhow::Result<Comparison> {
+    anyhow::ensure!(!runs.is_empty(), "no DEM runs to compare");
+    let teeth = runs[0].teeth_g.len();
+    let mut on_mesh = scenario.clone();
+    on_mesh.sim.particles = on_mesh.sim.particles.max(COMPARE_PARTICLES);
+    on_mesh.sim.teeth = teeth as u32;
+    let scenario = &on_mesh;
     let started = std::time::Instant::now();
-    let det = evaluate_detailed(engine.as_ref(), scenario, design, false)
-        .map_err(|e| anyhow::anyhow!("invalid design ({}): {e}", e.rule()))?;
+    let sim = model_run(scenario, design, None)?;
     let model_s = started.elapsed().as_secs_f64();
-    let sim = &det.evaluation.sim;
+    let mut long = scenario.clone();
+    long.sim.teeth = long.sim.teeth.max(super::case::REACH_CONVEYOR_TEETH);
+    let untruncated = model_run(&long, design, None)?;
+    let model_untruncated_d_avg_mm = untruncated.d_avg_m * 1e3;
+    // every run's settled bed in turn (the first grains of each run, then the second, ...)
+    let beds: Vec<&Vec<[f64; 2]>> = runs.iter().map(|r| &r.settled_xy_m).filter(|b| !b.is_empty()).collect();
+    let bed: Vec<[f64; 2]> = (0..beds.iter().map(|b| b.len()).max().unwrap_or(0))
+        .flat_map(|i| beds.iter().filter_map(move |b| b.get(i).copied()))
+        .collect();
+    let bed = (beds.len() == runs.len() && !bed.is_empty()).then_some(bed);
+    let model_from_bed_d_avg_mm = match &bed {
+        Some(b) => Some(model_run(scenario, design, Some(b))?.d_avg_m * 1e3),
+        None => None,
+    };
+    let with_law = match dem_law {
+        Some(law) => {
+            let mut s = scenario.clone();
+            s.collision = law.clone();
+            s.validate().map_err(|e| anyhow::anyhow!("the DEM's restitution law: {e}"))?;
+            Some(model_run(&s, design, bed.as_deref())?)
+        }
+        None => None,
+    };
+    let model_dem_law_d_avg_mm = with_law.as_ref().map(|o| o.d_avg_m * 1e3);
+    let model_dem_law_pct =
+        with_law.as_ref().map(|o| (0..teeth).map(|j| 100.0 * o.distribution.get(j).copied().unwrap_or(0.0)).collect());
     let model: Vec<f64> = (0..teeth).map(|j| sim.distribution.get(j).copied().unwrap_or(0.0)).collect();
-    let beyond: f64 = sim.distribution.iter().skip(teeth).sum();
     let fractions: Vec<Vec<f64>> =
         runs.iter().map(|r| r.teeth_g.iter().map(|m| m / r.input_mass_g).collect()).collect();
     let dem_pct: Vec<Spread> =
@@ -88,6 +162,18 @@ pub fn compare(scenario: &Scenario, design: &Design, runs: &[RunResult]) -> anyh
     let dem_d: Vec<f64> = runs.iter().map(|r| r.d_avg_m * 1e3).collect();
     let dem_d_avg_mm = spread(&dem_d);
     let model_d_avg_mm = sim.d_avg_m * 1e3;
+    // the model's particles past the end: those lost on the mesh but not on a long conveyor
+    let model_past_end_pct = 100.0 * (sim.lost_fraction - untruncated.lost_fraction).max(0.0);
+    let dem_past_end_pct =
+        spread(&runs.iter().map(|r| 100.0 * r.past_end as f64 / r.grains.max(1) as f64).collect::<Vec<_>>());
+    let mut warnings = Vec::new();
+    for (who, pct) in [("the model", model_past_end_pct), ("the DEM", dem_past_end_pct.mean)] {
+        if pct > 100.0 * PAST_END_WARN {
+            warnings.push(format!(
+                "{who} loses {pct:.1} % of its mass past the mesh's last tooth ({teeth}): both sides credit it nothing, so d_avg compares two truncations; lengthen the mesh ([dem] teeth, or leave it unset: the model's reach on a long conveyor)"
+            ));
+        }
+    }
     Ok(Comparison {
         teeth,
         runs: runs.len(),
@@ -98,7 +184,7 @@ pub fn compare(scenario: &Scenario, design: &Design, runs: &[RunResult]) -> anyh
                 .map(|r| 100.0 * (1.0 - r.teeth_g.iter().sum::<f64>() / r.input_mass_g).max(0.0))
                 .collect::<Vec<_>>(),
         ),
-        model_lost_pct: 100.0 * (sim.lost_fraction + beyond),
+        model_lost_pct: 100.0 * sim.lost_fraction,
         dem_pct,
         mean_abs_tooth_error_pp: errors.iter().sum::<f64>() / teeth.max(1) as f64,
         max_abs_tooth_error_pp: errors.iter().copied().fold(0.0, f64::max),
@@ -112,6 +198,76 @@ pub fn compare(scenario: &Scenario, design: &Design, runs: &[RunResult]) -> anyh
         model_s,
         dem_s: spread(&runs.iter().map(|r| r.wall_s).collect::<Vec<_>>()),
         model_particles: scenario.sim.particles,
+        model_past_end_pct,
+        dem_past_end_pct,
+        model_untruncated_d_avg_mm,
+        model_from_bed_d_avg_mm,
+        model_dem_law_d_avg_mm,
+        model_dem_law_pct,
+        warnings,
+    })
+}
+
+/// Steady conveying beside the model (`dem run --strokes K`): the DEM's advance per stroke
+/// once steady, the model's single-stroke advance (teeth advanced × pitch, along the conveyor,
+/// the same measure) and d_avg (D.7's horizontal, p4-credited distance, erratum 16), and the
+/// feed rates they give by Eq. 5.16 at the design's full stroke frequency.
+#[derive(Clone, Debug, Serialize)]
+pub struct SteadyComparison {
+    pub runs: usize,
+    pub strokes: u32,
+    pub period_teeth: u32,
+    pub dem: super::conveyor::Steady,
+    /// Each run's mean advance over its steady cycles, mm.
+    pub dem_per_run_mm: Vec<f64>,
+    pub model_advance_mm: f64,
+    pub model_d_avg_mm: f64,
+    pub f_stroke_hz: f64,
+    /// Eq. 5.16 with the model's d_avg: what the optimiser designs with, kg/h.
+    pub model_m_dot_kg_h: f64,
+    /// Eq. 5.16 with the model's advance along the conveyor, kg/h.
+    pub model_m_dot_advance_kg_h: f64,
+    /// Eq. 5.16 with the DEM's steady advance: the DEM's own feed rate, kg/h.
+    pub dem_m_dot_kg_h: f64,
+    pub dem_m_dot_sd_kg_h: f64,
+    /// (DEM steady advance − model advance) / model advance, %.
+    pub advance_error_pct: Option<f64>,
+    pub dem_s: Spread,
+}
+
+/// The steady runs of a `dem run --strokes` campaign beside the model on `scenario`.
+pub fn compare_steady(
+    scenario: &Scenario,
+    design: &Design,
+    runs: &[super::conveyor::SteadyRun],
+) -> anyhow::Result<SteadyComparison> {
+    let st = super::conveyor::steady(runs)?;
+    let mut s = scenario.clone();
+    s.sim.particles = s.sim.particles.max(COMPARE_PARTICLES);
+    s.sim.teeth = s.sim.teeth.max(super::case::REACH_CONVEYOR_TEETH);
+    let sim = model_run(&s, design, None)?;
+    let prep = crate::model::prepare(&s, design).map_err(|e| anyhow::anyhow!("invalid design ({}): {e}", e.rule()))?;
+    let perf = crate::model::performance::performance(&s, design, sim.d_avg_m, prep.fill.area);
+    let feed = |x: f64| perf.regolith_mass_kg * (x / s.performance.conveyor_length) * perf.f_stroke_hz * 3600.0;
+    let per_run: Vec<f64> = runs
+        .iter()
+        .map(|r| r.cycles[1..].iter().map(|c| c.advance_m).sum::<f64>() / (r.cycles.len() - 1) as f64)
+        .collect();
+    Ok(SteadyComparison {
+        runs: runs.len(),
+        strokes: runs[0].cycles.len() as u32,
+        period_teeth: runs[0].period_teeth,
+        dem_per_run_mm: per_run.iter().map(|x| x * 1e3).collect(),
+        model_advance_mm: sim.advance_m * 1e3,
+        model_d_avg_mm: sim.d_avg_m * 1e3,
+        f_stroke_hz: perf.f_stroke_hz,
+        model_m_dot_kg_h: perf.m_dot_kg_s * 3600.0,
+        model_m_dot_advance_kg_h: feed(sim.advance_m),
+        dem_m_dot_kg_h: feed(st.advance_m),
+        dem_m_dot_sd_kg_h: feed(st.advance_sd_m),
+        advance_error_pct: (sim.advance_m > 0.0).then(|| 100.0 * (st.advance_m - sim.advance_m) / sim.advance_m),
+        dem: st,
+        dem_s: spread(&runs.iter().map(|r| r.wall_s).collect::<Vec<_>>()),
     })
 }
 

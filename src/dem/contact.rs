@@ -51,6 +51,32 @@ pub struct Contact {
     pub timestep_s: f64,
 }
 
+/// The contact model of every pair and of the mesh: Hertz with tangential history (Mindlin
+/// with Coulomb's limit) and constant directional torque rolling friction.
+pub const CONTACT_MODEL: &str = "model hertz tangential history rolling_friction cdt";
+
+/// The LIGGGHTS commands that set `c`'s material properties (type 1 the grains, type 2 the
+/// wall) and the pair style, and the time step: what a case and a single impact share.
+pub fn property_commands(c: &Contact) -> String {
+    let pair = |v: f64| format!("{v} {v} {v} {v}");
+    format!(
+        "fix m1 all property/global youngsModulus peratomtype {:e} {:e}\n\
+         fix m2 all property/global poissonsRatio peratomtype {} {}\n\
+         fix m3 all property/global coefficientRestitution peratomtypepair 2 {}\n\
+         fix m4 all property/global coefficientFriction peratomtypepair 2 {}\n\
+         fix m5 all property/global coefficientRollingFriction peratomtypepair 2 {}\n\
+         pair_style gran {CONTACT_MODEL}\npair_coeff * *\ntimestep {:e}\n",
+        c.grain_youngs_pa,
+        c.wall_youngs_pa,
+        c.grain_poisson,
+        c.wall_poisson,
+        pair(c.restitution),
+        pair(c.sliding_friction),
+        pair(c.rolling_friction),
+        c.timestep_s,
+    )
+}
+
 /// Effective modulus of a grain on the wall, Pa.
 fn effective_modulus(e1: f64, nu1: f64, e2: f64, nu2: f64) -> f64 {
     1.0 / ((1.0 - nu1 * nu1) / e1 + (1.0 - nu2 * nu2) / e2)

@@ -191,6 +191,27 @@ pub fn check_result(r: &RunResult, case: &Case, first_seed: u64, run: u32) -> Re
     Ok(())
 }
 
+/// Read a dump's `x y z` columns (`write_dump ... custom id x y z`), in the dump's order.
+pub fn parse_positions(text: &str) -> anyhow::Result<Vec<[f64; 3]>> {
+    let mut lines = text.lines();
+    let header = lines.by_ref().find(|l| l.starts_with("ITEM: ATOMS")).context("dump has no `ITEM: ATOMS` section")?;
+    let cols: Vec<&str> = header.split_whitespace().skip(2).collect();
+    let at = |name: &str| cols.iter().position(|c| *c == name).with_context(|| format!("dump lacks column `{name}`"));
+    let idx = [at("x")?, at("y")?, at("z")?];
+    let mut out = Vec::new();
+    for (n, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let f: Vec<&str> = line.split_whitespace().collect();
+        let num = |i: usize| -> anyhow::Result<f64> {
+            f.get(i)
+                .and_then(|s| s.parse::<f64>().ok())
+                .filter(|v| v.is_finite())
+                .with_context(|| format!("dump atom line {}: bad field {i}", n + 1))
+        };
+        out.push([num(idx[0])?, num(idx[1])?, num(idx[2])?]);
+    }
+    Ok(out)
+}
+
 /// One DEM run reduced to what the rig measured, and a little more.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RunResult {
@@ -210,6 +231,14 @@ pub struct RunResult {
     pub d_avg_m: f64,
     /// Wall-clock seconds LIGGGHTS ran.
     pub wall_s: f64,
+    /// Grains lost past the mesh's last tooth (a subset of `lost`): a mesh too short for
+    /// the design's flights (`dem compare` warns).
+    #[serde(default)]
+    pub past_end: usize,
+    /// Where the grains lay after settling, before the stroke (x, y in the model's global
+    /// frame, m): the bed the model can be launched from (`dem compare`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub settled_xy_m: Vec<[f64; 2]>,
 }
 
 /// Reduce the dump of `case`, written `stroke_time_s` after the stroke began (infinity:
@@ -221,7 +250,7 @@ pub fn reduce(case: &Case, grains: &[DumpGrain], stroke_time_s: f64, wall_s: f64
     let rho = case.contact.density_kg_m3;
     let mut present = vec![false; placed];
     let mut teeth_g = vec![0.0; case.teeth as usize];
-    let (mut lost, mut moving, mut credited) = (0usize, 0usize, 0.0);
+    let (mut lost, mut moving, mut credited, mut past_end) = (0usize, 0usize, 0.0, 0usize);
     let mut mass_total = 0.0;
     for g in grains {
         let m = g.mass_kg * 1e3;
@@ -237,6 +266,7 @@ pub fn reduce(case: &Case, grains: &[DumpGrain], stroke_time_s: f64, wall_s: f64
         let tooth = profile.tooth_of_x(x);
         if x < 0.0 || tooth > case.teeth as i64 {
             lost += 1;
+            past_end += (x >= 0.0) as usize;
             continue;
         }
         let j = tooth.max(1);
@@ -264,6 +294,8 @@ pub fn reduce(case: &Case, grains: &[DumpGrain], stroke_time_s: f64, wall_s: f64
         moving,
         d_avg_m: if input_mass_g > 0.0 { credited / input_mass_g } else { 0.0 },
         wall_s,
+        past_end,
+        settled_xy_m: Vec::new(),
     }
 }
 
@@ -423,6 +455,8 @@ mod tests {
             moving: 0,
             d_avg_m: 0.01,
             wall_s: 1.0,
+            past_end: 0,
+            settled_xy_m: Vec::new(),
         };
         let csv = measured_csv(&["DEM".into()], &[r(1, vec![0.5, 0.3, 0.1]), r(2, vec![0.4, 0.4, 0.1])]).unwrap();
         let m = crate::io::measured::parse(&csv, "dem.csv").unwrap();

@@ -11,9 +11,13 @@
 //! - [`contact`]: contact parameters from the material, the softened modulus, the time step;
 //! - [`motion`]: the sled's motion (stroke, optional return) as mesh velocities;
 //! - [`case`]: the LIGGGHTS input script and the case folder;
+//! - [`conveyor`]: steady conveying, K cycles on a periodic conveyor of full teeth;
+//! - [`refine`]: convergence, the campaign again at half the overlap and twice the grains;
 //! - [`run`]: finding and running LIGGGHTS, progress, errors;
 //! - [`gather`]: the dump read back, grains assigned to teeth, the campaign's CSV and setup;
-//! - [`compare`]: the model beside the DEM.
+//! - [`compare`]: the model beside the DEM;
+//! - [`impact`]: single grains in LIGGGHTS beside the model's restitution law, and the DEM's
+//!   law measured for the model (`ContactLaw::Dem`).
 //!
 //! Coordinates: the model's global frame (x along the horizontal, y up, tooth 0's p1 at the
 //! origin, the conveyor tilted by α as in Eq. 4.21), and z the periodic depth. Gravity is
@@ -24,9 +28,12 @@ pub mod case;
 pub mod check;
 pub mod compare;
 pub mod contact;
+pub mod conveyor;
 pub mod gather;
 pub mod grains;
+pub mod impact;
 pub mod motion;
+pub mod refine;
 pub mod run;
 pub mod settings;
 pub mod sizes;

@@ -29,7 +29,7 @@ pub struct DemSettings {
     pub max_time_s: f64,
     /// RMS grain speed below which the grains count as at rest, m/s.
     pub rest_speed_m_s: f64,
-    /// Teeth of the mesh; `None`: the model's reach plus a margin, at most `sim.teeth`.
+    /// Teeth of the mesh; `None`: the model's reach on a long conveyor plus a margin.
     pub teeth: Option<u32>,
 }
 

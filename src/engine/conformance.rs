@@ -82,7 +82,14 @@ pub struct Report {
     pub passed: bool,
 }
 
-/// The four conformance scenarios of an environment list: each with drag on and off.
+/// A tangential table of the DEM restitution law (`ContactLaw::Dem`) for the conformance
+/// cases: single impacts in LIGGGHTS at the lunar preset's contact (k_elastic 0.872, μ 0.106,
+/// rolling friction 0.1), rounded: sliding (1 − 1/ψ) above ψ ≈ 0.7, tangential rebound below.
+pub const EXAMPLE_DEM_TANGENTIAL: [f64; crate::model::collision::TANGENTIAL_NODES] =
+    [-0.91, -0.91, -0.70, -0.33, 0.0, 0.20, 0.33, 0.50, 0.665, 0.75, 0.833, 0.875];
+
+/// The conformance scenarios of an environment list: each with drag on and off, and with
+/// drag off under the DEM's restitution law.
 pub fn scenarios(envs: &[Scenario], particles: u32) -> Vec<(String, Scenario)> {
     let mut out = Vec::new();
     for base in envs {
@@ -92,6 +99,14 @@ pub fn scenarios(envs: &[Scenario], particles: u32) -> Vec<(String, Scenario)> {
             s.sim.particles = particles;
             s.environment.k_drag = if drag { Some(base.environment.k_drag.unwrap_or(5.439)) } else { None };
             out.push((format!("{name}, drag {}", if drag { "on" } else { "off" }), s));
+        }
+        if base.mode == crate::model::PhysicsMode::Physical {
+            let mut s = base.clone();
+            s.sim.particles = particles;
+            s.environment.k_drag = None;
+            s.collision.law = crate::model::ContactLaw::Dem;
+            s.collision.tangential_ratio = EXAMPLE_DEM_TANGENTIAL.to_vec();
+            out.push((format!("{name}, drag off, DEM law"), s));
         }
     }
     out

@@ -242,6 +242,14 @@ fn scalar_hit(d: &KDesign<f64>, ph: &KPhysics<f64>, p: &KParticle<f64>, bounce: 
 /// on a CPU where [`available`] holds: the same bits as the scalar law in every lane.
 pub fn bounce_velocities(r: &Restitution<f64>, v: &[[f64; LANES]; 2], n: &[[f64; LANES]; 2]) -> [[f64; LANES]; 2] {
     assert!(available());
+    if r.dem {
+        // the DEM law's table look-up has no lane form: the scalar law, lane by lane
+        let mut out = [[0.0; LANES]; 2];
+        for l in 0..LANES {
+            [out[0][l], out[1][l]] = r.bounce([v[0][l], v[1][l]], [n[0][l], n[1][l]]);
+        }
+        return out;
+    }
     #[cfg(target_arch = "x86_64")]
     // SAFETY: the CPU has AVX-512F (asserted above).
     return unsafe { avx512::bounce(r, v, n) };
@@ -1477,7 +1485,7 @@ mod tests {
         }
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         for mode in [PhysicsMode::Physical, PhysicsMode::Listing] {
-            let r = Restitution::new(mode, 0.8, 0.3, &Material::lunar_regolith());
+            let r = Restitution::new(mode, &crate::model::Collision::thesis(0.8, 0.3), &Material::lunar_regolith());
             for _ in 0..2000 {
                 let (mut v, mut n) = ([[0.0; LANES]; 2], [[0.0; LANES]; 2]);
                 for l in 0..LANES {

@@ -51,7 +51,7 @@ impl Context {
             mode: s.mode,
             g: s.environment.g,
             k_drag: s.environment.k_drag.unwrap_or(0.0),
-            restitution: Restitution::new(s.mode, s.collision.k_elastic, s.collision.mu_friction, &s.material),
+            restitution: Restitution::new(s.mode, &s.collision, &s.material),
             randomise,
             band: s.sim.random_band,
             seed: s.sim.seed,
@@ -246,6 +246,23 @@ pub fn evaluate_detailed(
     let run = engine.run(&prepared, &ctx, if trace { Some(&mut flights) } else { None });
     let evaluation = finish(scenario, &prepared, &run);
     Ok(Detailed { prepared, evaluation, particles: run.particles, flights })
+}
+
+/// [`evaluate_detailed`] with the caller's launch points instead of the fill polygon's (the
+/// DEM's settled bed, `dem compare`): particle i starts at `launches[i % len]`.
+pub fn evaluate_detailed_from(
+    engine: &dyn ParticleEngine,
+    scenario: &Scenario,
+    design: &Design,
+    launches: &[[f64; 2]],
+) -> Result<Detailed, Invalid> {
+    assert!(!launches.is_empty(), "launch points to start from");
+    let ctx = Context::new(scenario);
+    let mut prepared = prepare(scenario, design)?;
+    prepared.launches = (0..prepared.launches.len()).map(|i| launches[i % launches.len()]).collect();
+    let run = engine.run(&prepared, &ctx, None);
+    let evaluation = finish(scenario, &prepared, &run);
+    Ok(Detailed { prepared, evaluation, particles: run.particles, flights: Vec::new() })
 }
 
 /// Engines selectable by name.

@@ -87,6 +87,10 @@ pub struct MaterialTable {
 pub struct CollisionTable {
     pub k_elastic: Option<f64>,
     pub mu_friction: Option<f64>,
+    /// `"thesis"` (default) or `"dem"` (`model::ContactLaw`).
+    pub law: Option<crate::model::ContactLaw>,
+    /// The DEM law's measured k_t at each ψ of `model::collision::TANGENTIAL_PSI`.
+    pub tangential_ratio: Option<Vec<f64>>,
 }
 
 #[derive(Clone, Debug, Default, Deserialize)]
@@ -281,6 +285,10 @@ impl ConfigFile {
         if let Some(c) = &self.collision {
             set(&mut s.collision.k_elastic, c.k_elastic);
             set(&mut s.collision.mu_friction, c.mu_friction);
+            set(&mut s.collision.law, c.law);
+            if let Some(t) = &c.tangential_ratio {
+                s.collision.tangential_ratio = t.clone();
+            }
         }
         if let Some(t) = &self.sim {
             set(&mut s.sim.teeth, t.teeth);

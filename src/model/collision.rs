@@ -1,7 +1,10 @@
-//! Restitution at an impact (4.1.2, Eq. 4.3-4.14, and the bounce of 4.2.4, Eq. 4.47-4.49).
+//! Restitution at an impact (4.1.2, Eq. 4.3-4.14, and the bounce of 4.2.4, Eq. 4.47-4.49),
+//! by the thesis's law or by the DEM's (`ContactLaw`): the same bounce of Eq. 4.47-4.49 with
+//! another k_n and k_t.
 
 use super::real::Real;
-use super::scenario::{Material, PhysicsMode};
+pub use super::scenario::{check_tangential_table, TANGENTIAL_NODES, TANGENTIAL_PSI};
+use super::scenario::{Collision, ContactLaw, Material, PhysicsMode};
 
 /// Plastic limit velocity v_limit, m/s (Eq. 4.7 as repaired by erratum 1):
 /// v_limit = π² p_limit^(5/2) / (sqrt(40 ρ_particle) E*²), with E* from Eq. 4.4 and
@@ -27,18 +30,30 @@ pub struct Restitution<T> {
     pub v_limit: T,
     /// Clamp k_tang to [0, 1] (4.1.2); the listing does not (erratum 7).
     pub clamp_tangential: bool,
+    /// The DEM's law: k_t from `tangential_table` (the fields above but k_elastic and
+    /// mu_friction unused).
+    pub dem: bool,
+    /// The DEM law's k_t at each ψ of [`TANGENTIAL_PSI`] (zeros with the thesis's law).
+    pub tangential_table: [T; TANGENTIAL_NODES],
 }
 
 impl Restitution<f64> {
-    pub fn new(mode: PhysicsMode, k_elastic: f64, mu_friction: f64, material: &Material) -> Self {
+    pub fn new(mode: PhysicsMode, collision: &Collision, material: &Material) -> Self {
         let physical = mode == PhysicsMode::Physical;
+        let dem = collision.law == ContactLaw::Dem;
+        let mut tangential_table = [0.0; TANGENTIAL_NODES];
+        if dem {
+            tangential_table.copy_from_slice(&collision.tangential_ratio);
+        }
         Restitution {
-            k_elastic,
-            mu_friction,
+            k_elastic: collision.k_elastic,
+            mu_friction: collision.mu_friction,
             tangential_factor: if physical { 3.5 } else { 1.0 / 3.5 },
-            plastic: physical,
+            plastic: physical && !dem,
             v_limit: limit_velocity(material),
             clamp_tangential: physical,
+            dem,
+            tangential_table,
         }
     }
 }
@@ -52,7 +67,29 @@ impl<T: Real> Restitution<T> {
             plastic: self.plastic,
             v_limit: U::c(self.v_limit.f64()),
             clamp_tangential: self.clamp_tangential,
+            dem: self.dem,
+            tangential_table: self.tangential_table.map(|v| U::c(v.f64())),
         }
+    }
+
+    /// The DEM law's k_t at ψ = |v_t| / (μ (1 + k_n) |v_n|): linear between the table's
+    /// nodes; past the last node the Coulomb form 1 − c/ψ through the last node (sliding
+    /// throughout the contact, where a sphere's k_t is 1 − μ (1 + e) |v_n|/|v_t|).
+    #[inline(always)]
+    pub fn dem_tangential(&self, psi: T) -> T {
+        let last = TANGENTIAL_NODES - 1;
+        let psi_last = T::c(TANGENTIAL_PSI[last]);
+        if !(psi < psi_last) {
+            // also ψ = ∞ (no friction or no normal speed): the tangential speed is kept
+            return T::one() - (T::one() - self.tangential_table[last]) * psi_last / psi;
+        }
+        let mut i = 0;
+        while i + 1 < last && !(psi < T::c(TANGENTIAL_PSI[i + 1])) {
+            i += 1;
+        }
+        let (p0, p1) = (T::c(TANGENTIAL_PSI[i]), T::c(TANGENTIAL_PSI[i + 1]));
+        let (k0, k1) = (self.tangential_table[i], self.tangential_table[i + 1]);
+        k0 + (k1 - k0) * (psi - p0) / (p1 - p0)
     }
 
     /// Rebound velocity for impact velocity `v` on a surface with unit normal `n` (into the air).
@@ -70,12 +107,17 @@ impl<T: Real> Restitution<T> {
             self.k_elastic
         };
         // Eq. 4.14 (or the listing's line 316): k_t = 1 - c μ (k_n + 1) |v_n| / |v_t|.
-        let mut k_tang = if vt_abs > T::zero() {
+        let mut k_tang = if self.dem {
+            // the DEM's measured k_t(ψ); a zero friction impulse makes ψ infinite
+            let impulse = self.mu_friction * (k_norm + T::one()) * vn_abs;
+            let psi = if impulse > T::zero() { vt_abs / impulse } else { T::c(f64::INFINITY) };
+            self.dem_tangential(psi)
+        } else if vt_abs > T::zero() {
             T::one() - self.tangential_factor * self.mu_friction * (k_norm + T::one()) * vn_abs / vt_abs
         } else {
             T::zero()
         };
-        if self.clamp_tangential {
+        if self.clamp_tangential && !self.dem {
             k_tang = k_tang.max(T::zero()).min(T::one());
         }
         // Eq. 4.49
@@ -95,7 +137,7 @@ mod tests {
 
     #[test]
     fn normal_impact_reverses_with_k_elastic_below_the_limit() {
-        let r = Restitution::new(PhysicsMode::Physical, 0.8, 0.1, &Material::lunar_regolith());
+        let r = Restitution::new(PhysicsMode::Physical, &Collision::thesis(0.8, 0.1), &Material::lunar_regolith());
         let out = r.bounce([0.0, -0.01], [0.0, 1.0]);
         assert!((out[1] - 0.008).abs() < 1e-12);
         assert_eq!(out[0], 0.0);
@@ -103,11 +145,11 @@ mod tests {
 
     #[test]
     fn plastic_branch_lowers_the_normal_cor() {
-        let r = Restitution::new(PhysicsMode::Physical, 0.8, 0.0, &Material::lunar_regolith());
+        let r = Restitution::new(PhysicsMode::Physical, &Collision::thesis(0.8, 0.0), &Material::lunar_regolith());
         let out = r.bounce([0.0, -1.0], [0.0, 1.0]);
         let expected = 0.8 * (r.v_limit / 1.0f64).powf(0.25);
         assert!((out[1] - expected).abs() < 1e-12);
-        let listing = Restitution::new(PhysicsMode::Listing, 0.8, 0.0, &Material::lunar_regolith());
+        let listing = Restitution::new(PhysicsMode::Listing, &Collision::thesis(0.8, 0.0), &Material::lunar_regolith());
         assert!((listing.bounce([0.0, -1.0], [0.0, 1.0])[1] - 0.8).abs() < 1e-12);
     }
 
@@ -116,9 +158,57 @@ mod tests {
         let m = Material::lunar_regolith();
         // steep impact: |v_n| >> |v_t| makes Eq. 4.14 strongly negative
         let v = [0.01, -1.0];
-        let phys = Restitution::new(PhysicsMode::Physical, 0.8, 0.5, &m).bounce(v, [0.0, 1.0]);
+        let phys = Restitution::new(PhysicsMode::Physical, &Collision::thesis(0.8, 0.5), &m).bounce(v, [0.0, 1.0]);
         assert_eq!(phys[0], 0.0);
-        let list = Restitution::new(PhysicsMode::Listing, 0.8, 0.5, &m).bounce(v, [0.0, 1.0]);
+        let list = Restitution::new(PhysicsMode::Listing, &Collision::thesis(0.8, 0.5), &m).bounce(v, [0.0, 1.0]);
         assert!(list[0] < 0.0);
+    }
+
+    fn dem_law(e: f64, mu: f64, table: [f64; TANGENTIAL_NODES]) -> Restitution<f64> {
+        let c = Collision { k_elastic: e, mu_friction: mu, law: ContactLaw::Dem, tangential_ratio: table.to_vec() };
+        Restitution::new(PhysicsMode::Physical, &c, &Material::lunar_regolith())
+    }
+
+    /// The DEM's law: one normal COR at every speed (no plastic branch), k_t read from the
+    /// table at ψ = |v_t| / (μ (1 + e) |v_n|), Coulomb's 1 − c/ψ past its last node.
+    #[test]
+    fn the_dem_law_keeps_one_normal_cor_and_reads_k_t_from_its_table() {
+        let coulomb = TANGENTIAL_PSI.map(|p| if p > 0.0 { (1.0 - 1.0 / p).max(-0.9) } else { -0.9 });
+        let r = dem_law(0.872, 0.106, coulomb);
+        for vn in [0.005, 0.3, 1.5] {
+            let out = r.bounce([0.0, -vn], [0.0, 1.0]);
+            assert!((out[1] / vn - 0.872).abs() < 1e-12, "k_n {} at {vn} m/s", out[1] / vn);
+        }
+        let impulse = 0.106 * 1.872;
+        for psi in [0.1, 0.6, 1.0, 1.4, 2.5, 5.0, 8.0, 20.0] {
+            let vt = psi * impulse * 0.5;
+            let out = r.bounce([vt, -0.5], [0.0, 1.0]);
+            let want = if psi >= 8.0 {
+                1.0 - (1.0 - coulomb[TANGENTIAL_NODES - 1]) * 8.0 / psi
+            } else {
+                let i = TANGENTIAL_PSI.iter().rposition(|&p| p <= psi).unwrap();
+                let f = (psi - TANGENTIAL_PSI[i]) / (TANGENTIAL_PSI[i + 1] - TANGENTIAL_PSI[i]);
+                coulomb[i] + f * (coulomb[i + 1] - coulomb[i])
+            };
+            assert!((out[0] / vt - want).abs() < 1e-12, "psi {psi}: k_t {} want {want}", out[0] / vt);
+        }
+        // past the table the law is Coulomb's sliding bounce: 1 - 1/psi
+        let out = r.bounce([20.0 * impulse, -1.0], [0.0, 1.0]);
+        assert!((out[0] / (20.0 * impulse) - (1.0 - 1.0 / 20.0)).abs() < 1e-12);
+        // no friction keeps the tangential speed; a reversed table reverses it
+        assert_eq!(dem_law(0.872, 0.0, coulomb).bounce([0.3, -0.5], [0.0, 1.0])[0], 0.3);
+        let back = dem_law(0.872, 0.106, [-0.9; TANGENTIAL_NODES]).bounce([0.01, -0.5], [0.0, 1.0]);
+        assert!((back[0] + 0.009).abs() < 1e-12, "{back:?}");
+    }
+
+    #[test]
+    fn a_tangential_table_is_checked_by_name() {
+        assert!(check_tangential_table(&[0.5; TANGENTIAL_NODES]).is_ok());
+        assert!(check_tangential_table(&[0.5; 3]).unwrap_err().contains("must hold"));
+        let mut t = [0.5; TANGENTIAL_NODES];
+        t[4] = 1.5;
+        assert!(check_tangential_table(&t).unwrap_err().contains("value 5 must lie in [-1, 1]"));
+        t[4] = f64::NAN;
+        assert!(check_tangential_table(&t).is_err());
     }
 }

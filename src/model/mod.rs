@@ -20,5 +20,5 @@ pub use design::Design;
 pub use outcome::{ParticleEnd, ParticleState, SimOutcome};
 pub use performance::Performance;
 pub use prepare::{prepare, Prepared};
-pub use scenario::{EnvPreset, PhysicsMode, Scenario};
+pub use scenario::{Collision, ContactLaw, EnvPreset, PhysicsMode, Scenario};
 pub use validity::Invalid;

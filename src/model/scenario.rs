@@ -3,6 +3,26 @@
 
 use serde::{Deserialize, Serialize};
 
+pub use crate::kernel_codes::TANGENTIAL_PSI;
+
+/// Nodes of the DEM law's tangential table.
+pub const TANGENTIAL_NODES: usize = TANGENTIAL_PSI.len();
+
+/// A measured tangential table: one finite ratio per node of [`TANGENTIAL_PSI`], each in
+/// [-1, 1] (a rebound keeps at most its tangential speed, and reverses at most all of it).
+pub fn check_tangential_table(t: &[f64]) -> Result<(), String> {
+    if t.len() != TANGENTIAL_NODES {
+        return Err(format!(
+            "`[collision] tangential_ratio` must hold {TANGENTIAL_NODES} values (k_t at psi = {TANGENTIAL_PSI:?}; `sawtooth dem impact --law-out` measures them), got {}",
+            t.len()
+        ));
+    }
+    match t.iter().position(|v| !(v.is_finite() && (-1.0..=1.0).contains(v))) {
+        Some(i) => Err(format!("`[collision] tangential_ratio` value {} must lie in [-1, 1], got {}", i + 1, t[i])),
+        None => Ok(()),
+    }
+}
+
 /// Which physics the engines run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
@@ -55,7 +75,21 @@ pub struct Material {
     pub conveyor: Solid,
 }
 
-/// The two fitted collision parameters (4.1.2).
+/// Which restitution law a bounce follows (`[collision] law`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum ContactLaw {
+    /// The thesis's law (4.1.2): k_n = k_elastic, plastic above v_limit (Eq. 4.9), and
+    /// k_t = 1 − 3.5 μ (k_n + 1) |v_n|/|v_t| clamped to [0, 1] (Eq. 4.14).
+    #[default]
+    Thesis,
+    /// The DEM's law (`sawtooth dem`, LIGGGHTS's Hertz contact with a constant restitution,
+    /// Coulomb and rolling friction): k_n = k_elastic at every speed, and k_t a table over
+    /// ψ = |v_t| / (μ (1 + k_n) |v_n|) measured on single impacts (`sawtooth dem impact`).
+    Dem,
+}
+
+/// The fitted collision parameters (4.1.2), and the law they enter.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Collision {
@@ -63,6 +97,20 @@ pub struct Collision {
     pub k_elastic: f64,
     /// Friction coefficient μ_friction of Eq. 4.14.
     pub mu_friction: f64,
+    /// The restitution law.
+    #[serde(default)]
+    pub law: ContactLaw,
+    /// The DEM law's tangential ratio k_t at each ψ of `collision::TANGENTIAL_PSI`
+    /// (measured by `sawtooth dem impact`); empty with the thesis's law.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tangential_ratio: Vec<f64>,
+}
+
+impl Collision {
+    /// The thesis's law with these coefficients.
+    pub fn thesis(k_elastic: f64, mu_friction: f64) -> Self {
+        Collision { k_elastic, mu_friction, law: ContactLaw::Thesis, tangential_ratio: Vec::new() }
+    }
 }
 
 /// Simulation settings (4.2.1).
@@ -262,7 +310,7 @@ impl Scenario {
             mode: PhysicsMode::Physical,
             environment: Environment { g: 1.625, alpha_deg: 35.0, k_drag: None },
             material: Material::lunar_regolith(),
-            collision: Collision { k_elastic: 0.872, mu_friction: 0.106 },
+            collision: Collision::thesis(0.872, 0.106),
             sim: SimSettings::default(),
             performance: PerformanceParams::default(),
             effects: Default::default(),
@@ -316,6 +364,7 @@ impl Scenario {
         }
         named(&b::COLLISION_K_ELASTIC, "collision.k_elastic", self.collision.k_elastic)?;
         named(&b::COLLISION_MU_FRICTION, "collision.mu_friction", self.collision.mu_friction)?;
+        self.validate_law()?;
         let s = &self.sim;
         b::SIM_TEETH.check_u32("`sim.teeth`", s.teeth)?;
         b::SIM_PARTICLES.check_u32("`sim.particles`", s.particles)?;
@@ -353,5 +402,26 @@ impl Scenario {
             named(&b::PERF_SPILL_CHECK_G, "performance.spill_check_g", g)?;
         }
         self.effects.validate()
+    }
+}
+
+impl Scenario {
+    /// The contact law's own rules: the DEM law needs its measured tangential table, runs
+    /// in the physical mode only (the listing mode reproduces the thesis's published figures
+    /// with the thesis's law), and the thesis's law takes no table.
+    fn validate_law(&self) -> Result<(), String> {
+        let c = &self.collision;
+        match c.law {
+            ContactLaw::Thesis if !c.tangential_ratio.is_empty() => {
+                Err("`[collision] tangential_ratio` belongs to `law = \"dem\"`; the thesis's law (Eq. 4.14) takes none"
+                    .into())
+            }
+            ContactLaw::Thesis => Ok(()),
+            ContactLaw::Dem if self.mode == PhysicsMode::Listing => {
+                Err("`[collision] law = \"dem\"` runs in the physical mode only (the listing mode is the thesis's law)"
+                    .into())
+            }
+            ContactLaw::Dem => check_tangential_table(&c.tangential_ratio),
+        }
     }
 }

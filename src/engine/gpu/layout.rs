@@ -7,6 +7,7 @@
 use bytemuck::{Pod, Zeroable};
 
 use crate::engine::kernel::{KDesign, KParticle, KPhysics};
+use crate::model::collision::TANGENTIAL_NODES;
 
 /// What a whole dispatch shares (the kernel's uniform). The physics a calibration varies per
 /// candidate is in [`GpuDesign`]; two groups whose `GpuPhysics` bytes agree can share a
@@ -56,7 +57,10 @@ pub struct GpuDesign {
     pub scatter_sigma: f32,
     pub launch_speed_spread: f32,
     pub launch_angle_sigma: f32,
-    pub _pad: [u32; 2],
+    /// 1: the DEM's restitution law, k_t from `tangential_table` (`ContactLaw::Dem`).
+    pub dem_law: u32,
+    pub _pad: u32,
+    pub tangential_table: [f32; TANGENTIAL_NODES],
 }
 
 #[repr(C)]
@@ -135,7 +139,9 @@ impl GpuDesign {
             scatter_sigma: k.scatter_sigma,
             launch_speed_spread: k.launch_speed_spread,
             launch_angle_sigma: k.launch_angle_sigma,
-            _pad: [0; 2],
+            dem_law: r.dem as u32,
+            _pad: 0,
+            tangential_table: r.tangential_table,
         }
     }
 }
@@ -165,7 +171,7 @@ mod tests {
         // 12, 32, 12 and 8 four-byte fields in shaders/shared/types.wgsl (tests/shaders.rs
         // checks every field's offset and size against naga's layout of the WGSL structs)
         assert_eq!(std::mem::size_of::<GpuPhysics>(), 48);
-        assert_eq!(std::mem::size_of::<GpuDesign>(), 128);
+        assert_eq!(std::mem::size_of::<GpuDesign>(), 176);
         assert_eq!(std::mem::size_of::<GpuParticle>(), 48);
         assert_eq!(std::mem::size_of::<GpuOutcome>(), 32);
     }
