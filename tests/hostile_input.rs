@@ -418,6 +418,12 @@ fn edited_checkpoints_and_plans_are_refused_by_field() {
 /// rest, and `$HOSTILE` names one way a blown-up run writes its dump (or none).
 const FAKE_LIGGGHTS: &str = r#"#!/bin/sh
 # a fake LIGGGHTS for tests/hostile_input.rs: reads grains.data, writes final.dump and stroke_time.txt
+# a single-grain impact run (`dem impact`, the campaign's measured law): the grain leaves the plate
+if [ -f grain.data ]; then
+  printf 'ITEM: TIMESTEP\n1\nITEM: NUMBER OF ATOMS\n1\nITEM: BOX BOUNDS ff ff pp\n0 1\n0 1\n0 1\nITEM: ATOMS id type diameter mass x y z vx vy vz omegax omegay omegaz\n1 1 0.001 1e-6 0 0.01 0 0.1 0.5 0 0 0 0\n' > final.dump
+  echo "Step Atoms KinEng vrms t"
+  exit 0
+fi
 awk 'BEGIN { pi = atan2(0, -1) }
 /^Atoms/ { atoms = 1; next }
 atoms && NF == 7 { n++; line[n] = sprintf("%d 1 %.9g %.9g %.9g %.9g %.9g 0 0 0", $1, $3, $4 * pi * $3 ^ 3 / 6, $5, $6, $7) }

@@ -289,6 +289,8 @@ pub fn run(dir: &Path, plan: &Plan, jobs: usize, say: &(dyn Fn(String) + Sync)) 
     let all = gather_checked(dir, plan, &first)?;
     if !dir.join(LAW).is_file() {
         say("measuring the DEM's restitution law on single grains of the case (dem impact)".into());
+        // the impact runs' folder is the campaign's own, marked so that the campaign's folder counts it
+        mark_subfolder(&dir.join("law"), "dem-law")?;
         let law = super::impact::measure_law(&first, &binary, &dir.join("law"), jobs)?;
         write_atomic(&dir.join(LAW), super::impact::law_toml(&law, &first).as_bytes())?;
     }

@@ -200,7 +200,7 @@ fn foreign_entries(dir: &Path, marker: Option<&Marker>) -> anyhow::Result<Vec<St
                 // the entry itself, not what a link points at
                 let t = e.file_type().with_context(|| format!("listing {}", dir.display()))?;
                 if t.is_file() {
-                    m.wrote.iter().any(|w| *w == name)
+                    m.wrote.contains(&name)
                 } else if t.is_dir() {
                     marker_of(&e.path()).is_some() || holds_only_bookkeeping(&e.path())
                 } else {
