@@ -28,6 +28,7 @@ pub mod lane_math;
 pub mod model;
 pub mod optim;
 pub mod plot;
+pub mod protocol;
 pub mod scenario_request;
 pub mod schema;
 pub mod simd;

@@ -29,8 +29,9 @@ const LAYERS: &[&[&str]] = &[
     // files, tables and figures: serve every layer above the engine
     &["io", "plot"],
     // engines put to work: calibration, optimisation, the DEM cross-check (issue 33's
-    // parallel `dem` branch)
-    &["calibrate", "optim", "dem"],
+    // parallel `dem` branch), and the campaign protocol that campaigns of optimisations and
+    // DEM checks both implement
+    &["calibrate", "optim", "dem", "protocol"],
     // workflows over them: fitting, diagnosis, campaigns of many runs, and a scenario
     // resolved from a config (or a run's run.toml) and overrides
     &["fit", "diagnose", "campaigns", "scenario_request"],

@@ -116,8 +116,7 @@ fn run_impact(case: &Case, binary: &Path, dir: &Path, vn: f64, vt: f64) -> anyho
     write_atomic(&dir.join(GRAIN), data.as_bytes())?;
     write_atomic(&dir.join(SCRIPT), script.as_bytes())?;
     run_case(binary, dir, &mut |_| {})?;
-    let text =
-        std::fs::read_to_string(dir.join(DUMP)).with_context(|| format!("reading {}", dir.join(DUMP).display()))?;
+    let text = crate::io::bounded::read_text(&dir.join(DUMP), &crate::schema::DEM_DUMP_FILE)?;
     let grain = parse_dump(&text)?.into_iter().next().context("the impact's dump holds no grain")?;
     let r = case.placement.classes.iter().map(|k| k.diameter_m).fold(f64::INFINITY, f64::min) / 2.0;
     if grain.pos[1] <= r {

@@ -11,6 +11,7 @@ pub mod gpu;
 pub mod kernel;
 pub mod lanes;
 pub mod listing;
+pub mod slopes;
 pub mod summary;
 
 use rayon::prelude::*;
