@@ -597,6 +597,15 @@ fn edited_dem_results_and_plans_are_refused_by_field() {
         ("[dem] particles (--particles) must lie in [1, 200000]", Box::new(|v| v["settings"]["particles"] = 0.into())),
         ("`environment.g` must lie in [0.001, 100]", Box::new(|v| v["scenario"]["environment"]["g"] = 1e-300.into())),
         ("`first_seed`", Box::new(|v| v["first_seed"] = u64::MAX.into())),
+        ("`strokes` must lie in [3, 200]", Box::new(|v| v["strokes"] = 4_294_967_295u64.into())),
+        ("`period_teeth` 7 belongs to a steady plan", Box::new(|v| v["period_teeth"] = 7.into())),
+        (
+            "`period_teeth` must lie in [2, 64]",
+            Box::new(|v| {
+                v["strokes"] = 5.into();
+                v["period_teeth"] = 1000.into()
+            }),
+        ),
     ];
     for (want, edit) in edits {
         let mut v = plan.clone();

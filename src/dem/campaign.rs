@@ -83,6 +83,17 @@ impl Plan {
         // refused it: the bounds of a design as a user gives one come first
         self.design.check_sensible(|i| format!("`design` {}", crate::model::design::DesignRow::COLUMNS[i]))?;
         self.settings.validate().map_err(|e| format!("`settings`: {e}"))?;
+        // steady conveying's counts, as `dem run --strokes K --period-teeth P` bounds them
+        if self.strokes != 0 {
+            if !(3..=200).contains(&self.strokes) {
+                return Err(format!("`strokes` must lie in [3, 200] (0: single strokes), got {}", self.strokes));
+            }
+            if !(2..=64).contains(&self.period_teeth) {
+                return Err(format!("`period_teeth` must lie in [2, 64], got {}", self.period_teeth));
+            }
+        } else if self.period_teeth != 0 {
+            return Err(format!("`period_teeth` {} belongs to a steady plan (`strokes` > 0)", self.period_teeth));
+        }
         if let Some((delay, speed)) = self.known_return {
             schema::MOTION_DELAY.check("`known_return[0]` (motion_delay_s)", delay)?;
             schema::MOTION_RETURN_SPEED.check("`known_return[1]` (motion_return_speed_m_s)", speed)?;
