@@ -127,6 +127,15 @@ impl Plan {
     }
 }
 
+/// The runs of a campaign without a result yet, said as a resumption where some have one.
+fn runs_to_do<T>(done: &[Option<T>], say: &(dyn Fn(String) + Sync)) -> Vec<u32> {
+    let todo: Vec<u32> = (0..done.len() as u32).filter(|r| done[*r as usize].is_none()).collect();
+    if todo.len() < done.len() {
+        say(format!("resuming: {} of {} runs already done", done.len() - todo.len(), done.len()));
+    }
+    todo
+}
+
 /// A steady run's result file (in place of [`RESULT`]).
 pub const STEADY_RESULT: &str = "steady.json";
 
@@ -153,10 +162,7 @@ pub fn run_steady(
     let binary = find_liggghts()?;
     record_plan(dir, plan)?;
     let done = steady_results(dir, plan.runs)?;
-    let todo: Vec<u32> = (0..plan.runs).filter(|r| done[*r as usize].is_none()).collect();
-    if todo.len() < plan.runs as usize {
-        say(format!("resuming: {} of {} runs already done", plan.runs as usize - todo.len(), plan.runs));
-    }
+    let todo = runs_to_do(&done, say);
     say(format!(
         "{} steady runs to do, {} at a time: {} cycles on a periodic conveyor of {} full teeth, {} grains of {:.0} um, time step {:.2e} s",
         todo.len(),
@@ -264,10 +270,7 @@ pub fn run(dir: &Path, plan: &Plan, jobs: usize, say: &(dyn Fn(String) + Sync)) 
     let binary = find_liggghts()?;
     record_plan(dir, plan)?;
     let done = results(dir, plan, &first)?;
-    let todo: Vec<u32> = (0..plan.runs).filter(|r| done[*r as usize].is_none()).collect();
-    if todo.len() < plan.runs as usize {
-        say(format!("resuming: {} of {} runs already done", plan.runs as usize - todo.len(), plan.runs));
-    }
+    let todo = runs_to_do(&done, say);
     say(format!(
         "{} runs to do, {} at a time: {} grains of {:.0} um, slab {:.2} mm, {} teeth, time step {:.2e} s (moduli softened x{:.2e})",
         todo.len(),
