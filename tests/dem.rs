@@ -17,7 +17,7 @@ use sawtooth::model::prepare;
 
 pub(crate) const RIG: &str = "data/validation/test3.toml";
 
-fn sawtooth_env(args: &[&str], env: &[(&str, &str)]) -> (i32, String, String) {
+pub(crate) fn sawtooth_env(args: &[&str], env: &[(&str, &str)]) -> (i32, String, String) {
     let mut c = Command::new(env!("CARGO_BIN_EXE_sawtooth"));
     c.args(args).current_dir(env!("CARGO_MANIFEST_DIR"));
     for (k, v) in env {

@@ -10,7 +10,7 @@ use std::path::Path;
 use sawtooth::io::config::ConfigFile;
 use sawtooth::model::collision::Restitution;
 
-use crate::dem::{coarse_rig, liggghts_present, read, sawtooth, tmp, RIG};
+use crate::dem::{coarse_rig, liggghts_present, read, sawtooth, sawtooth_env, tmp, RIG};
 
 fn json(text: &str) -> serde_json::Value {
     serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}: {text}"))
@@ -122,6 +122,49 @@ fn a_lone_grain_lands_on_the_same_tooth_in_the_dem_and_in_the_model_with_the_dem
     // the grain left tooth 1 on both sides
     assert!(model[0] < 50.0, "{model:?}");
     settled_beds_are_finite(&dir);
+}
+
+/// A run whose every grain leaves the box is a result with every grain lost (credited
+/// nothing), not a failure: LIGGGHTS refuses to run a granular case with no grains left, so
+/// the deck checks the count before every run and dump and stops with `all_lost.txt`. The
+/// grains are made to leave by a LIGGGHTS wrapper that deletes them all right after they are
+/// read (a lone grain rolling out of the box while it settles did this on a lunar design).
+#[test]
+fn a_run_whose_every_grain_leaves_the_box_is_a_result_with_every_grain_lost() {
+    if !liggghts_present("dem_reference::a_run_whose_every_grain_leaves_the_box_is_a_result_with_every_grain_lost") {
+        return;
+    }
+    let (_d, dir) = tmp("gone");
+    let liggghts = sawtooth::dem::run::find_liggghts().unwrap();
+    let wrapper = dir.with_extension("liggghts.sh");
+    // only the conveyor's case is emptied (the campaign's impact cases, which measure its law,
+    // run as they are)
+    std::fs::write(
+        &wrapper,
+        format!(
+            "#!/bin/sh\nif grep -q '^# sawtooth dem case' in.sawtooth; then\n  sed -i 's/^read_data .*$/&\\ndelete_atoms group all/' in.sawtooth\nfi\nexec '{}' \"$@\"\n",
+            liggghts.display()
+        ),
+    )
+    .unwrap();
+    std::fs::set_permissions(&wrapper, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let config = coarse_rig(&dir.with_extension("cfg"), "particles = 4\ngrain_diameter_m = 0.001\n");
+    let out = dir.to_str().unwrap();
+    let (code, _, err) = sawtooth_env(
+        &["dem", "run", "--config", &config, "--runs", "1", "--out", out],
+        &[("SAWTOOTH_LIGGGHTS", wrapper.to_str().unwrap())],
+    );
+    assert_eq!(code, 0, "{err}");
+    let run = dir.join("run-001");
+    assert!(read(&run.join("in.sawtooth")).contains("delete_atoms group all"), "the wrapper did not empty the case");
+    assert!(run.join("all_lost.txt").is_file(), "{err}");
+    let r = json(&read(&run.join("result.json")));
+    assert_eq!(r["grains"], 4, "{r}");
+    assert_eq!(r["lost"], 4, "{r}");
+    assert_eq!(r["left_box"], 4, "{r}");
+    assert_eq!(f(&r["d_avg_m"]), 0.0, "{r}");
+    assert!(r["teeth_g"].as_array().unwrap().iter().all(|m| f(m) == 0.0), "{r}");
+    assert!(f(&r["input_mass_g"]) > 0.0, "{r}");
 }
 
 #[test]

@@ -18,7 +18,7 @@ use std::sync::Mutex;
 use anyhow::{bail, Context as _};
 use serde::{Deserialize, Serialize};
 
-use super::case::{Case, DUMP, SETTLED, STROKE_TIME};
+use super::case::{Case, ALL_LOST, DUMP, SETTLED, STROKE_TIME};
 use super::conveyor::{Conveyor, SteadyRun};
 use super::gather::{
     check_dump, check_result, measured_csv, parse_dump, parse_positions, reduce, setup_toml, RunResult,
@@ -447,6 +447,11 @@ fn one_run(
 /// believable run otherwise.
 fn read_run(case: &Case, rd: &Path, wall_s: f64) -> Result<RunResult, String> {
     let at = |p: &Path, e: anyhow::Error| format!("{}: {e:#}", p.display());
+    // every grain left the box (the deck stopped before a run LIGGGHTS would refuse): a
+    // result with everything lost, which the rule credits nothing
+    if rd.join(ALL_LOST).is_file() && !rd.join(DUMP).is_file() {
+        return Ok(reduce(case, &[], 0.0, wall_s));
+    }
     let dump_path = rd.join(DUMP);
     let dump = read_text(&dump_path, &schema::DEM_DUMP_FILE).map_err(|e| at(&dump_path, e))?;
     let grains = parse_dump(&dump).map_err(|e| at(&dump_path, e))?;
