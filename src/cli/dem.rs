@@ -524,13 +524,14 @@ fn write_table(out: &mut dyn Write, c: &Comparison) -> anyhow::Result<()> {
     )?;
     writeln!(
         out,
-        "centre of mass (tooth): model {:.2}, DEM {:.2} ± {:.2}; dispersion: model {:.2}, DEM {:.2} ± {:.2}",
+        "centre of mass (tooth): model {:.2}, DEM {:.2} ± {:.2}; dispersion: model {:.2}, DEM {:.2} ± {:.2}{}",
         c.model_centre,
         c.dem_centre.mean,
         c.dem_centre.sd,
         c.model_dispersion,
         c.dem_dispersion.mean,
-        c.dem_dispersion.sd
+        c.dem_dispersion.sd,
+        if c.dem_centre.mean.is_nan() { " (no DEM run kept a grain on the teeth)" } else { "" }
     )?;
     writeln!(
         out,
