@@ -2,9 +2,9 @@
 # The hardware-GPU figures of BENCHMARKS.md in one command, for a machine with a GPU and many
 # cores (what the project is lent for a few minutes at a time): the machine, GPU conformance,
 # the GPU table (scripts/gpu-table.sh), issue 3's moonshot batches (a pop-1000 generation; 10 000
-# particles per design), the cpu engine's ratio to the listing at each lane level of
-# SAWTOOTH_CPU_LEVEL on this machine's CPU (on 2 threads, as the 2-core development machine,
-# and on all), a gpu-sweep over 0..40 degrees on the gpu and the cpu engine, and the GPU test
+# particles per design), the cpu engine's ratio to the listing on each SIMD path this
+# machine's CPU has (SAWTOOTH_SIMD; on 2 threads, as the 2-core development machine, and on
+# all), a gpu-sweep over 0..40 degrees on the gpu and the cpu engine, and the GPU test
 # target. Every step runs under its own time limit and writes into OUT, so a step that fails
 # or times out leaves the others' files.
 #
@@ -42,6 +42,7 @@ step() { # NAME LIMIT_S COMMAND...: run one step, its output to OUT/NAME.txt, it
     nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv 2>&1 || true
     lscpu | grep -E '^(Model name|CPU\(s\)|Thread|Core|Socket)' || true
     echo "AVX-512F: $(grep -c -w avx512f /proc/cpuinfo) of $(grep -c ^processor /proc/cpuinfo) CPUs"
+    echo "AVX2: $(grep -c -w avx2 /proc/cpuinfo) of $(grep -c ^processor /proc/cpuinfo) CPUs"
 } >"$out/machine.txt" 2>&1
 
 step conformance 120 "$st" conformance --designs 50
@@ -56,14 +57,22 @@ for env in lunar earth; do
     step "pop-$env-${big}p" 150 "$st" bench --env "$env" --designs "$pop" --sample random \
         --particles "$big" --engines cpu,gpu --repeats "$repeats" --json
 done
-# The cpu engine against the listing at each lane level, on 2 threads and on all of them
+# The cpu engine against the listing on each SIMD path this CPU has (the binary refuses a
+# path the CPU lacks, by name: such a path is left out), on 2 threads and on all of them
+paths=(default)
+for simd in scalar avx2 avx512 neon; do
+    if SAWTOOTH_SIMD=$simd "$st" bench --designs 1 --particles 1 --repeats 1 --engines cpu >/dev/null 2>&1; then
+        paths+=("$simd")
+    fi
+done
+echo "SIMD paths: ${paths[*]}" >>"$out/machine.txt"
 for threads in 2 all; do
-    for level in default x86-64-v3 baseline; do
+    for simd in "${paths[@]}"; do
         for env in lunar earth; do
             vars=()
             [[ $threads == 2 ]] && vars+=(RAYON_NUM_THREADS=2)
-            [[ $level != default ]] && vars+=(SAWTOOTH_CPU_LEVEL=$level)
-            step "levels-$threads-$level-$env" 60 env "${vars[@]}" "$st" bench --env "$env" \
+            [[ $simd != default ]] && vars+=(SAWTOOTH_SIMD=$simd)
+            step "simd-$threads-$simd-$env" 60 env "${vars[@]}" "$st" bench --env "$env" \
                 --engines listing,cpu --repeats "$repeats" --json
         done
     done

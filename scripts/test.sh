@@ -48,6 +48,19 @@ cargo clippy --release --locked --workspace --all-targets -- -D warnings || {
     lint_status=1
 }
 
+# --- the aarch64 build: the NEON lanes compile and lint (nothing aarch64 runs here) -------
+if ! rustup target list --installed 2>/dev/null | grep -qx aarch64-unknown-linux-gnu; then
+    rustup target add aarch64-unknown-linux-gnu >/dev/null 2>&1 || true
+fi
+if rustup target list --installed 2>/dev/null | grep -qx aarch64-unknown-linux-gnu; then
+    cargo clippy --locked --target aarch64-unknown-linux-gnu --lib --tests -- -D warnings || {
+        echo "test.sh: the aarch64 build failed (cargo clippy --target aarch64-unknown-linux-gnu)"
+        lint_status=1
+    }
+else
+    echo "test.sh: SKIPPED the aarch64 build: the target aarch64-unknown-linux-gnu is not installed and rustup could not add it"
+fi
+
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
 status=0

@@ -1,8 +1,9 @@
 //! The engine's elementary functions — `exp_m1`, `sin_cos`, `atan2`, `ln`, `ln_1p` —
-//! written once, over a lane type: one `f64` (the scalar kernel) or a vector of them (the
-//! AVX-512 lanes of `engine::lanes`). Each lane does the same IEEE operations in the same order as the
-//! scalar code (no fused multiply-add, selects instead of branches), so the lanes give the
-//! scalar kernel's bits by construction, on every CPU, whatever the system's libm.
+//! written once, over the lane type of `crate::lane`: one `f64` (the scalar kernel) or a
+//! vector of them (the SIMD lanes of `engine::lanes`). Each lane does the same IEEE
+//! operations in the same order as the scalar code (no fused multiply-add, selects instead
+//! of branches), so the lanes give the scalar kernel's bits by construction, on every CPU,
+//! whatever the system's libm.
 //!
 //! The method (docs/math.md has the derivation and the measured error):
 //! - `exp_m1`: x = k ln2 + r with |r| <= ln2/2 (Cody-Waite: ln2 in a 42-bit head and a
@@ -25,105 +26,15 @@
 //! (cos), 1.57 (expm1), 1.42 (atan2), 1.11 (ln) and 2.24 (ln_1p); docs/math.md has the
 //! arguments and the commands.
 
-use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
+use crate::lane::{F64Lane, Lane};
 
-/// A number or a vector of numbers on which the functions below run lane by lane: the IEEE
-/// operations of `f64` in every lane, and comparisons that give a mask of lanes.
-pub trait Lane:
-    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self>
-{
-    /// Which lanes a comparison holds in (`bool` for one `f64`).
-    type Mask: Copy + BitAnd<Output = Self::Mask> + BitOr<Output = Self::Mask> + Not<Output = Self::Mask>;
-    /// `x` in every lane.
-    fn splat(x: f64) -> Self;
-    /// `|self|` (the sign bit cleared).
-    fn abs(self) -> Self;
-    /// `self < other`, false where either is NaN.
-    fn lt(self, other: Self) -> Self::Mask;
-    /// `self <= other`, false where either is NaN.
-    fn le(self, other: Self) -> Self::Mask;
-    /// `self == other`, false where either is NaN.
-    fn eq(self, other: Self) -> Self::Mask;
-    /// `if m { a } else { b }` in every lane.
-    fn select(m: Self::Mask, a: Self, b: Self) -> Self;
-    /// Whether the sign bit is set (true for -0.0).
-    fn sign_negative(self) -> Self::Mask;
-    /// `self` with the sign of `sign`.
-    fn copysign(self, sign: Self) -> Self;
-    /// 2^k for a whole number k in [-1022, 1024] (infinity at 1024); anything outside gives
-    /// an unspecified number.
-    fn pow2i(self) -> Self;
-    /// The biased exponent field (0 to 2047, as a number) and the significand with the
-    /// exponent field set to 1023 (in [1, 2)), read from the bits.
-    fn exponent_field_and_significand(self) -> (Self, Self);
-}
-
-impl Lane for f64 {
-    type Mask = bool;
-    #[inline(always)]
-    fn splat(x: f64) -> Self {
-        x
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        f64::abs(self)
-    }
-    #[inline(always)]
-    fn lt(self, other: Self) -> bool {
-        self < other
-    }
-    #[inline(always)]
-    fn le(self, other: Self) -> bool {
-        self <= other
-    }
-    #[inline(always)]
-    fn eq(self, other: Self) -> bool {
-        self == other
-    }
-    #[inline(always)]
-    fn select(m: bool, a: Self, b: Self) -> Self {
-        if m {
-            a
-        } else {
-            b
-        }
-    }
-    #[inline(always)]
-    fn sign_negative(self) -> bool {
-        self.is_sign_negative()
-    }
-    #[inline(always)]
-    fn copysign(self, sign: Self) -> Self {
-        f64::copysign(self, sign)
-    }
-    #[inline(always)]
-    fn pow2i(self) -> Self {
-        // k + 1023 as the low bits of a number in [2^52, 2^53), shifted into the exponent
-        f64::from_bits((self + (1023.0 + TWO_52)).to_bits() << 52)
-    }
-    #[inline(always)]
-    fn exponent_field_and_significand(self) -> (Self, Self) {
-        let bits = self.to_bits();
-        // the field as the low bits of a number in [2^52, 2^53), minus 2^52
-        let field = f64::from_bits(TWO_52.to_bits() | ((bits >> 52) & 0x7ff)) - TWO_52;
-        (field, f64::from_bits((bits & MANTISSA_BITS) | ONE_BITS))
-    }
-}
-
-/// The 52 stored significand bits of an f64.
-pub const MANTISSA_BITS: u64 = 0x000f_ffff_ffff_ffff;
-/// 1.0's bits: the exponent field 1023.
-pub const ONE_BITS: u64 = 0x3ff0_0000_0000_0000;
-
-/// 2^52: adding it to a whole number below 2^52 leaves the number in the low mantissa bits.
-const TWO_52: f64 = 4_503_599_627_370_496.0;
 /// 1.5 · 2^52: `(y + ROUNDER) - ROUNDER` is y rounded to the nearest whole number, ties to
 /// even, for |y| < 2^51 — two additions, the same in every lane and without SSE4.1.
 const ROUNDER: f64 = 6_755_399_441_055_744.0;
 
 /// `y` rounded to a whole number, ties to even (|y| < 2^51).
 #[inline(always)]
-fn round_whole<T: Lane>(y: T) -> T {
+fn round_whole<T: F64Lane>(y: T) -> T {
     (y + T::splat(ROUNDER)) - T::splat(ROUNDER)
 }
 
@@ -163,7 +74,7 @@ const EXPM1_P: [f64; 10] = [
 /// module's notes). Exact at ±0 (keeping the sign); -1 below -40, +inf above 709.78; NaN
 /// for NaN.
 #[inline(always)]
-pub fn exp_m1<T: Lane>(x: T) -> T {
+pub fn exp_m1<T: F64Lane>(x: T) -> T {
     // clamped so that k stays in the range of `pow2i`; expm1(-40) already rounds to -1 and
     // expm1(710) overflows
     let xc = T::select(T::splat(710.0).lt(x), T::splat(710.0), x);
@@ -214,7 +125,7 @@ const COS_C: [f64; 6] = [
 /// (sin x, cos x) (reduction by π/2 in three pieces and two polynomials; see the module's
 /// notes). sin keeps the sign of ±0; NaN for NaN, infinities and |x| > [`SIN_COS_MAX`].
 #[inline(always)]
-pub fn sin_cos<T: Lane>(x: T) -> (T, T) {
+pub fn sin_cos<T: F64Lane>(x: T) -> (T, T) {
     let k = round_whole(x * T::splat(FRAC_2_PI));
     let r = ((x - k * T::splat(PIO2_1)) - k * T::splat(PIO2_2)) - k * T::splat(PIO2_3);
     let z = r * r;
@@ -269,7 +180,7 @@ const ATAN_A: [f64; 11] = [
 /// and one polynomial; see the module's notes). IEEE's special values: ±0 or ±π on the
 /// axes by the signs of the zeros, the diagonals' angles when both are infinite, NaN for NaN.
 #[inline(always)]
-pub fn atan2<T: Lane>(y: T, x: T) -> T {
+pub fn atan2<T: F64Lane>(y: T, x: T) -> T {
     let (zero, one, inf) = (T::splat(0.0), T::splat(1.0), T::splat(f64::INFINITY));
     let (ax, ay) = (x.abs(), y.abs());
     // both infinite: the angle of (±1, ±1)
@@ -320,7 +231,7 @@ const LN_Q: [f64; 7] = [
 /// ln(1 + f) = 2 atanh s = f - s (f - s² Q(s²)) (since 2s = f - s f); then e ln 2 added
 /// in LN2_HI and LN2_LO. -inf at ±0, NaN below 0 and for NaN, +inf at +inf.
 #[inline(always)]
-pub fn ln<T: Lane>(x: T) -> T {
+pub fn ln<T: F64Lane>(x: T) -> T {
     let (zero, one) = (T::splat(0.0), T::splat(1.0));
     let subnormal = x.lt(T::splat(f64::MIN_POSITIVE));
     let (field, m) = T::select(subnormal, x * T::splat(TWO_54), x).exponent_field_and_significand();
@@ -340,7 +251,7 @@ pub fn ln<T: Lane>(x: T) -> T {
 /// ln(1 + x), accurate for small x: with u = 1 + x rounded, ln(u) · x/(u - 1), which
 /// cancels u's rounding (x itself where u rounds to 1). NaN below -1, -inf at -1.
 #[inline(always)]
-pub fn ln_1p<T: Lane>(x: T) -> T {
+pub fn ln_1p<T: F64Lane>(x: T) -> T {
     let (one, inf) = (T::splat(1.0), T::splat(f64::INFINITY));
     let u = one + x;
     let d = u - one;

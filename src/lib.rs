@@ -10,8 +10,9 @@
 //! - [`plot`]: the one plotting layer every figure goes through (SVG or PNG).
 //! - [`dem`]: a bridge to the LIGGGHTS DEM engine: cases, campaigns, model vs DEM.
 //! - [`cli`]: the thin command-line layer.
+//! - [`lane`]: the lane type (one number, or AVX2, AVX-512 or NEON lanes) the SIMD code is written over.
 //! - [`lane_math`]: the engine's own `exp_m1`, `sin_cos`, `atan2`, one code for scalar and lanes.
-//! - [`x86_64_v3`]: hot loops compiled a second time for AVX2 CPUs, same bits.
+//! - [`simd`]: which instruction set the cpu engine runs on (`SAWTOOTH_SIMD`), same bits on each.
 
 pub mod calibrate;
 pub mod campaigns;
@@ -22,10 +23,12 @@ pub mod engine;
 pub mod fit;
 pub mod io;
 pub mod kernel_codes;
+pub mod lane;
 pub mod lane_math;
 pub mod model;
 pub mod optim;
 pub mod plot;
+pub mod protocol;
 pub mod scenario_request;
 pub mod schema;
-pub mod x86_64_v3;
+pub mod simd;

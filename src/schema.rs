@@ -75,13 +75,13 @@ pub struct Real {
 }
 
 impl Real {
-    /// The interval in mathematical notation, `(0, 1e6]`.
+    /// The interval in mathematical notation, `[0.001, 1000000]`, `(-90, 90)`, `[1e-15, 1000]`.
     pub fn interval(&self) -> String {
         format!(
             "{}{}, {}{}",
             if self.min_open { '(' } else { '[' },
-            self.min,
-            self.max,
+            bound_text(self.min),
+            bound_text(self.max),
             if self.max_open { ')' } else { ']' }
         )
     }
@@ -101,6 +101,26 @@ impl Real {
             Err(format!("{spelled} must lie in {}{unit} ({}), got {v:?}", self.interval(), self.why))
         }
     }
+}
+
+/// A bound as a reader writes it: plain digits from 0.001 up to ten million, powers of ten
+/// beyond (`1e-15`, `1e13`), not twenty zeros.
+fn bound_text(v: f64) -> String {
+    if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e7) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// A text field of a plan that is printed in messages and tables and copied into the Slurm
+/// scripts' comments (a command, a label, a folder): one line of at most 4096 bytes, so that
+/// a line break cannot start a command in a script.
+pub fn one_line(field: &str, text: &str) -> Result<(), String> {
+    if text.len() > 4096 || text.chars().any(char::is_control) {
+        return Err(format!("{field} must be one line of at most 4096 bytes, without control characters"));
+    }
+    Ok(())
 }
 
 /// A file the project reads, bounded in size so that `--config /dev/zero` or a runaway
@@ -288,12 +308,36 @@ pub const ALPHA_POINTS: Count = Count {
 // ---- `dem` ---------------------------------------------------------------------------------
 
 pub const DEM_RUNS: Count = Count {
-    flags: &["--runs", "--seeds"],
-    keys: &[],
+    flags: &["--runs"],
+    keys: &["runs"],
     python: None,
     min: 1,
     max: 10_000,
     why: "each run is a LIGGGHTS simulation of minutes with its own folder",
+};
+pub const DEM_SEEDS: Count = Count {
+    flags: &["--seeds"],
+    keys: &["seeds"],
+    python: None,
+    min: 1,
+    max: 1000,
+    why: "each seed is a LIGGGHTS run of every checked design",
+};
+pub const DEM_FRONT: Count = Count {
+    flags: &["--front"],
+    keys: &[],
+    python: None,
+    min: 0,
+    max: 100,
+    why: "each front design is a DEM campaign of --seeds runs; a hundred cover any front",
+};
+pub const JOBS: Count = Count {
+    flags: &["--jobs"],
+    keys: &[],
+    python: None,
+    min: 1,
+    max: 4096,
+    why: "LIGGGHTS processes at a time; more than any machine has cores",
 };
 pub const DEM_PARTICLES: Count = Count {
     flags: &["--particles"],
@@ -310,6 +354,27 @@ pub const DEM_TEETH: Count = Count {
     min: 2,
     max: 1000,
     why: "the mesh holds a facet row per tooth; a longer slab is a typo",
+};
+
+// ---- `campaign slurm` ----------------------------------------------------------------------
+
+pub const SLURM_CPUS_PER_TASK: Count = Count {
+    flags: &["--cpus-per-task"],
+    keys: &[],
+    python: None,
+    min: 1,
+    max: 4096,
+    why: "more cores than any node has",
+};
+pub const SLURM_GPUS_PER_TASK: Count =
+    Count { flags: &["--gpus-per-task"], keys: &[], python: None, min: 1, max: 64, why: "more GPUs than any node has" };
+pub const SLURM_MAX_PARALLEL: Count = Count {
+    flags: &["--max-parallel"],
+    keys: &[],
+    python: None,
+    min: 1,
+    max: PLAN_MEMBERS.max,
+    why: "at most one task per member",
 };
 
 // ---- `synth`, `bench`, `conformance` -----------------------------------------------------
@@ -364,11 +429,11 @@ pub const ENV_G: Real = Real {
     keys: &["[environment] g_m_s2"],
     python: None,
     unit: "m/s^2",
-    min: 0.0,
-    min_open: true,
+    min: 0.001,
+    min_open: false,
     max: 100.0,
     max_open: false,
-    why: "ten times the Earth's gravity is no planetary surface",
+    why: "from below the surface gravity of Phobos (0.0057 m/s^2) to ten times the Earth's: the bodies with regolith to move",
 };
 pub const ENV_ALPHA: Real = Real {
     lib: "environment.alpha_deg",
@@ -388,11 +453,11 @@ pub const ENV_K_DRAG: Real = Real {
     keys: &["[environment] k_drag_per_s"],
     python: Some("k_drag_per_s"),
     unit: "1/s",
-    min: 0.0,
-    min_open: true,
+    min: 1e-4,
+    min_open: false,
     max: 10000.0,
     max_open: false,
-    why: "Stokes drag of 10^4 1/s stops a grain within microns; 0 in a file or flag means vacuum",
+    why: "below 1e-4 1/s drag changes a second's flight by less than 0.01 % and the Stokes closed form (Eq. 4.55) loses its digits (k_drag 1e-9 moves lunar C's d_avg by 7 %); 0 in a file or flag means vacuum; 10^4 1/s stops a grain within microns",
 };
 pub const MATERIAL_AOR: Real = Real {
     lib: "material.aor_deg",
@@ -412,11 +477,11 @@ pub const MATERIAL_BULK_DENSITY: Real = Real {
     keys: &["[material] bulk_density_kg_m3"],
     python: None,
     unit: "kg/m^3",
-    min: 0.0,
-    min_open: true,
+    min: 1.0,
+    min_open: false,
     max: 25000.0,
     max_open: false,
-    why: "denser than osmium is a typo",
+    why: "a bulk lighter than air (1.2 kg/m^3) is no solid; denser than osmium is a typo",
 };
 pub const SOLID_YOUNGS_MODULUS: Real = Real {
     lib: "material.particle.youngs_modulus",
@@ -424,11 +489,11 @@ pub const SOLID_YOUNGS_MODULUS: Real = Real {
     keys: &["material.particle.youngs_modulus", "material.conveyor.youngs_modulus"],
     python: None,
     unit: "Pa",
-    min: 0.0,
-    min_open: true,
+    min: 1e3,
+    min_open: false,
     max: 1e13,
     max_open: false,
-    why: "stiffer than diamond is a typo",
+    why: "softer than a gel (1 kPa) is no grain or conveyor; stiffer than diamond is a typo",
 };
 pub const SOLID_POISSON_RATIO: Real = Real {
     lib: "material.particle.poisson_ratio",
@@ -448,11 +513,11 @@ pub const SOLID_STRENGTH: Real = Real {
     keys: &["material.particle.strength", "material.conveyor.strength"],
     python: None,
     unit: "Pa",
-    min: 0.0,
-    min_open: true,
+    min: 1e3,
+    min_open: false,
     max: 1e12,
     max_open: false,
-    why: "stronger than any solid is a typo",
+    why: "weaker than a gel (1 kPa) is no solid; stronger than any solid is a typo",
 };
 pub const SOLID_DENSITY: Real = Real {
     lib: "material.particle.density",
@@ -460,11 +525,11 @@ pub const SOLID_DENSITY: Real = Real {
     keys: &["material.particle.density", "material.conveyor.density"],
     python: None,
     unit: "kg/m^3",
-    min: 0.0,
-    min_open: true,
+    min: 1.0,
+    min_open: false,
     max: 25000.0,
     max_open: false,
-    why: "denser than osmium is a typo",
+    why: "a solid lighter than air (1.2 kg/m^3) does not exist; denser than osmium is a typo",
 };
 pub const COLLISION_K_ELASTIC: Real = Real {
     lib: "collision.k_elastic",
@@ -559,11 +624,11 @@ pub const OPT_TOL: Real = Real {
     keys: &["config.mode.tol"],
     python: None,
     unit: "",
-    min: 0.0,
-    min_open: true,
+    min: 1e-12,
+    min_open: false,
     max: 1.0,
     max_open: false,
-    why: "a relative change of the front's spread: at 1 every generation already counts as a stall",
+    why: "below 1e-12 the spread changes by less than its rounding, so no run would stall; at 1 every generation already counts as a stall",
 };
 pub const PARETO_FRACTION: Real = Real {
     lib: "",
@@ -571,11 +636,11 @@ pub const PARETO_FRACTION: Real = Real {
     keys: &["config.mode.pareto_fraction"],
     python: None,
     unit: "",
-    min: 0.0,
-    min_open: true,
+    min: 1e-5,
+    min_open: false,
     max: 1.0,
     max_open: false,
-    why: "a share of the population",
+    why: "a share of the population: from one member of the largest (100 000) to all",
 };
 pub const CROSSOVER_PROB: Real = Real {
     lib: "",
@@ -610,11 +675,11 @@ pub const SYNTH_MASS_G: Real = Real {
     keys: &[],
     python: None,
     unit: "g",
-    min: 0.0,
-    min_open: true,
+    min: 1e-3,
+    min_open: false,
     max: 1e6,
     max_open: false,
-    why: "a tonne of regolith in one test is no laboratory test",
+    why: "from a milligram, below any laboratory test's load, to a tonne of regolith, beyond any",
 };
 
 /// The `[performance]` table's values (Eq. 4.45-4.60, D.7-D.8): positive and below a bound
@@ -625,11 +690,11 @@ pub const PERF_CONVEYOR_LENGTH: Real = Real {
     keys: &["[performance] conveyor_length_m"],
     python: None,
     unit: "m",
-    min: 0.0,
-    min_open: true,
+    min: 0.01,
+    min_open: false,
     max: 1000.0,
     max_open: false,
-    why: "a conveyor beyond a kilometre is a typo, and makes the wire count overflow",
+    why: "a conveyor shorter than a centimetre holds no tooth; beyond a kilometre is a typo, and makes the wire count overflow",
 };
 pub const PERF_REGOLITH_WIDTH: Real = Real {
     lib: "performance.regolith_width",
@@ -637,11 +702,11 @@ pub const PERF_REGOLITH_WIDTH: Real = Real {
     keys: &["[performance] regolith_width_m"],
     python: None,
     unit: "m",
-    min: 0.0,
-    min_open: true,
+    min: 1e-3,
+    min_open: false,
     max: 100.0,
     max_open: false,
-    why: "a bed wider than 100 m is a typo",
+    why: "a bed narrower than a millimetre is no bed of grains; wider than 100 m is a typo",
 };
 pub const PERF_SLED_WIDTH: Real = Real {
     lib: "performance.sled_width",
@@ -649,11 +714,11 @@ pub const PERF_SLED_WIDTH: Real = Real {
     keys: &["[performance] sled_width_m"],
     python: None,
     unit: "m",
-    min: 0.0,
-    min_open: true,
+    min: 1e-3,
+    min_open: false,
     max: 100.0,
     max_open: false,
-    why: "a sled wider than 100 m is a typo",
+    why: "a sled narrower than a millimetre carries no bed; wider than 100 m is a typo",
 };
 pub const PERF_SLED_THICKNESS: Real = Real {
     lib: "performance.sled_thickness",
@@ -661,11 +726,11 @@ pub const PERF_SLED_THICKNESS: Real = Real {
     keys: &["[performance] sled_thickness_m"],
     python: None,
     unit: "m",
-    min: 0.0,
-    min_open: true,
+    min: 1e-5,
+    min_open: false,
     max: 1.0,
     max_open: false,
-    why: "a plate thicker than a metre is a typo",
+    why: "a plate thinner than 10 um is a foil; thicker than a metre is a typo",
 };
 pub const PERF_SLED_DENSITY: Real = Real {
     lib: "performance.sled_density",
@@ -673,11 +738,11 @@ pub const PERF_SLED_DENSITY: Real = Real {
     keys: &["[performance] sled_density_kg_m3"],
     python: None,
     unit: "kg/m^3",
-    min: 0.0,
-    min_open: true,
+    min: 1.0,
+    min_open: false,
     max: 100000.0,
     max_open: false,
-    why: "denser than any solid",
+    why: "a solid lighter than air does not exist; denser than any solid is a typo",
 };
 pub const PERF_WIRE_FORCE: Real = Real {
     lib: "performance.wire_force",
@@ -685,11 +750,11 @@ pub const PERF_WIRE_FORCE: Real = Real {
     keys: &["scenario.performance.wire_force"],
     python: None,
     unit: "N",
-    min: 0.0,
-    min_open: true,
+    min: 1e-3,
+    min_open: false,
     max: 1000000.0,
     max_open: false,
-    why: "beyond any shape-memory wire",
+    why: "a wire pulling less than a millinewton moves no sled; beyond any shape-memory wire",
 };
 pub const PERF_WIRE_DIAMETER: Real = Real {
     lib: "performance.wire_diameter",
@@ -697,11 +762,11 @@ pub const PERF_WIRE_DIAMETER: Real = Real {
     keys: &["scenario.performance.wire_diameter"],
     python: None,
     unit: "m",
-    min: 0.0,
-    min_open: true,
+    min: 1e-6,
+    min_open: false,
     max: 0.1,
     max_open: false,
-    why: "a wire thicker than 10 cm is a typo",
+    why: "a wire thinner than a micrometre is not drawn; thicker than 10 cm is a typo",
 };
 pub const PERF_WIRE_DENSITY: Real = Real {
     lib: "performance.wire_density",
@@ -709,11 +774,11 @@ pub const PERF_WIRE_DENSITY: Real = Real {
     keys: &["scenario.performance.wire_density"],
     python: None,
     unit: "kg/m^3",
-    min: 0.0,
-    min_open: true,
+    min: 1.0,
+    min_open: false,
     max: 100000.0,
     max_open: false,
-    why: "denser than any solid",
+    why: "a solid lighter than air does not exist; denser than any solid is a typo",
 };
 pub const PERF_WIRE_HEAT_CAPACITY: Real = Real {
     lib: "performance.wire_heat_capacity",
@@ -721,11 +786,11 @@ pub const PERF_WIRE_HEAT_CAPACITY: Real = Real {
     keys: &["scenario.performance.wire_heat_capacity"],
     python: None,
     unit: "J/(kg K)",
-    min: 0.0,
-    min_open: true,
+    min: 1.0,
+    min_open: false,
     max: 100000.0,
     max_open: false,
-    why: "beyond any solid's",
+    why: "below 1 J/(kg K) no solid stores heat near room temperature; beyond any solid's",
 };
 pub const PERF_WIRE_DELTA_T: Real = Real {
     lib: "performance.wire_delta_t",
@@ -733,11 +798,11 @@ pub const PERF_WIRE_DELTA_T: Real = Real {
     keys: &["scenario.performance.wire_delta_t"],
     python: None,
     unit: "K",
-    min: 0.0,
-    min_open: true,
+    min: 0.01,
+    min_open: false,
     max: 10000.0,
     max_open: false,
-    why: "beyond any wire's melting point",
+    why: "a transformation within a hundredth of a kelvin is no shape-memory cycle; beyond any wire's melting point",
 };
 pub const PERF_CONTRACTION_RATIO: Real = Real {
     lib: "performance.contraction_ratio",
@@ -745,11 +810,11 @@ pub const PERF_CONTRACTION_RATIO: Real = Real {
     keys: &["[performance] contraction_ratio"],
     python: None,
     unit: "",
-    min: 0.0,
-    min_open: true,
+    min: 1e-4,
+    min_open: false,
     max: 1.0,
     max_open: true,
-    why: "a contracting wire's strain lies strictly between 0 and 1",
+    why: "a strain below 0.01 % moves no sled; a contracting wire's strain lies below 1",
 };
 pub const PERF_WIRE_EMISSIVITY: Real = Real {
     lib: "performance.wire_emissivity",
@@ -757,11 +822,11 @@ pub const PERF_WIRE_EMISSIVITY: Real = Real {
     keys: &["scenario.performance.wire_emissivity"],
     python: None,
     unit: "",
-    min: 0.0,
-    min_open: true,
+    min: 1e-3,
+    min_open: false,
     max: 1.0,
     max_open: false,
-    why: "an emissivity lies in (0, 1]",
+    why: "an emissivity lies in (0, 1]; below 0.001 is a mirror no wire is",
 };
 pub const PERF_T_LOW: Real = Real {
     lib: "performance.t_low",
@@ -769,11 +834,11 @@ pub const PERF_T_LOW: Real = Real {
     keys: &["scenario.performance.t_low"],
     python: None,
     unit: "K",
-    min: 0.0,
-    min_open: true,
+    min: 1.0,
+    min_open: false,
     max: 10000.0,
     max_open: false,
-    why: "beyond any wire's melting point",
+    why: "a temperature below 1 K is no wire's; beyond any wire's melting point",
 };
 pub const PERF_T_HIGH: Real = Real {
     lib: "performance.t_high",
@@ -781,11 +846,11 @@ pub const PERF_T_HIGH: Real = Real {
     keys: &["scenario.performance.t_high"],
     python: None,
     unit: "K",
-    min: 0.0,
-    min_open: true,
+    min: 1.0,
+    min_open: false,
     max: 10000.0,
     max_open: false,
-    why: "beyond any wire's melting point",
+    why: "a temperature below 1 K is no wire's; beyond any wire's melting point",
 };
 pub const PERF_DOWNSTROKE_SPEED: Real = Real {
     lib: "performance.downstroke_speed",
@@ -793,11 +858,11 @@ pub const PERF_DOWNSTROKE_SPEED: Real = Real {
     keys: &["[performance] downstroke_speed_m_s"],
     python: None,
     unit: "m/s",
-    min: 0.0,
-    min_open: true,
+    min: 1e-4,
+    min_open: false,
     max: 1000.0,
     max_open: false,
-    why: "faster than sound is a typo",
+    why: "slower than 0.1 mm/s a downstroke takes hours; faster than sound is a typo",
 };
 pub const PERF_F_MAX: Real = Real {
     lib: "performance.f_max",
@@ -805,11 +870,35 @@ pub const PERF_F_MAX: Real = Real {
     keys: &["[performance] f_max_hz"],
     python: None,
     unit: "Hz",
-    min: 0.0,
-    min_open: true,
+    min: 1e-4,
+    min_open: false,
     max: 10000.0,
     max_open: false,
-    why: "beyond any wire's cycling rate",
+    why: "below one stroke in three hours no conveyor runs; beyond any wire's cycling rate",
+};
+pub const PERF_WIRE_BIAS_STRESS: Real = Real {
+    lib: "performance.wire_bias_stress",
+    flags: &[],
+    keys: &["scenario.performance.wire_bias_stress"],
+    python: None,
+    unit: "Pa",
+    min: 0.0,
+    min_open: false,
+    max: 1e10,
+    max_open: false,
+    why: "a bias stress lies between none and beyond any wire's strength (10 GPa)",
+};
+pub const PERF_SPILL_CHECK_G: Real = Real {
+    lib: "performance.spill_check_g",
+    flags: &[],
+    keys: &["scenario.performance.spill_check_g"],
+    python: None,
+    unit: "m/s^2",
+    min: 0.001,
+    min_open: false,
+    max: 100.0,
+    max_open: false,
+    why: "the gravity of the listing's spill check (erratum 9): the bounds of environment.g",
 };
 
 /// Every `[performance]` bound, in the order `Scenario::validate` checks them.
@@ -830,6 +919,8 @@ pub const PERFORMANCE: &[&Real] = &[
     &PERF_T_HIGH,
     &PERF_DOWNSTROKE_SPEED,
     &PERF_F_MAX,
+    &PERF_WIRE_BIAS_STRESS,
+    &PERF_SPILL_CHECK_G,
 ];
 
 /// Recovered over loaded mass of one measured run (`input_mass` against the teeth's sum):
@@ -849,6 +940,171 @@ pub const RECOVERY: Real = Real {
     why: "a run recovers at most half again what was loaded",
 };
 
+// ---- a design (CLI units: `--design`, `[design]`), a setup's `[measurement]`, `study`,
+// `[requirements]` ------------------------------------------------------------------------
+
+const TOOTH_LENGTH_WHY: &str =
+    "a tooth feature under a tenth of a millimetre is finer than the grains it carries; one beyond a metre is no sawtooth";
+
+/// The eight design variables in the units users write them (`Design::check_sensible`):
+/// what a sawtooth can be, far beyond the optimiser's bounds (Table 5.1, erratum 2), short of
+/// values no conveyor has. Signs, the chain l_b <= r <= l_a <= l_c and the constraints of
+/// 5.2 are the model's (`model::geometry::check_design`).
+pub const DESIGN: [Real; 8] = [
+    design_length("design.l_c", &["[design] l_c_mm"]),
+    design_length("design.l_a", &["[design] l_a_mm"]),
+    design_length("design.l_b", &["[design] l_b_mm"]),
+    design_length("design.r", &["[design] r_mm"]),
+    Real {
+        lib: "design.omega_deg",
+        flags: &["--design"],
+        keys: &["[design] omega_deg"],
+        python: None,
+        unit: "degrees",
+        min: 1.0,
+        min_open: false,
+        max: 179.0,
+        max_open: false,
+        why: "a catch arc meeting its base within a degree of flat is no catch",
+    },
+    Real {
+        lib: "design.delta_deg",
+        flags: &["--design"],
+        keys: &["[design] delta_deg"],
+        python: None,
+        unit: "degrees",
+        min: -90.0,
+        min_open: true,
+        max: 90.0,
+        max_open: true,
+        why: "the offset added to the launch angle alpha + launch offset (D.1 line 35) turns it less than a right angle either way; 0 is Table 5.1's lower bound",
+    },
+    Real {
+        lib: "design.v0",
+        flags: &["--design"],
+        keys: &["[design] v0_m_s"],
+        python: None,
+        unit: "m/s",
+        min: 0.01,
+        min_open: false,
+        max: 100.0,
+        max_open: false,
+        why: "a launch slower than 1 cm/s rises less than 31 um on the Moon (v0^2/2g), less than a grain; faster than 100 m/s is no sled",
+    },
+    Real {
+        lib: "design.a",
+        flags: &["--design"],
+        keys: &["[design] a_m_s2"],
+        python: None,
+        unit: "m/s^2",
+        min: 0.01,
+        min_open: false,
+        max: 10000.0,
+        max_open: false,
+        why: "a sled accelerating at less than 0.01 m/s^2 needs over a minute to reach the optimiser's slowest launch (0.8 m/s); beyond 10^4 m/s^2 (1000 g) is no conveyor",
+    },
+];
+
+const fn design_length(lib: &'static str, keys: &'static [&'static str]) -> Real {
+    Real {
+        lib,
+        flags: &["--design"],
+        keys,
+        python: None,
+        unit: "mm",
+        min: 0.1,
+        min_open: false,
+        max: 1000.0,
+        max_open: false,
+        why: TOOTH_LENGTH_WHY,
+    }
+}
+
+pub const SCALE_RESOLUTION_G: Real = Real {
+    lib: "",
+    flags: &["--resolution-g"],
+    keys: &["[measurement] scale_resolution_g"],
+    python: None,
+    unit: "g",
+    min: 1e-15,
+    min_open: false,
+    max: 1000.0,
+    max_open: false,
+    why: "from the femtogram of one micrometre grain (the DEM's smallest, whose setup states one grain as the resolution) to a kilogram, which weighs no tooth",
+};
+pub const PARTICLE_MASS_G: Real = Real {
+    lib: "",
+    flags: &[],
+    keys: &["[measurement] particle_mass_g"],
+    python: None,
+    unit: "g",
+    min: 1e-12,
+    min_open: false,
+    max: 1e6,
+    max_open: false,
+    why: "the mass loaded per run: from a few micrometre grains to a tonne, beyond any rig",
+};
+pub const TARGET_MASS_FLOW: Real = Real {
+    lib: "",
+    flags: &["--target-mass-flow"],
+    keys: &["study.target_mass_flow"],
+    python: None,
+    unit: "kg/s",
+    min: 1e-6,
+    min_open: false,
+    max: 100.0,
+    max_open: false,
+    why: "from a few grams an hour to 360 t/h, beyond any regolith conveyor (Table 2.2 asks 6-48 kg/h)",
+};
+pub const REQ_FEED_RATE: Real = Real {
+    lib: "",
+    flags: &[],
+    keys: &["[requirements] feed_rate_min_kg_h", "[requirements] feed_rate_target_kg_h"],
+    python: None,
+    unit: "kg/h",
+    min: 1e-3,
+    min_open: false,
+    max: 1e6,
+    max_open: false,
+    why: "from a gram an hour to a thousand tonnes an hour (Table 2.2: 6-48 kg/h)",
+};
+pub const REQ_POWER: Real = Real {
+    lib: "",
+    flags: &[],
+    keys: &["[requirements] power_max_w"],
+    python: None,
+    unit: "W",
+    min: 1e-3,
+    min_open: false,
+    max: 1e6,
+    max_open: false,
+    why: "from a milliwatt to a megawatt (Table 2.2: 5 W)",
+};
+pub const REQ_TRANSPORT_LENGTH: Real = Real {
+    lib: "",
+    flags: &[],
+    keys: &["[requirements] transport_length_m"],
+    python: None,
+    unit: "m",
+    min: 0.01,
+    min_open: false,
+    max: 1000.0,
+    max_open: false,
+    why: "the bounds of a conveyor's length (performance.conveyor_length)",
+};
+pub const REQ_SLOPE: Real = Real {
+    lib: "",
+    flags: &[],
+    keys: &["[requirements] slope_min_deg", "[requirements] slope_max_deg"],
+    python: None,
+    unit: "degrees",
+    min: 0.0,
+    min_open: false,
+    max: 80.0,
+    max_open: false,
+    why: "the bounds of environment.alpha_deg",
+};
+
 // ---- files -------------------------------------------------------------------------------
 
 pub const CONFIG_FILE: FileLimit =
@@ -858,6 +1114,31 @@ pub const MANIFEST_FILE: FileLimit = FileLimit { what: "run manifest (run.toml)"
 pub const PLAN_FILE: FileLimit = FileLimit { what: "campaign plan (plan.json)", flags: &[], max_bytes: 256 * MIB };
 /// A checkpoint of the largest population (100 000 members of ~0.5 kB) fits well within.
 pub const CHECKPOINT_FILE: FileLimit = FileLimit { what: "checkpoint", flags: &[], max_bytes: 512 * MIB };
+/// A front of the largest population: 100 000 rows of ~600 bytes.
+pub const PARETO_FILE: FileLimit = FileLimit { what: "front (pareto.csv)", flags: &[], max_bytes: 256 * MIB };
+/// A run's every evaluation, ~300 bytes a row: over ten million rows.
+pub const EVALUATIONS_FILE: FileLimit =
+    FileLimit { what: "evaluation log (evaluations.csv)", flags: &[], max_bytes: 4096 * MIB };
+/// One row of ~150 bytes per generation, at most a million generations.
+pub const GENERATIONS_FILE: FileLimit =
+    FileLimit { what: "generation log (generations.csv)", flags: &[], max_bytes: 256 * MIB };
+/// A study's summary: a few rows per metric.
+pub const SUMMARY_FILE: FileLimit =
+    FileLimit { what: "study summary (summary.csv)", flags: &["--repeatability"], max_bytes: 16 * MIB };
+/// One DEM run's result: tooth masses of at most 1000 teeth and the settled bed's positions
+/// (two numbers of ~25 bytes pretty-printed for each of at most 200 000 grains).
+pub const DEM_RESULT_FILE: FileLimit = FileLimit { what: "DEM result (result.json)", flags: &[], max_bytes: 32 * MIB };
+/// The engine's end positions: at most 200 000 grains of ~250 bytes.
+pub const DEM_DUMP_FILE: FileLimit = FileLimit { what: "DEM dump (final.dump)", flags: &[], max_bytes: 128 * MIB };
+/// One number: the stroke time at which a DEM run ended.
+pub const DEM_STROKE_TIME_FILE: FileLimit =
+    FileLimit { what: "DEM stroke time (stroke_time.txt)", flags: &[], max_bytes: MIB };
+/// A folder's marker: a few lines and the names of the files its run wrote.
+pub const MARKER_FILE_LIMIT: FileLimit =
+    FileLimit { what: "folder marker (.sawtooth-run)", flags: &[], max_bytes: MIB };
+/// The job ids of a campaign's last Slurm submission.
+pub const SUBMISSION_FILE: FileLimit =
+    FileLimit { what: "Slurm submission record (slurm/last-submit)", flags: &[], max_bytes: MIB };
 
 /// Every declared count, for the documentation and its test.
 pub const COUNTS: &[&Count] = &[
@@ -887,12 +1168,35 @@ pub const COUNTS: &[&Count] = &[
     &RESCORE_STREAMS,
     &ALPHA_POINTS,
     &DEM_RUNS,
+    &DEM_SEEDS,
+    &DEM_FRONT,
+    &JOBS,
+    &SLURM_CPUS_PER_TASK,
+    &SLURM_GPUS_PER_TASK,
+    &SLURM_MAX_PARALLEL,
     &DEM_PARTICLES,
     &DEM_TEETH,
 ];
 
 /// Every declared real interval.
 pub const REALS: &[&Real] = &[
+    &DESIGN[0],
+    &DESIGN[1],
+    &DESIGN[2],
+    &DESIGN[3],
+    &DESIGN[4],
+    &DESIGN[5],
+    &DESIGN[6],
+    &DESIGN[7],
+    &SCALE_RESOLUTION_G,
+    &PARTICLE_MASS_G,
+    &TARGET_MASS_FLOW,
+    &REQ_FEED_RATE,
+    &REQ_POWER,
+    &REQ_TRANSPORT_LENGTH,
+    &REQ_SLOPE,
+    &PERF_WIRE_BIAS_STRESS,
+    &PERF_SPILL_CHECK_G,
     &SYNTH_MASS_G,
     &RECOVERY,
     &PERF_CONVEYOR_LENGTH,
@@ -934,7 +1238,22 @@ pub const REALS: &[&Real] = &[
 ];
 
 /// Every declared file limit.
-pub const FILES: &[&FileLimit] = &[&CONFIG_FILE, &MEASURED_FILE, &MANIFEST_FILE, &PLAN_FILE, &CHECKPOINT_FILE];
+pub const FILES: &[&FileLimit] = &[
+    &CONFIG_FILE,
+    &MEASURED_FILE,
+    &MANIFEST_FILE,
+    &PLAN_FILE,
+    &CHECKPOINT_FILE,
+    &PARETO_FILE,
+    &EVALUATIONS_FILE,
+    &GENERATIONS_FILE,
+    &SUMMARY_FILE,
+    &DEM_RESULT_FILE,
+    &DEM_DUMP_FILE,
+    &DEM_STROKE_TIME_FILE,
+    &MARKER_FILE_LIMIT,
+    &SUBMISSION_FILE,
+];
 
 #[cfg(test)]
 mod tests {
@@ -954,9 +1273,16 @@ mod tests {
         assert!(PERF_CONTRACTION_RATIO.check("x", 0.5).is_ok());
         for bad in [0.0, 1.0, 2.0, f64::NAN, f64::INFINITY] {
             let e = PERF_CONTRACTION_RATIO.check("`[performance] contraction_ratio`", bad).unwrap_err();
-            assert!(e.contains("must lie in (0, 1)"), "{e}");
+            assert!(e.contains("must lie in [1e-4, 1)"), "{e}");
         }
-        assert!(SYNTH_MASS_G.check("--mass-g", 1e308).unwrap_err().contains("(0, 1000000] g"));
+        assert!(SYNTH_MASS_G.check("--mass-g", 1e308).unwrap_err().contains("[0.001, 1000000] g"));
+        // issue 45: an open bound at 0 let 1e-300 through; each bound is now the least physical value
+        assert!(ENV_G.check("g", 1e-300).unwrap_err().contains("g must lie in [0.001, 100] m/s^2"));
+        assert!(MATERIAL_BULK_DENSITY.check("rho", 1e-300).is_err());
+        for p in PERFORMANCE {
+            assert!(p.check("x", 1e-300).is_err() || p.min == 0.0, "{p:?}");
+            assert!(p.check("x", 1e308).is_err(), "{p:?}");
+        }
     }
 
     /// docs/reliability.md lists every declared bound: each name a user meets it by, and

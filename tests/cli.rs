@@ -36,9 +36,8 @@ fn same_seed_same_output_different_seed_different_output() {
     assert_ne!(run("5"), run("6"));
 }
 
-/// `bench` says what each engine ran on (the CPU's model; for the cpu engine also which
-/// compilation of its bounce loop, chosen at run time), so a timing can be traced to its
-/// machine and build.
+/// `bench` says what each engine ran on (the CPU's model; for the cpu engine also its SIMD
+/// path, chosen at run time), so a timing can be traced to its machine and build.
 #[test]
 fn bench_names_each_engines_device() {
     let args = [
@@ -58,9 +57,8 @@ fn bench_names_each_engines_device() {
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("listing: listing engine on the host CPU"), "{out}");
     let cpu = out.lines().find(|l| l.starts_with("cpu: cpu engine on the host CPU")).unwrap_or_else(|| panic!("{out}"));
-    let build = cpu.trim_end_matches(", AVX-512 lanes)").trim_end_matches(')');
-    assert!(build.ends_with("x86-64-v3 build") || build.ends_with("baseline build"), "{cpu}");
-    assert_eq!(cpu.ends_with(", AVX-512 lanes)"), sawtooth::engine::lanes::available(), "{cpu}");
+    // the SIMD path it took (the widest this CPU has, or the one SAWTOOTH_SIMD names)
+    assert!(cpu.ends_with(&format!("{})", sawtooth::simd::selected().describe())), "{cpu}");
     // and which CPU: its model name, so that a timing can be traced to its machine
     assert!(cpu.contains(&format!("({}; ", sawtooth::engine::host_cpu())), "{cpu}");
     if let Ok(info) = std::fs::read_to_string("/proc/cpuinfo") {
@@ -71,7 +69,7 @@ fn bench_names_each_engines_device() {
     let (code, out, err) = sawtooth(&[&args[..], &["--json"]].concat());
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-    assert!(v["devices"]["cpu"].as_str().is_some_and(|d| d.contains("build")), "{v}");
+    assert!(v["devices"]["cpu"].as_str().is_some_and(|d| d.contains("SIMD ")), "{v}");
     assert!(v["devices"]["listing"].as_str().is_some(), "{v}");
 }
 
@@ -199,11 +197,8 @@ fn bad_input_names_the_field_and_exits_2() {
     assert_bad_input(&["simulate", "--design", "47,46,32,43,94,11,NaN,32"], "v0");
     assert_bad_input(&["simulate", "--design", "47,46,45,43,94,11,0.84,32"], "l_b <= r");
     // values no conveyor has are refused before they overflow the performance model
-    assert_bad_input(
-        &["simulate", "--design", "47,46,32,43,94,11,0.84,1e300"],
-        "`a` = 1e300 m/s^2 is beyond any conveyor",
-    );
-    assert_bad_input(&["simulate", "--design", "47,46,32,43,94,11,0.84,inf"], "`a` must be a finite number");
+    assert_bad_input(&["simulate", "--design", "47,46,32,43,94,11,0.84,1e300"], "`a` must lie in [0.01, 10000] m/s^2");
+    assert_bad_input(&["simulate", "--design", "47,46,32,43,94,11,0.84,inf"], "`a` must lie in [0.01, 10000] m/s^2 (");
     // the message names what the user wrote: the flag, and the config file's key with its unit
     assert_bad_input(&["simulate", "--design", LUNAR_C, "--k-elastic", "1.5"], "`[collision] k_elastic` (--k-elastic)");
     assert_bad_input(&["simulate", "--design", LUNAR_C, "--particles", "0"], "`[sim] particles` (--particles)");
@@ -248,34 +243,54 @@ fn malformed_toml_names_the_key() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// `SAWTOOTH_CPU_LEVEL` caps the cpu engine's paths (to measure what CPUs without AVX-512
-/// or AVX2 run), `bench` names the path taken, and every path gives the same results to
-/// the bit: the lanes and the scalar kernel share one code for their functions
-/// (`lane_math`), and neither compilation fuses a multiply-add.
+/// `SAWTOOTH_SIMD` forces the cpu engine's path (to measure what other CPUs run), `bench`
+/// names the path taken, and every path gives the same results to the bit: the lanes are
+/// one code, held to the scalar kernel, and no path fuses a multiply-add. A path this CPU
+/// lacks, a name that is none, and the retired `SAWTOOTH_CPU_LEVEL` are refused by name
+/// (exit 2) before any work.
 #[test]
-fn every_cpu_level_gives_the_same_results_and_bench_names_it() {
-    let run = |level: Option<&str>, args: &[&str]| {
+fn every_simd_path_gives_the_same_results_and_bench_names_it() {
+    use sawtooth::simd::Simd;
+    let run = |simd: Option<&str>, args: &[&str]| {
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_sawtooth"));
-        if let Some(level) = level {
-            cmd.env("SAWTOOTH_CPU_LEVEL", level);
+        cmd.env_remove("SAWTOOTH_CPU_LEVEL");
+        if let Some(simd) = simd {
+            cmd.env("SAWTOOTH_SIMD", simd);
         } else {
-            cmd.env_remove("SAWTOOTH_CPU_LEVEL");
+            cmd.env_remove("SAWTOOTH_SIMD");
         }
         let out = cmd.args(args).output().expect("run binary");
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        String::from_utf8_lossy(&out.stdout).to_string()
+        let text = |b: &[u8]| String::from_utf8_lossy(b).to_string();
+        (out.status.code(), text(&out.stdout), text(&out.stderr))
     };
+    let bench = ["bench", "--designs", "2", "--particles", "10", "--repeats", "1", "--engines", "cpu"];
     for env in ["lunar", "earth"] {
         let simulate = ["simulate", "--env", env, "--design", LUNAR_C, "--particles", "200", "--json"];
-        let full = run(None, &simulate);
-        for level in ["x86-64-v3", "baseline"] {
-            assert_eq!(run(Some(level), &simulate), full, "{env}, SAWTOOTH_CPU_LEVEL={level}");
+        let (code, widest, err) = run(None, &simulate);
+        assert_eq!(code, Some(0), "{err}");
+        for simd in Simd::ALL {
+            let (code, out, err) = run(Some(simd.name()), &simulate);
+            if simd.supported() {
+                assert_eq!((code, out), (Some(0), widest.clone()), "{env}, SAWTOOTH_SIMD={}: {err}", simd.name());
+            } else {
+                assert_eq!(code, Some(2), "{err}");
+                let named = format!("SAWTOOTH_SIMD={}: this CPU lacks", simd.name());
+                assert!(err.contains(&named) && !err.contains("panicked"), "{err}");
+            }
         }
     }
-    let bench = ["bench", "--designs", "2", "--particles", "10", "--repeats", "1", "--engines", "cpu"];
-    let device = |level| run(Some(level), &bench).lines().find(|l| l.starts_with("cpu: ")).map(str::to_owned);
-    let baseline = device("baseline").expect("a cpu line");
-    assert!(baseline.ends_with("baseline build)"), "{baseline}");
-    let v3 = device("x86-64-v3").expect("a cpu line");
-    assert!(!v3.contains("AVX-512 lanes"), "{v3}");
+    for simd in Simd::ALL.into_iter().filter(|s| s.supported()) {
+        let (code, out, err) = run(Some(simd.name()), &bench);
+        assert_eq!(code, Some(0), "{err}");
+        let cpu = out.lines().find(|l| l.starts_with("cpu: ")).unwrap_or_else(|| panic!("{out}"));
+        assert!(cpu.ends_with(&format!("{})", simd.describe())), "{cpu}");
+    }
+    let (code, _, err) = run(Some("sse2"), &bench);
+    assert_eq!(code, Some(2));
+    assert!(err.contains("SAWTOOTH_SIMD=\"sse2\" is none of scalar, avx2, avx512, neon"), "{err}");
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_sawtooth"));
+    let out = cmd.env_remove("SAWTOOTH_SIMD").env("SAWTOOTH_CPU_LEVEL", "baseline").args(bench).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("SAWTOOTH_CPU_LEVEL") && err.contains("SAWTOOTH_SIMD=scalar"), "{err}");
 }

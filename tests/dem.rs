@@ -15,9 +15,9 @@ use sawtooth::model::fill::{in_polygon, polygon_area};
 use sawtooth::model::geometry::{check_design, Profile};
 use sawtooth::model::prepare;
 
-const RIG: &str = "data/validation/test3.toml";
+pub(crate) const RIG: &str = "data/validation/test3.toml";
 
-fn sawtooth_env(args: &[&str], env: &[(&str, &str)]) -> (i32, String, String) {
+pub(crate) fn sawtooth_env(args: &[&str], env: &[(&str, &str)]) -> (i32, String, String) {
     let mut c = Command::new(env!("CARGO_BIN_EXE_sawtooth"));
     c.args(args).current_dir(env!("CARGO_MANIFEST_DIR"));
     for (k, v) in env {
@@ -31,13 +31,13 @@ fn sawtooth_env(args: &[&str], env: &[(&str, &str)]) -> (i32, String, String) {
     )
 }
 
-fn sawtooth(args: &[&str]) -> (i32, String, String) {
+pub(crate) fn sawtooth(args: &[&str]) -> (i32, String, String) {
     sawtooth_env(args, &[])
 }
 
 /// True when the full tier runs and LIGGGHTS can run here; with CI=true its absence fails the
 /// test instead.
-fn liggghts_present(test: &str) -> bool {
+pub(crate) fn liggghts_present(test: &str) -> bool {
     if !common::full_tier(test, "runs LIGGGHTS, a Debian package") {
         return false;
     }
@@ -53,13 +53,24 @@ fn liggghts_present(test: &str) -> bool {
     }
 }
 
-fn tmp(name: &str) -> (tempfile::TempDir, PathBuf) {
+pub(crate) fn tmp(name: &str) -> (tempfile::TempDir, PathBuf) {
     let d = tempfile::tempdir().unwrap();
     let p = d.path().join(name);
     (d, p)
 }
 
-fn read(p: &Path) -> String {
+/// The rig at the coarse overlap of 10 % (`[dem] max_overlap_fraction`): a quarter of the
+/// default's cost, for tests of the mechanics at CI size (the rig's d_avg is converged there
+/// already, docs/dem.md), written into `dir` with `extra` config lines after it.
+pub(crate) fn coarse_rig(dir: &Path, extra: &str) -> String {
+    let rig = read(&Path::new(env!("CARGO_MANIFEST_DIR")).join(RIG));
+    std::fs::create_dir_all(dir).unwrap();
+    let p = dir.join("rig-coarse.toml");
+    std::fs::write(&p, format!("{rig}\n[dem]\nmax_overlap_fraction = 0.1\n{extra}")).unwrap();
+    p.to_str().unwrap().to_string()
+}
+
+pub(crate) fn read(p: &Path) -> String {
     std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
 
@@ -189,7 +200,8 @@ fn a_real_stroke_lands_grains_in_later_teeth_as_the_model_does() {
     }
     let (_d, dir) = tmp("campaign");
     let out = dir.to_str().unwrap();
-    let args = ["dem", "run", "--config", RIG, "--particles", "100", "--runs", "1", "--jobs", "1", "--out", out];
+    let config = coarse_rig(&dir.with_extension("cfg"), "");
+    let args = ["dem", "run", "--config", &config, "--particles", "100", "--runs", "1", "--jobs", "1", "--out", out];
     let (code, table, err) = sawtooth(&args);
     assert_eq!(code, 0, "{err}");
     assert!(table.contains("d_avg: model"), "{table}");
@@ -244,11 +256,12 @@ fn a_polydisperse_fill_runs_as_size_classes_with_their_own_drag() {
     }
     let (_d, dir) = tmp("poly");
     let out = dir.to_str().unwrap();
+    let config = coarse_rig(&dir.with_extension("cfg"), "");
     let args = [
         "dem",
         "run",
         "--config",
-        RIG,
+        &config,
         "--particles",
         "80",
         "--effect",
@@ -338,16 +351,14 @@ fn the_same_case_twice_gives_the_same_files_and_the_same_tooth_masses() {
         return;
     }
     // CI-sized: the rig's grains have landed 0.5 s after the stroke; stop there
-    let config = d.path().join("rig-short.toml");
-    let rig = read(&Path::new(env!("CARGO_MANIFEST_DIR")).join(RIG));
-    std::fs::write(&config, format!("{rig}\n[dem]\nmax_time_s = 0.5\n")).unwrap();
+    let config = coarse_rig(&d.path().join("cfg"), "max_time_s = 0.5\n");
     let run = |name: &str| {
         let dir = d.path().join(name);
         let args = [
             "dem",
             "run",
             "--config",
-            config.to_str().unwrap(),
+            &config,
             "--particles",
             "40",
             "--seed",

@@ -333,7 +333,7 @@ fn bad_input_exits_2_naming_the_field() {
     run(&["--objective", "mae"], &["--objective"]);
     run(&["--pop=-1"], &["--pop"]);
     run(&["--at", "k_drag=fast"], &["--at", "k_drag", "not a number"]);
-    run(&["--at", "k_drag=-1"], &["--at", "k_drag", "must lie in (0, 10000]"]);
+    run(&["--at", "k_drag=-1"], &["--at", "k_drag", "must lie in [1e-4, 10000]"]);
     run(&["--at", "gravity=1"], &["--at", "`gravity`"]);
     // D.4's fractions need no input mass, the loaded-mass ones do
     assert_bad_input(

@@ -1,8 +1,10 @@
 //! Fuzzing every reader of user input (issue 34) with proptest at scale: cargo-fuzz needs a
 //! nightly toolchain this project cannot install, so each reader gets a mutation fuzzer
 //! built from proptest strategies over a committed corpus (tests/fuzz/corpus/KIND/): the
-//! TOML config, the setup, the measured-data CSV, the campaign plan and the checkpoint, and
-//! random designs through design validation and preparation. Every case must end as a
+//! TOML config, the setup, the measured-data CSV, the campaign plan and the checkpoint, the
+//! DEM's readers (a DEM campaign's and a DEM check's plan.json, a run's result.json and the
+//! engine's dump) and an optimisation's pareto.csv, and random designs through design
+//! validation and preparation. Every case must end as a
 //! value or an error: a panic fails the test (proptest shrinks it and records its seed under
 //! tests/fuzz/regressions/, replayed first on every later run), an abort kills it (the
 //! address space is capped, so an unbounded allocation aborts instead of swapping), and a
@@ -24,12 +26,18 @@ use proptest::test_runner::{Config, FileFailurePersistence, RngAlgorithm, TestRn
 use serde_json::Value;
 
 use sawtooth::campaigns::plan::parse_plan;
+use sawtooth::dem::campaign::{parse_plan as parse_dem_plan, Plan as DemPlan};
+use sawtooth::dem::check::parse_plan as parse_check_plan;
+use sawtooth::dem::gather::{check_dump, check_result, parse_dump, reduce, DumpGrain, RunResult};
+use sawtooth::dem::sizes::grain_mass;
+use sawtooth::dem::Case;
 use sawtooth::io::config::ConfigFile;
 use sawtooth::io::measured;
 use sawtooth::model::design::{LOWER_BOUND_CLI, UPPER_BOUND_CLI};
 use sawtooth::model::prepare::prepare;
 use sawtooth::model::{Design, Scenario};
 use sawtooth::optim::checkpoint::{validate_state, Shape};
+use sawtooth::optim::front::{parse_pareto_csv, picks};
 use sawtooth::optim::test_problems::Zdt1;
 use sawtooth::optim::{Mode, Nsga2, State};
 
@@ -449,7 +457,7 @@ fn fuzz_plan() {
 fn fuzz_checkpoint() {
     let config =
         sawtooth::optim::Config { pop: 8, max_generations: 1_000_000, mode: Mode::Standard, ..Default::default() };
-    let shape = Shape { dim: 8, objectives: 2 };
+    let shape = Shape::new(8, 2);
     fuzz("checkpoint", mutated_json(corpus("checkpoint")), |t| {
         let Ok(mut state) = serde_json::from_str::<State>(t) else { return false };
         if validate_state(&state, &config, shape).is_err() {
@@ -483,5 +491,98 @@ fn fuzz_design() {
             return false;
         }
         prepare(&scenarios[*earth as usize], &d).is_ok()
+    });
+}
+
+/// The case the DEM readers' results and dumps belong to: the first run of the committed DEM
+/// campaign plan (tests/fuzz/corpus/dem_plan/, 60 grains of the rig of Test 3).
+fn dem_case() -> (DemPlan, Case) {
+    parse_dem_plan(&corpus("dem_plan")[0], "plan.json").expect("the committed plan holds")
+}
+
+/// The case's grains where they were placed, at rest: what an honest engine could end with.
+fn placed_grains(case: &Case) -> Vec<DumpGrain> {
+    let rho = case.contact.density_kg_m3;
+    case.placement
+        .grains
+        .iter()
+        .enumerate()
+        .map(|(i, g)| DumpGrain { id: i as u64 + 1, mass_kg: grain_mass(g.diameter_m, rho), pos: g.pos, vel: [0.0; 3] })
+        .collect()
+}
+
+/// `grains` as LIGGGHTS's `write_dump ... custom id type diameter mass x y z vx vy vz` writes
+/// them (six significant digits).
+fn dump_text(case: &Case, grains: &[DumpGrain]) -> String {
+    let mut s = format!(
+        "ITEM: TIMESTEP\n1\nITEM: NUMBER OF ATOMS\n{}\nITEM: BOX BOUNDS ff ff pp\n0 1\n0 1\n0 1\nITEM: ATOMS id type diameter mass x y z vx vy vz \n",
+        grains.len()
+    );
+    for g in grains {
+        let d = case.placement.grains[g.id as usize - 1].diameter_m;
+        let n = |v: f64| format!("{:.5e}", v);
+        s.push_str(&format!(
+            "{} 1 {} {} {} {} {} 0 0 0 \n",
+            g.id,
+            n(d),
+            n(g.mass_kg),
+            n(g.pos[0]),
+            n(g.pos[1]),
+            n(g.pos[2])
+        ));
+    }
+    s
+}
+
+/// A DEM campaign's plan.json (`dem run`, `dem compare`): serde, then every rule and the case.
+#[test]
+fn fuzz_dem_plan() {
+    fuzz("dem_plan", mutated_json(corpus("dem_plan")), |t| parse_dem_plan(t, "plan.json").is_ok());
+}
+
+/// A DEM check's plan.json (`campaign run/gather/status/slurm` on a check's folder).
+#[test]
+fn fuzz_dem_check_plan() {
+    fuzz("dem_check_plan", mutated_json(corpus("dem_check_plan")), |t| parse_check_plan(t, "plan.json").is_ok());
+}
+
+/// A run's result.json, read back against its campaign: a real LIGGGHTS run's (of the case
+/// as it was built when the corpus was made) and one reduced from the placed grains, which
+/// passes as it is.
+#[test]
+fn fuzz_dem_result() {
+    let (plan, case) = dem_case();
+    let honest = reduce(&case, &placed_grains(&case), 0.5, 1.0);
+    check_result(&honest, &case, plan.first_seed, 0).expect("the placed grains' result passes");
+    let mut docs = corpus("dem_result");
+    docs.push(serde_json::to_string_pretty(&honest).unwrap());
+    fuzz("dem_result", mutated_json(docs), |t| {
+        let Ok(r) = serde_json::from_str::<RunResult>(t) else { return false };
+        check_result(&r, &case, plan.first_seed, 0).is_ok()
+    });
+}
+
+/// The engine's dump, parsed and checked against the case: a real LIGGGHTS dump and one of
+/// the placed grains; the latter passes as it is.
+#[test]
+fn fuzz_dem_dump() {
+    let (_, case) = dem_case();
+    let placed = dump_text(&case, &placed_grains(&case));
+    check_dump(&case, &parse_dump(&placed).unwrap(), Some(0.5)).expect("the placed grains pass");
+    let mut docs = corpus("dem_dump");
+    docs.push(placed);
+    fuzz("dem_dump", mutated_text(docs), |t| {
+        let Ok(grains) = parse_dump(t) else { return false };
+        check_dump(&case, &grains, Some(0.5)).is_ok()
+    });
+}
+
+/// An optimisation's pareto.csv as `dem check` reads it: parsed, then the picks A, B, C.
+#[test]
+fn fuzz_pareto() {
+    fuzz("pareto", mutated_text(corpus("pareto")), |t| {
+        let Ok(front) = parse_pareto_csv(t, "pareto.csv") else { return false };
+        let _ = picks(&front);
+        !front.is_empty()
     });
 }

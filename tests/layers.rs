@@ -20,17 +20,18 @@ use std::path::{Path, PathBuf};
 /// its own rank or below, never above; cycles are refused separately, so two modules of one
 /// rank may not use each other either.
 const LAYERS: &[&[&str]] = &[
-    // leaf helpers every layer may use: vector math (`lane_math`), the switch for the hot loops compiled a second time for AVX2 CPUs,
-    // the integer codes the Rust and WGSL kernels share, and `schema` (the input bounds of
-    // issue 34's parallel branch; it imports nothing)
-    &["lane_math", "x86_64_v3", "kernel_codes", "schema"],
+    // leaf helpers every layer may use: the lane type (`lane`) and the vector math over it
+    // (`lane_math`), the SIMD path the cpu engine takes (`simd`), the integer codes the Rust
+    // and WGSL kernels share, and `schema` (the input bounds; it imports nothing)
+    &["lane", "lane_math", "simd", "kernel_codes", "schema"],
     &["model"],
     &["engine"],
     // files, tables and figures: serve every layer above the engine
     &["io", "plot"],
     // engines put to work: calibration, optimisation, the DEM cross-check (issue 33's
-    // parallel `dem` branch)
-    &["calibrate", "optim", "dem"],
+    // parallel `dem` branch), and the campaign protocol that campaigns of optimisations and
+    // DEM checks both implement
+    &["calibrate", "optim", "dem", "protocol"],
     // workflows over them: fitting, diagnosis, campaigns of many runs, and a scenario
     // resolved from a config (or a run's run.toml) and overrides
     &["fit", "diagnose", "campaigns", "scenario_request"],
@@ -372,6 +373,22 @@ fn resolve(here: &[String], path: &[String]) -> Option<Vec<String>> {
     Some(base)
 }
 
+/// The file modules a file declares under `#[cfg(test)]` (`#[cfg(test)] mod tests;` in
+/// `module`), as module paths.
+fn test_file_modules(tokens: &[(Token, usize)], module: &[String]) -> Vec<Vec<String>> {
+    let mut out = Vec::new();
+    for i in 0..tokens.len().saturating_sub(2) {
+        if let (Token::Ident(m), Token::Ident(name), Token::Punct(';')) =
+            (&tokens[i].0, &tokens[i + 1].0, &tokens[i + 2].0)
+        {
+            if m == "mod" && under_cfg_test(tokens, i) {
+                out.push(module.iter().cloned().chain([name.clone()]).collect());
+            }
+        }
+    }
+    out
+}
+
 /// The module a source file defines: src/lib.rs -> [], src/cli/mod.rs -> [cli],
 /// src/cli/multi.rs -> [cli, multi].
 fn file_module(rel: &Path) -> Vec<String> {
@@ -510,13 +527,24 @@ fn crate_graph(src: &Path) -> (Vec<Reference>, BTreeSet<Vec<String>>) {
     rust_files(src, &mut files);
     let mut refs = Vec::new();
     let mut modules = BTreeSet::new();
+    let mut sources = Vec::new();
     for f in files {
-        let rel = f.strip_prefix(src).unwrap();
+        let rel = f.strip_prefix(src).unwrap().to_path_buf();
         if rel == Path::new("main.rs") || rel.starts_with("bin") {
             continue; // binaries are crates of their own, over the library
         }
-        let module = file_module(rel);
         let text = std::fs::read_to_string(&f).unwrap();
+        sources.push((rel, text));
+    }
+    // unit tests in a file of their own (`#[cfg(test)] mod tests;`) are left out like inline ones
+    let test_files: Vec<Vec<String>> =
+        sources.iter().flat_map(|(rel, text)| test_file_modules(&tokenize(text), &file_module(rel))).collect();
+    for (rel, text) in sources {
+        let rel = rel.as_path();
+        let module = file_module(rel);
+        if test_files.iter().any(|t| module.starts_with(t)) {
+            continue;
+        }
         let name = format!("src/{}", rel.display());
         // inline modules exist as well as file modules
         let tokens = tokenize(&text);
@@ -633,6 +661,15 @@ fn unit_test_modules_are_left_out_and_the_code_after_them_is_not() {
     assert_eq!(
         refs_of(src, &["calibrate", "solver"]),
         vec![strings(&["calibrate", "fit", "Param"]), strings(&["model", "Design"])]
+    );
+}
+
+#[test]
+fn unit_test_files_are_found_and_other_file_modules_are_not() {
+    let src = "#[cfg(test)]\nmod tests;\nmod search;\npub(crate) mod inner;\n#[cfg(test)]\npub(crate) mod fixtures;";
+    assert_eq!(
+        test_file_modules(&tokenize(src), &strings(&["engine", "lanes"])),
+        vec![strings(&["engine", "lanes", "tests"]), strings(&["engine", "lanes", "fixtures"])]
     );
 }
 

@@ -126,7 +126,7 @@ fn requirements_come_from_files_and_bad_ones_are_named() {
     std::fs::write(&file, "[requirements]\npreset = \"table-2.2\"\npower_max_w = -5\n").unwrap();
     let (code, _, err) = run(&["simulate", "--design", SOLUTION_C, "--requirements", file.to_str().unwrap()]);
     assert_ne!(code, 0);
-    assert!(err.contains("requirements.power_max_w must be a positive number"), "{err}");
+    assert!(err.contains("requirements.power_max_w must lie in [0.001, 1000000] W"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -9,6 +9,7 @@ mod campaign;
 mod campaign_slurm;
 mod cli;
 mod dem;
+mod dem_reference;
 mod diagnose;
 mod diagnose_beyond;
 mod diagnose_dem;

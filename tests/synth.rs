@@ -60,8 +60,9 @@ fn synth_rejects_bad_input() {
     for (args, needle) in [
         (["--runs", "0"], "--runs"),
         (["--particles", "0"], "--particles"),
-        (["--resolution-g", "0"], "--resolution-g must be a positive number of grams, got 0"),
-        (["--mass-g", "0"], "--mass-g must lie in (0, 1000000] g"),
+        (["--resolution-g", "0"], "--resolution-g must lie in [1e-15, 1000] g"),
+        (["--resolution-g", "1e308"], "--resolution-g must lie in [1e-15, 1000] g"),
+        (["--mass-g", "0"], "--mass-g must lie in [0.001, 1000000] g"),
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_sawtooth"))
             .args(["synth", "--setup", setup, "--out", "/tmp/x.csv"])

@@ -3,7 +3,7 @@
 //! the workgroup) against the `cpu` engine's own aggregation (`outcome::summarise`) of the
 //! same particles, in both precisions, both physics modes, lunar and earth.
 
-use sawtooth::engine::cpu::{kernel_design, kernel_physics, run_design, run_particles};
+use sawtooth::engine::cpu::{engine_lanes, kernel_design, kernel_physics, run_design, run_particles};
 use sawtooth::engine::kernel::{follow_particle, init_particle, particle_steps, reduce, KOutcome};
 use sawtooth::engine::Context;
 use sawtooth::model::outcome::{from_counts, summarise, SimOutcome};
@@ -20,7 +20,7 @@ fn both<T: Real>(s: &Scenario, n: usize, seed: u64) -> Vec<(SimOutcome, SimOutco
         .map(|design| {
             let prep = prepare(s, design).unwrap();
             let (d, ph) = (kernel_design::<T>(&prep), kernel_physics::<T>(&ctx));
-            let (mut parts, iterations) = run_particles::<T>(&prep, &ctx, None);
+            let (mut parts, iterations) = run_particles::<T>(&prep, &ctx, engine_lanes(), None);
             let mut hist = vec![0u32; prep.profile.teeth as usize];
             let k: KOutcome<T> = reduce(&d, &ph, &mut parts, iterations, &mut hist);
             let twin = from_counts(
@@ -34,7 +34,7 @@ fn both<T: Real>(s: &Scenario, n: usize, seed: u64) -> Vec<(SimOutcome, SimOutco
                 k.iterations,
                 k.bounce_sum as u64,
             );
-            let run = run_design::<T>(&prep, &ctx, None);
+            let run = run_design::<T>(&prep, &ctx, engine_lanes(), None);
             let engine = summarise(&prep.profile, prep.fill.area, &run.particles, run.iterations);
             (twin, engine)
         })
@@ -91,7 +91,7 @@ fn check_particle_major<T: Real + PartialEq + std::fmt::Debug>(s: &Scenario, see
     for design in random_valid_designs(&s, 12, seed) {
         let prep = prepare(&s, &design).unwrap();
         let (d, ph) = (kernel_design::<T>(&prep), kernel_physics::<T>(&ctx));
-        let (bounce_major, iterations) = run_particles::<T>(&prep, &ctx, None);
+        let (bounce_major, iterations) = run_particles::<T>(&prep, &ctx, engine_lanes(), None);
         let mut most = 1;
         for (i, l) in prep.launches.iter().enumerate() {
             let mut p = init_particle(&d, &ph, [T::c(l[0]), T::c(l[1])], i as u32);

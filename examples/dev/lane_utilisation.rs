@@ -17,7 +17,7 @@ fn main() {
         let mut steps: Vec<u64> = Vec::new();
         for d in random_valid_designs(&scenario, 1000, 1) {
             let prep = prepare(&scenario, &d).expect("random_valid_designs gives valid designs");
-            let run = cpu::run_design::<f64>(&prep, &ctx, None);
+            let run = cpu::run_design::<f64>(&prep, &ctx, cpu::engine_lanes(), None);
             // kernel.rs `particle_steps`: one per impact, plus the flight that lost it
             steps.extend(run.particles.iter().map(|p| p.bounces as u64 + u64::from(p.state == ParticleState::Lost)));
         }

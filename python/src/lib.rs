@@ -424,18 +424,7 @@ fn evaluate_problem<'py>(
     let xs = designs_from(x)?;
     let scenario = scenario.inner.clone();
     let requirements = requirements.map(|spec| load_requirements(&spec)).transpose().map_err(value_error)?;
-    let slopes = slopes_deg.unwrap_or_default();
-    if slopes.len() > MAX_ALPHA_POINTS as usize {
-        return Err(PyValueError::new_err(format!(
-            "slopes_deg: at most {MAX_ALPHA_POINTS} slopes (each is one more simulation per design), got {}",
-            slopes.len()
-        )));
-    }
-    for &alpha in &slopes {
-        let mut s = scenario.clone();
-        s.environment.alpha_deg = alpha;
-        s.validate().map_err(|e| PyValueError::new_err(format!("slopes_deg: slope {alpha}: {e}")))?;
-    }
+    let slopes = checked_slopes(&scenario, slopes_deg)?;
     let eng = engine_for(kind, &scenario).map_err(value_error)?;
     let rows: Vec<Vec<f64>> = xs.iter().map(|v| v.to_vec()).collect();
     let base_seed = scenario.sim.seed;
@@ -531,21 +520,48 @@ fn evaluate_problem<'py>(
     Ok(d)
 }
 
-/// simulate(scenario, design=None, *, engine="cpu", trajectories=False) -> dict
+/// `slopes_deg` checked as `evaluate_problem` and `simulate` take it: at most
+/// MAX_ALPHA_POINTS slopes, each a valid conveyor angle of `scenario`.
+fn checked_slopes(scenario: &sawtooth::model::Scenario, slopes_deg: Option<Vec<f64>>) -> PyResult<Vec<f64>> {
+    let slopes = slopes_deg.unwrap_or_default();
+    if slopes.len() > MAX_ALPHA_POINTS as usize {
+        return Err(PyValueError::new_err(format!(
+            "slopes_deg: at most {MAX_ALPHA_POINTS} slopes (each is one more simulation per design), got {}",
+            slopes.len()
+        )));
+    }
+    for &alpha in &slopes {
+        let mut s = scenario.clone();
+        s.environment.alpha_deg = alpha;
+        s.validate().map_err(|e| PyValueError::new_err(format!("slopes_deg: slope {alpha}: {e}")))?;
+    }
+    Ok(slopes)
+}
+
+/// simulate(scenario, design=None, *, engine="cpu", trajectories=False, slopes_deg=None,
+/// requirements=None) -> dict
 ///
 /// One design (8 values in VARIABLES' units; default: the config's [design]): `sawtooth
 /// simulate --json`'s object (distribution, d_avg_m, lost_fraction, fill_area_mm2, performance
 /// {f_stroke_hz, m_dot_kg_s, w_spec_j_kg, p_avg_w, stroke_m, ...}) plus "particles" {state,
 /// x_m, y_m, bounces} and, with trajectories=True, "flights" {particle, bounce, x_m, y_m,
 /// vx_m_s, vy_m_s, t_s, state}: each flight's start (global m) and velocity (m/s).
+/// requirements: "table-2.2" or a TOML file with a [requirements] table; the verdicts come
+/// as "requirements" (`simulate --requirements`). slopes_deg (degrees, at most
+/// MAX_ALPHA_POINTS): the design at every slope instead, `simulate --alpha FROM..TO --json`'s
+/// object: engine, mode, scenario, design, "slopes" [{alpha_deg, distribution, d_avg_m,
+/// lost_fraction, performance} or {alpha_deg, invalid, reason}] and, with requirements, their
+/// verdict at the worst slope.
 #[pyfunction]
-#[pyo3(signature = (scenario, design=None, *, engine="cpu", trajectories=false))]
+#[pyo3(signature = (scenario, design=None, *, engine="cpu", trajectories=false, slopes_deg=None, requirements=None))]
 fn simulate<'py>(
     py: Python<'py>,
     scenario: &PyScenario,
     design: Option<Vec<f64>>,
     engine: &str,
     trajectories: bool,
+    slopes_deg: Option<Vec<f64>>,
+    requirements: Option<String>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let kind = engine_kind(engine)?;
     let design = match (design, scenario.design) {
@@ -562,6 +578,21 @@ fn simulate<'py>(
         }
     };
     let s = scenario.inner.clone();
+    let requirements = requirements.map(|spec| load_requirements(&spec)).transpose().map_err(value_error)?;
+    if let Some(slopes) = slopes_deg {
+        if trajectories {
+            return Err(PyValueError::new_err(
+                "trajectories draw one slope: give slopes_deg or trajectories, not both",
+            ));
+        }
+        let slopes = checked_slopes(&s, Some(slopes))?;
+        let eng = engine_for(kind, &s).map_err(value_error)?;
+        let v = py.detach(|| {
+            let rows = sawtooth::engine::slopes::over_slopes(eng.as_ref(), &s, &design, &slopes, requirements.as_ref());
+            sawtooth::engine::slopes::slopes_json(eng.name(), &s, &design, &rows, requirements.as_ref())
+        });
+        return json_to_py(py, &v);
+    }
     if trajectories && (s.effects.sled_motion.is_some() || s.effects.quadratic_drag.is_some()) {
         return Err(PyValueError::new_err("trajectories redraw each flight as one closed-form arc; with the sled-motion or quadratic-drag effects that would be wrong, so they are not offered"));
     }
@@ -574,7 +605,12 @@ fn simulate<'py>(
     let det = py
         .detach(|| evaluate_detailed(eng.as_ref(), &s, &design, trajectories))
         .map_err(|invalid| PyValueError::new_err(format!("invalid design ({}): {invalid}", invalid.rule())))?;
-    let v = simulation_json(&s, &design, eng.name(), &det);
+    let mut v = simulation_json(&s, &design, eng.name(), &det);
+    if let Some(r) = &requirements {
+        let e = &det.evaluation;
+        let x = r.assess(&e.performance, &s.performance, e.sim.lost_fraction);
+        v["requirements"] = sawtooth::engine::slopes::requirements_json(r, &[(s.environment.alpha_deg, x)]);
+    }
     let out = json_to_py(py, &v)?;
     let d = out.cast::<PyDict>()?;
     let ps = &det.particles;
@@ -709,7 +745,7 @@ fn _fit<'py>(
     r.normalise = normalise.map(|n| choice("normalise", &n)).transpose()?;
     r.seed = seed;
     r.engine = engine_kind(engine)?;
-    r.holdout = holdout.unwrap_or(r.holdout);
+    r.holdout = holdout;
     r.bootstrap = bootstrap.unwrap_or(r.bootstrap);
     r.out = out;
     let outcome = py.detach(|| fit_request::run(&r, &mut |line| eprintln!("{line}"))).map_err(value_error)?;

@@ -36,6 +36,11 @@ use super::objective;
 use super::space::Space;
 use super::target::{ObjectiveKind, Target};
 
+/// What the polishes report of each evaluation: the model's index, the model, its point, its bins.
+type Recorder<'a> = dyn FnMut(usize, &Model, &[f64], &Bins) + 'a;
+/// A Levenberg-Marquardt step's normal equations: JᵀJ and Jᵀr.
+type NormalEquations = (Vec<Vec<f64>>, Vec<f64>);
+
 /// One model to fit: its space, what it is fitted to, extra starting points (parameter
 /// units) and how it is searched.
 pub struct Model<'a> {
@@ -367,7 +372,7 @@ impl Solver {
         models: &[Model],
         current: &mut [(Vec<f64>, f64, Bins)],
         evaluations: &mut [u64],
-        record: &mut dyn FnMut(usize, &Model, &[f64], &Bins),
+        record: &mut Recorder<'_>,
         log: &mut dyn FnMut(String),
     ) {
         let n = models.len();
@@ -425,7 +430,7 @@ impl Solver {
         models: &[Model],
         current: &mut [(Vec<f64>, f64, Bins)],
         evaluations: &mut [u64],
-        record: &mut dyn FnMut(usize, &Model, &[f64], &Bins),
+        record: &mut Recorder<'_>,
         log: &mut dyn FnMut(String),
     ) {
         let n = models.len();
@@ -435,7 +440,7 @@ impl Solver {
         let mut lambda = vec![LM_LAMBDA0; n];
         let mut failures = vec![0usize; n];
         let mut active: Vec<bool> = current.iter().map(|c| c.2.is_some() && !c.0.is_empty()).collect();
-        let mut normal: Vec<Option<(Vec<Vec<f64>>, Vec<f64>)>> = vec![None; n];
+        let mut normal: Vec<Option<NormalEquations>> = vec![None; n];
         let (started, mut lines) = (std::time::Instant::now(), crate::io::progress::Lines::new());
         let total = self.polish_iterations as u64;
         for k in 1..=total {
@@ -782,7 +787,7 @@ mod tests {
         let mut lines = Vec::new();
         let fit = lm.polish(&sim, &[model()], &mut |l| lines.push(l)).unwrap().remove(0);
         assert!(fit.value <= before.value, "{} > {}", fit.value, before.value);
-        assert!(fit.x.iter().zip(space.bounds()).all(|(x, (lo, hi))| (lo..=hi).contains(&x)), "{:?}", fit.x);
+        assert!(fit.x.iter().zip(space.bounds()).all(|(x, (lo, hi))| (lo..=hi).contains(x)), "{:?}", fit.x);
         assert!(lines.iter().any(|l| l.contains("Levenberg-Marquardt")), "{lines:?}");
         // a Jacobian (3 neighbours) and up to three trials per iteration, after the start
         assert!(fit.evaluations <= 1 + lm.polish_iterations as u64 * 6, "{}", fit.evaluations);

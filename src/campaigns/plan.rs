@@ -19,6 +19,8 @@ use crate::optim::lockstep::Lockstep;
 use crate::optim::manifest::{read_manifest, Manifest};
 use crate::optim::nsga2::load_checkpoint;
 use crate::optim::runner::{is_finished, run, RunOptions};
+pub use crate::protocol::MemberState;
+use crate::protocol::Ran;
 use crate::schema::{CHECKPOINT_EVERY, PLAN_MEMBERS};
 
 /// The plan's file in a campaign folder.
@@ -91,13 +93,6 @@ pub fn parse_plan(text: &str, name: &str) -> anyhow::Result<Plan> {
         bail!("{name}: plan format {} (this sawtooth reads format {PLAN_FORMAT})", plan.format);
     }
     validate_plan(&plan).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-    for (i, m) in plan.members.iter().enumerate() {
-        let p = Path::new(&m.dir);
-        if m.dir.is_empty() || p.is_absolute() || p.components().any(|c| !matches!(c, std::path::Component::Normal(_)))
-        {
-            bail!("{name}: member {i}: dir `{}` must be a plain folder name inside the campaign", m.dir);
-        }
-    }
     Ok(plan)
 }
 
@@ -124,28 +119,7 @@ pub fn write_plan(root: &Path, plan: &Plan) -> anyhow::Result<RunDir> {
     Ok(owned)
 }
 
-/// Where a member stands.
-#[derive(Debug, Clone, PartialEq)]
-pub enum MemberState {
-    Finished,
-    /// A process holds its folder now.
-    Running,
-    /// Stopped (or pre-empted) with a checkpoint at this generation.
-    Checkpoint(u64),
-    NotStarted,
-}
-
-impl std::fmt::Display for MemberState {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            MemberState::Finished => write!(f, "finished"),
-            MemberState::Running => write!(f, "running"),
-            MemberState::Checkpoint(g) => write!(f, "stopped at generation {g} (checkpoint)"),
-            MemberState::NotStarted => write!(f, "not started"),
-        }
-    }
-}
-
+/// Where the member run in `dir` stands: running, finished, stopped at a checkpoint, or not started.
 pub fn member_state(dir: &Path) -> MemberState {
     if run_dir::is_held(dir) {
         MemberState::Running
@@ -200,6 +174,29 @@ pub fn finished_fronts(root: &Path, plan: &Plan) -> anyhow::Result<Vec<Vec<Front
         );
     }
     Ok(fronts)
+}
+
+/// Run member `i` alone in its folder (the caller holds the campaign's folder shared):
+/// resumed from its checkpoint where it has one, not run again once finished.
+pub fn run_member(root: &Path, plan: &Plan, i: usize) -> anyhow::Result<Ran> {
+    let m = &plan.members[i];
+    let dir = plan.member_dir(root, i);
+    if member_state(&dir) == MemberState::Finished {
+        return Ok(Ran::AlreadyFinished);
+    }
+    let engine = make_engine_for(plan.engine, &m.manifest.scenario)?;
+    let resume = dir.join("checkpoint.json").exists();
+    let opts = RunOptions {
+        checkpoint_every: plan.checkpoint_every,
+        progress: false,
+        label: format!("member {i} ({}) ", m.label),
+    };
+    let o = run(&dir, (!resume).then(|| m.manifest.clone()), resume, &engine, &opts)
+        .with_context(|| format!("member {i} ({})", m.label))?;
+    if o.interrupted {
+        return Ok(Ran::Interrupted);
+    }
+    Ok(Ran::Finished(format!("{} generations ({}), {} front points", o.generations, o.termination, o.front.len())))
 }
 
 /// Run every unfinished member in lockstep; `false` when interrupted (Ctrl-C / SIGTERM).
@@ -261,6 +258,21 @@ pub fn execute(root: &Path, plan: &Plan) -> anyhow::Result<bool> {
 /// rules as a new run's settings (`Manifest::validate`, `schema`).
 pub fn validate_plan(plan: &Plan) -> Result<(), String> {
     PLAN_MEMBERS.check_usize("`members` (their number)", plan.members.len())?;
+    // the command is copied into the Slurm scripts' comments: a line break there would be a command
+    crate::schema::one_line("`command`", &plan.command)?;
+    match &plan.study {
+        Study::Sweep => {}
+        Study::Repeatability { target_mass_flow } | Study::Sensitivity { target_mass_flow, .. } => {
+            crate::schema::TARGET_MASS_FLOW.check("`study.target_mass_flow`", *target_mass_flow)?;
+        }
+    }
+    if let Study::Sensitivity { repeatability_ci: Some((mean, half)), .. } = &plan.study {
+        if !(mean.is_finite() && half.is_finite() && *half >= 0.0) {
+            return Err(format!(
+                "`study.repeatability_ci` ({mean}, {half}) must be a finite mean and a half-width >= 0"
+            ));
+        }
+    }
     CHECKPOINT_EVERY.check("`checkpoint_every`", plan.checkpoint_every)?;
     let mut dirs = HashSet::new();
     for (i, m) in plan.members.iter().enumerate() {
@@ -272,6 +284,19 @@ pub fn validate_plan(plan: &Plan) -> Result<(), String> {
                 m.manifest.engine, plan.engine
             )));
         }
+        // the folder is named in messages, Slurm scripts and paths: a plain name inside the
+        // campaign, no separator, no `..`, no newline or NUL
+        let plain = !m.dir.is_empty()
+            && m.dir.len() <= 128
+            && !m.dir.starts_with('.')
+            && m.dir.chars().all(|c| c.is_ascii_alphanumeric() || "._+-=".contains(c));
+        if !plain {
+            return Err(at(format!(
+                "`dir` {:?} must be a plain folder name inside the campaign (at most 128 letters, digits, `._+-=`, not starting with `.`)",
+                m.dir
+            )));
+        }
+        crate::schema::one_line("`label`", &m.label).map_err(at)?;
         if !dirs.insert(m.dir.as_str()) {
             return Err(at(format!("`dir` `{}` is another member's too; each member has its own folder", m.dir)));
         }

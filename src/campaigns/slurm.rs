@@ -8,8 +8,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _};
 
-use super::plan::{member_state, read_plan, MemberState};
 use crate::io::atomic::write_atomic;
+use crate::io::run_dir::mark_subfolder;
+use crate::protocol::{unfinished, Campaign};
 
 /// What the array asks of Slurm (`campaign slurm`'s flags).
 #[derive(Clone, Debug, PartialEq)]
@@ -198,20 +199,12 @@ pub struct Written {
     pub stale_gather: Option<String>,
 }
 
-/// Read the plan in `dir`, check `s`, choose the tasks, and write `dir/slurm/array.sbatch`,
-/// `dir/slurm/gather.sbatch` (run by `exe`) and the `dir/logs` folder the tasks log to.
-pub fn write_scripts(dir: &Path, s: &SlurmSettings, exe: &Path) -> anyhow::Result<Written> {
-    // what the scripts need of the plan: its command, its members, which are finished
-    let (command, finished): (String, Vec<bool>) = if crate::dem::check::is_check(dir) {
-        let p = crate::dem::check::read_plan(dir)?;
-        (p.command.clone(), (0..p.members()).map(|i| p.member_done(dir, i)).collect())
-    } else {
-        let p = read_plan(dir)?;
-        let done = (0..p.members.len()).map(|i| member_state(&p.member_dir(dir, i)) == MemberState::Finished);
-        (p.command.clone(), done.collect())
-    };
+/// For the campaign `c` planned in `dir`: check `s`, choose the tasks, and write
+/// `dir/slurm/array.sbatch`, `dir/slurm/gather.sbatch` (run by `exe`) and the `dir/logs`
+/// folder the tasks log to.
+pub fn write_scripts(c: &dyn Campaign, dir: &Path, s: &SlurmSettings, exe: &Path) -> anyhow::Result<Written> {
     s.validate()?;
-    let tasks: Vec<usize> = (0..finished.len()).filter(|&i| !s.unfinished || !finished[i]).collect();
+    let tasks: Vec<usize> = if s.unfinished { unfinished(c, dir) } else { (0..c.members()).collect() };
     if tasks.is_empty() {
         bail!(
             "every member of {} is finished: nothing to submit; summarise with `sawtooth campaign gather {}`",
@@ -221,15 +214,16 @@ pub fn write_scripts(dir: &Path, s: &SlurmSettings, exe: &Path) -> anyhow::Resul
     }
     let root = std::fs::canonicalize(dir).with_context(|| format!("resolving {}", dir.display()))?;
     let (root_s, exe_s) = (root.to_string_lossy().into_owned(), exe.to_string_lossy().into_owned());
-    let (array, gather) = scripts(s, &command, finished.len(), &root_s, &exe_s, &tasks)?;
+    let (array, gather) = scripts(s, c.command(), c.members(), &root_s, &exe_s, &tasks)?;
     let sdir = root.join("slurm");
-    std::fs::create_dir_all(&sdir).with_context(|| format!("creating {}", sdir.display()))?;
-    std::fs::create_dir_all(root.join("logs")).with_context(|| format!("creating {}", root.join("logs").display()))?;
+    // folders of the campaign's own, marked so that the campaign's folder counts them as its
+    mark_subfolder(&sdir, "slurm")?;
+    mark_subfolder(&root.join("logs"), "slurm-logs")?;
     let (array_path, gather_path) = (sdir.join("array.sbatch"), sdir.join("gather.sbatch"));
     write_atomic(&array_path, array.as_bytes())?;
     write_atomic(&gather_path, gather.as_bytes())?;
     let stale_gather = if s.unfinished {
-        std::fs::read_to_string(sdir.join(LAST_SUBMIT))
+        crate::io::bounded::read_text(&sdir.join(LAST_SUBMIT), &crate::schema::SUBMISSION_FILE)
             .ok()
             .and_then(|t| t.split_whitespace().find_map(|w| w.strip_prefix("gather=").map(String::from)))
     } else {

@@ -181,8 +181,8 @@ pub fn summarise_repeatability(
 /// summary.csv (the sensitivity study is judged against it).
 pub fn read_ci(dir: &Path) -> anyhow::Result<(f64, f64)> {
     let path = dir.join("summary.csv");
-    let mut reader =
-        csv::Reader::from_path(&path).with_context(|| format!("--repeatability: reading {}", path.display()))?;
+    let text = crate::io::bounded::read_text(&path, &crate::schema::SUMMARY_FILE).context("--repeatability")?;
+    let mut reader = csv::Reader::from_reader(text.as_bytes());
     for row in reader.deserialize::<SummaryRow>() {
         let row = row.with_context(|| format!("--repeatability: reading {}", path.display()))?;
         if row.metric == "w_spec_j_kg" {

@@ -1,26 +1,22 @@
 //! `sawtooth campaign run|gather|status|slurm DIR`: a campaign folder written by
-//! `gpu-sweep --plan`, `study … --plan` or `dem check --plan` (whose members are DEM runs,
-//! `crate::dem::check`) run member by member (one process per member, e.g. one Slurm array
-//! task), or all at once here; summarised by `gather` with the same
-//! code and bytes as the one-process commands. A shared filesystem is assumed: every task
-//! reads the plan and writes its member's folder under DIR.
+//! `gpu-sweep --plan`, `study … --plan` or `dem check --plan`, run member by member (one
+//! process per member, e.g. one Slurm array task), or all at once here; summarised by
+//! `gather` with the same code and bytes as the one-process commands. Whatever the kind of
+//! campaign (`campaigns::open` tells it), the library's campaign protocol (`crate::protocol`)
+//! does the work; this module parses the flags and prints. A shared filesystem is assumed:
+//! every task reads the plan and writes its member's folder under DIR.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{bail, Context as _};
+use anyhow::Context as _;
 use clap::{Args, Subcommand};
 
-use crate::campaigns::plan::{
-    execute, finished_fronts, member_state, read_plan, write_plan, MemberState, Plan, CAMPAIGN_KIND, PLAN_FILE,
-};
+use crate::campaigns::open;
+use crate::campaigns::plan::{write_plan, Plan, PLAN_FILE};
 use crate::campaigns::slurm::{array_spec, submit, submit_command, write_scripts, SlurmSettings};
-use crate::campaigns::summarise;
-use crate::dem::check::is_check;
-use crate::engine::make_engine_for;
-use crate::io::run_dir::{Access, RunDir};
-use crate::optim::runner::{run as run_optimisation, RunOptions};
+use crate::protocol::{self, Campaign, Ran};
 
 #[derive(Debug, Subcommand)]
 pub enum CampaignCommand {
@@ -63,13 +59,13 @@ pub struct SlurmArgs {
     #[arg(long)]
     pub time: Option<String>,
     /// CPU cores per task (the CPU engine's threads).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = super::args::count::<u32>(&crate::schema::SLURM_CPUS_PER_TASK))]
     pub cpus_per_task: u32,
     /// GPUs per task (for --engine gpu/auto plans).
-    #[arg(long)]
+    #[arg(long, value_parser = super::args::count::<u32>(&crate::schema::SLURM_GPUS_PER_TASK))]
     pub gpus_per_task: Option<u32>,
     /// At most K tasks of the array running at once (`--array=…%K`).
-    #[arg(long)]
+    #[arg(long, value_parser = super::args::count::<u32>(&crate::schema::SLURM_MAX_PARALLEL))]
     pub max_parallel: Option<u32>,
     /// Only the members that are not finished (to resubmit after a cancel or a failure).
     #[arg(long)]
@@ -124,12 +120,15 @@ pub fn plan_or_run(root: &Path, plan: &Plan, plan_only: bool, out: &mut dyn Writ
         )?;
         return Ok(ExitCode::SUCCESS);
     }
-    if !execute(root, plan)? {
-        return Ok(ExitCode::from(130));
+    Ok(exit_code(&plan.run_all(root, out)?))
+}
+
+/// 130 (as for Ctrl-C) when the run was interrupted, its state saved for the same command.
+fn exit_code(ran: &Ran) -> ExitCode {
+    match ran {
+        Ran::Interrupted => ExitCode::from(130),
+        _ => ExitCode::SUCCESS,
     }
-    let fronts = finished_fronts(root, plan)?;
-    summarise(root, plan, &fronts, out)?;
-    Ok(ExitCode::SUCCESS)
 }
 
 fn task_from_env() -> anyhow::Result<Option<usize>> {
@@ -148,95 +147,27 @@ fn run_cmd(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         Some(t) => Some(t),
         None => task_from_env()?,
     };
-    if is_check(&a.dir) {
-        // a DEM check's plan (`dem check --plan`): its members are DEM runs
-        return match task {
-            Some(i) => super::dem::campaign_task(&a.dir, i, out),
-            None => super::dem::campaign_run_all(&a.dir, out),
-        };
-    }
-    let plan = read_plan(&a.dir)?;
-    let Some(i) = task else {
-        // Every member here, batched per generation; then the summary.
-        let _owned = RunDir::acquire(&a.dir, CAMPAIGN_KIND, Access::Exclusive)?;
-        if !execute(&a.dir, &plan)? {
-            return Ok(ExitCode::from(130));
-        }
-        let fronts = finished_fronts(&a.dir, &plan)?;
-        summarise(&a.dir, &plan, &fronts, out)?;
-        return Ok(ExitCode::SUCCESS);
+    let c = open(&a.dir)?;
+    let ran = match task {
+        Some(i) => protocol::run_task(c.as_ref(), &a.dir, i, out)?,
+        None => protocol::run_here(c.as_ref(), &a.dir, out)?,
     };
-    let n = plan.members.len();
-    if i >= n {
-        bail!("--task {i}: the plan in {} has {n} members (tasks 0..={})", a.dir.display(), n.saturating_sub(1));
-    }
-    // Shared: the other tasks run beside this one; a one-process run or a gather excludes them.
-    let _root = RunDir::acquire(&a.dir, CAMPAIGN_KIND, Access::Shared)?;
-    let m = &plan.members[i];
-    let dir = plan.member_dir(&a.dir, i);
-    if member_state(&dir) == MemberState::Finished {
-        writeln!(out, "member {i} ({}) is already finished", m.label)?;
-        return Ok(ExitCode::SUCCESS);
-    }
-    let engine = make_engine_for(plan.engine, &m.manifest.scenario)?;
-    let resume = dir.join("checkpoint.json").exists();
-    let opts = RunOptions {
-        checkpoint_every: plan.checkpoint_every,
-        progress: false,
-        label: format!("member {i} ({}) ", m.label),
-    };
-    let o = run_optimisation(&dir, (!resume).then(|| m.manifest.clone()), resume, &engine, &opts)
-        .with_context(|| format!("member {i} ({})", m.label))?;
-    if o.interrupted {
-        eprintln!("member {i} ({}): run the same command again to continue it", m.label);
-        return Ok(ExitCode::from(130));
-    }
-    writeln!(
-        out,
-        "member {i} ({}) finished: {} generations ({}), {} front points",
-        m.label,
-        o.generations,
-        o.termination,
-        o.front.len()
-    )?;
-    Ok(ExitCode::SUCCESS)
+    Ok(exit_code(&ran))
 }
 
 fn gather(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    if is_check(dir) {
-        return super::dem::campaign_gather(dir, out);
-    }
-    let plan = read_plan(dir)?;
-    let _owned = RunDir::acquire(dir, CAMPAIGN_KIND, Access::Exclusive)?;
-    let fronts = finished_fronts(dir, &plan)?;
-    summarise(dir, &plan, &fronts, out)?;
+    protocol::gather(open(dir)?.as_ref(), dir, out)?;
     Ok(ExitCode::SUCCESS)
 }
 
 fn status(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    if is_check(dir) {
-        return super::dem::campaign_status(dir, out);
-    }
-    let plan = read_plan(dir)?;
-    let (mut finished, mut running, mut stopped, mut fresh) = (0, 0, 0, 0);
-    writeln!(out, "{} ({}, {} members)", dir.display(), plan.command, plan.members.len())?;
-    for (i, m) in plan.members.iter().enumerate() {
-        let s = member_state(&plan.member_dir(dir, i));
-        match s {
-            MemberState::Finished => finished += 1,
-            MemberState::Running => running += 1,
-            MemberState::Checkpoint(_) => stopped += 1,
-            MemberState::NotStarted => fresh += 1,
-        }
-        writeln!(out, "{i:>5}  {:<12} {s}", m.label)?;
-    }
-    writeln!(out, "finished {finished}, running {running}, stopped {stopped}, not started {fresh}")?;
+    protocol::status(open(dir)?.as_ref(), dir, out)?;
     Ok(ExitCode::SUCCESS)
 }
 
 fn slurm(a: SlurmArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let exe = std::env::current_exe().and_then(std::fs::canonicalize).context("locating the sawtooth executable")?;
-    let w = write_scripts(&a.dir, &a.settings(), &exe)?;
+    let w = write_scripts(open(&a.dir)?.as_ref(), &a.dir, &a.settings(), &exe)?;
     writeln!(
         out,
         "wrote {} ({} tasks: {}) and {}",

@@ -60,8 +60,10 @@ pub struct ImpactArgs {
 }
 
 /// What a case is built from: the scenario as `simulate` takes it, a design, and the DEM's
-/// own settings (`[dem]` in the config; the flags override).
+/// own settings (`[dem]` in the config; the flags override). `--particles` is the DEM's grain
+/// count here (the model keeps the config's particle count).
 #[derive(Debug, Args)]
+#[command(mut_arg("particles", |a| a.help(dem_particles_help(true)).value_parser(super::args::count::<u32>(&crate::schema::DEM_PARTICLES))))]
 pub struct CaseArgs {
     #[command(flatten)]
     pub scenario: ScenarioArgs,
@@ -72,6 +74,15 @@ pub struct CaseArgs {
     /// which --particles grains hold the model's fill mass].
     #[arg(long, allow_negative_numbers = true)]
     pub grain_diameter_um: Option<f64>,
+}
+
+/// `--particles` of a DEM command: the grains of the case, with the DEM's own default
+/// (`config`: the command reads a --config file, whose `[dem] particles` comes first).
+fn dem_particles_help(config: bool) -> String {
+    let default = DemSettings::default().particles;
+    let default =
+        if config { format!("the --config file's [dem] particles, else {default}") } else { default.to_string() };
+    format!("DEM grains per run (LIGGGHTS particles in tooth 0's fill) [default: {default}]")
 }
 
 #[derive(Debug, Args)]
@@ -91,7 +102,7 @@ pub struct RunArgs {
     #[arg(long, default_value_t = 3, value_parser = super::args::count::<u32>(&crate::schema::DEM_RUNS))]
     pub runs: u32,
     /// LIGGGHTS processes at a time [default: the cores].
-    #[arg(long)]
+    #[arg(long, value_parser = super::args::count::<usize>(&crate::schema::JOBS))]
     pub jobs: Option<usize>,
     /// Steady conveying: each run is K cycles of the sled (stroke, stop, rest, return at the
     /// downstroke speed, rest) on a periodic conveyor of full teeth, and reports the advance
@@ -127,16 +138,15 @@ pub struct CheckArgs {
     /// An `optimize` run folder (run.toml, pareto.csv).
     pub run_dir: PathBuf,
     /// Front designs checked besides the picks A, B, C, spread over the front's mass flow.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, value_parser = super::args::count::<usize>(&crate::schema::DEM_FRONT))]
     pub front: usize,
     /// DEM seeds per design.
-    #[arg(long, default_value_t = 3, value_parser = super::args::count::<u32>(&crate::schema::DEM_RUNS))]
+    #[arg(long, default_value_t = 3, value_parser = super::args::count::<u32>(&crate::schema::DEM_SEEDS))]
     pub seeds: u32,
-    /// Grains per DEM run [default: [dem]'s default].
-    #[arg(long)]
+    #[arg(long, help = dem_particles_help(false), value_parser = super::args::count::<u32>(&crate::schema::DEM_PARTICLES))]
     pub particles: Option<u32>,
     /// LIGGGHTS processes at a time [default: the cores].
-    #[arg(long)]
+    #[arg(long, value_parser = super::args::count::<usize>(&crate::schema::JOBS))]
     pub jobs: Option<usize>,
     /// Where the campaigns and check.json go.
     #[arg(long)]
@@ -299,12 +309,9 @@ fn write(a: WriteArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// `--jobs` (bounded by its parser), else the cores.
 fn jobs(j: Option<usize>) -> anyhow::Result<usize> {
-    match j {
-        Some(0) => bail!("--jobs must be at least 1"),
-        Some(j) => Ok(j),
-        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
-    }
+    Ok(j.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())))
 }
 
 fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
@@ -335,14 +342,14 @@ fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     plan.case(0).map_err(anyhow::Error::msg)?;
     if plan.is_steady() {
         plan.conveyor(0).map_err(anyhow::Error::msg)?;
-        let _owned = RunDir::acquire(&a.out, "dem", Access::Exclusive).context("--out")?;
+        let _owned = RunDir::acquire(&a.out, campaign::KIND, Access::Exclusive).context("--out")?;
         let runs = campaign::run_steady(&a.out, &plan, jobs, &|line| eprintln!("dem: {line}"))?;
         let report = steady_report(&plan, &runs)?;
         write_atomic(&a.out.join("steady.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
         write_steady(out, &report)?;
         return Ok(ExitCode::SUCCESS);
     }
-    let _owned = RunDir::acquire(&a.out, "dem", Access::Exclusive).context("--out")?;
+    let _owned = RunDir::acquire(&a.out, campaign::KIND, Access::Exclusive).context("--out")?;
     if let Some(levels) = a.refine {
         if !(1..=3).contains(&levels) {
             bail!("--refine must lie in [1, 3] levels, got {levels}");
@@ -387,18 +394,21 @@ fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
 /// The plan of a steady campaign in `dir`, or None for a single-stroke one.
 fn steady_plan(dir: &Path) -> anyhow::Result<Option<Plan>> {
     let path = dir.join(campaign::PLAN);
-    let Ok(text) = std::fs::read_to_string(&path) else { return Ok(None) };
-    let plan: Plan = serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
+    if std::fs::symlink_metadata(&path).is_err() {
+        return Ok(None);
+    }
+    // checked by every rule of a plan, as every plan read back is
+    let (plan, _) = campaign::read_plan(dir)?;
     Ok(plan.is_steady().then_some(plan))
 }
 
 /// Read a campaign folder back: its plan and every run's result.
 fn load_campaign(dir: &Path) -> anyhow::Result<(Plan, Vec<crate::dem::gather::RunResult>)> {
-    let path = dir.join(campaign::PLAN);
-    let text = std::fs::read_to_string(&path)
-        .with_context(|| format!("{} is not a `sawtooth dem run` campaign (no {})", dir.display(), campaign::PLAN))?;
-    let plan: Plan = serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
-    let results = campaign::results(dir, plan.runs)?;
+    if std::fs::symlink_metadata(dir.join(campaign::PLAN)).is_err() {
+        bail!("{} is not a `sawtooth dem run` campaign (no {})", dir.display(), campaign::PLAN);
+    }
+    let (plan, first) = campaign::read_plan(dir)?;
+    let results = campaign::results(dir, &plan, &first)?;
     let missing = results.iter().filter(|r| r.is_none()).count();
     if missing > 0 {
         bail!(
@@ -435,7 +445,7 @@ fn compare_cmd(a: CompareArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> 
     }
     let (plan, results) = load_campaign(&a.dir)?;
     let c = compare(&plan.scenario, &plan.design, &results, campaign::law(&a.dir)?.as_ref())?;
-    let _owned = RunDir::acquire(&a.dir, "dem", Access::Exclusive).context("DIR")?;
+    let _owned = RunDir::acquire(&a.dir, campaign::KIND, Access::Exclusive).context("DIR")?;
     let json = serde_json::to_string_pretty(&c)?;
     write_atomic(&a.dir.join("compare.json"), json.as_bytes())?;
     let figure = ComparisonPlot::new(&c, &plan.scenario, &plan.design, results.len());
@@ -514,13 +524,14 @@ fn write_table(out: &mut dyn Write, c: &Comparison) -> anyhow::Result<()> {
     )?;
     writeln!(
         out,
-        "centre of mass (tooth): model {:.2}, DEM {:.2} ± {:.2}; dispersion: model {:.2}, DEM {:.2} ± {:.2}",
+        "centre of mass (tooth): model {:.2}, DEM {:.2} ± {:.2}; dispersion: model {:.2}, DEM {:.2} ± {:.2}{}",
         c.model_centre,
         c.dem_centre.mean,
         c.dem_centre.sd,
         c.model_dispersion,
         c.dem_dispersion.mean,
-        c.dem_dispersion.sd
+        c.dem_dispersion.sd,
+        if c.dem_centre.mean.is_nan() { " (no DEM run kept a grain on the teeth)" } else { "" }
     )?;
     writeln!(
         out,
@@ -553,9 +564,6 @@ fn check(a: CheckArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         settings.particles = n;
     }
     settings.validate().map_err(anyhow::Error::msg)?;
-    if a.seeds == 0 || a.seeds > 1000 {
-        bail!("--seeds must lie in [1, 1000], got {}", a.seeds);
-    }
     let command = format!(
         "sawtooth dem check {} --seeds {} --front {} --particles {} --out {}",
         a.run_dir.display(),
@@ -595,61 +603,7 @@ fn report_check(
     if json {
         writeln!(out, "{}", serde_json::to_string_pretty(report)?)?;
     } else {
-        crate::dem::check::write_table(out, report)?;
-        writeln!(out, "\nwrote {}/{}", dir.display(), crate::dem::check::CHECK_JSON)?;
+        crate::dem::check::write_summary(out, report, dir)?;
     }
-    Ok(ExitCode::SUCCESS)
-}
-
-/// `sawtooth campaign run DIR --task I` on a DEM check's folder: member I (one DEM run)
-/// alone, the folder shared with the other tasks.
-pub fn campaign_task(dir: &Path, task: usize, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    let plan = crate::dem::check::read_plan(dir)?;
-    let _shared = RunDir::acquire(dir, crate::dem::check::CHECK_KIND, Access::Shared)?;
-    let label = if task < plan.members() { plan.member_label(task) } else { String::new() };
-    let ran = crate::dem::check::run_member(dir, &plan, task, &|l| eprintln!("member {task} ({label}): {l}"))?;
-    if ran {
-        writeln!(out, "member {task} ({label}) finished: {}", plan.member_dir(dir, task).display())?;
-    } else {
-        writeln!(out, "member {task} ({label}) is already finished")?;
-    }
-    Ok(ExitCode::SUCCESS)
-}
-
-/// `sawtooth campaign run DIR` (no task) on a DEM check's folder: every member here, one
-/// design after another, then the report (what `dem check` does).
-pub fn campaign_run_all(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    let plan = crate::dem::check::read_plan(dir)?;
-    let jobs = jobs(None)?;
-    let report = crate::dem::check::check(dir, &plan, jobs, &|l| eprintln!("dem check: {l}"))?;
-    report_check(&report, dir, false, out)
-}
-
-/// `sawtooth campaign gather DIR` on a DEM check's folder: check.json from the members'
-/// results, refused while any is missing.
-pub fn campaign_gather(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    let plan = crate::dem::check::read_plan(dir)?;
-    let _owned = RunDir::acquire(dir, crate::dem::check::CHECK_KIND, Access::Exclusive)?;
-    let report = crate::dem::check::gather(dir, &plan)?;
-    report_check(&report, dir, false, out)
-}
-
-/// `sawtooth campaign status DIR` on a DEM check's folder: each member finished or not.
-pub fn campaign_status(dir: &Path, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
-    let plan = crate::dem::check::read_plan(dir)?;
-    writeln!(out, "{} ({}, {} members)", dir.display(), plan.command, plan.members())?;
-    let mut finished = 0;
-    for i in 0..plan.members() {
-        let state = if plan.member_done(dir, i) {
-            finished += 1;
-            "finished"
-        } else if plan.member_dir(dir, i).is_dir() {
-            "started (running, or stopped: run it again)"
-        } else {
-            "not started"
-        };
-        writeln!(out, "{i:>5}  {:<16} {state}", plan.member_label(i))?;
-    }
-    writeln!(out, "finished {finished}, not finished {}", plan.members() - finished)?;
     Ok(ExitCode::SUCCESS)
 }

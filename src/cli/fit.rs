@@ -43,9 +43,10 @@ pub struct FitArgs {
     pub seed: Option<u64>,
     #[command(flatten)]
     pub engine: EngineArgs,
-    /// Hold out the last K runs: fit on the others, score on them (0 = off).
-    #[arg(long, default_value_t = FitRequest::DEFAULT_HOLDOUT)]
-    pub holdout: usize,
+    /// Hold out the last K runs: fit on the others, score on them (0 = off) [default: 3, or
+    /// half the runs where the data hold fewer than 6; none with --at, which scores every run].
+    #[arg(long)]
+    pub holdout: Option<usize>,
     /// Bootstrap replicates over the runs for the parameter uncertainty (0 = off).
     #[arg(long, default_value_t = FitRequest::DEFAULT_BOOTSTRAP, value_parser = super::args::count::<usize>(&crate::schema::FIT_BOOTSTRAP))]
     pub bootstrap: usize,

@@ -105,6 +105,8 @@ pub enum Command {
 
 /// Exit status: 0 success, 1 a check failed, 2 bad input or an error.
 pub fn run(cli: Cli, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    // the SIMD path the environment names (`SAWTOOTH_SIMD`) must be one this CPU has
+    crate::simd::check().map_err(anyhow::Error::msg)?;
     match cli.command {
         Command::Simulate(a) => simulate::run(a, out),
         Command::Bench(a) => bench::run(a, out),

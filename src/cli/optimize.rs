@@ -297,7 +297,7 @@ fn differing_keys(path: &str, given: &serde_json::Value, stored: &serde_json::Va
 
 pub fn run(a: OptimizeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let (manifest, kind, scenario) = if a.resume {
-        if !a.out.join("run.toml").exists() && a.out.join(".sawtooth-run").exists() {
+        if !a.out.join("run.toml").exists() && crate::io::run_dir::kind_of(&a.out).is_some() {
             bail!(
                 "--resume: {} holds no run.toml: the run was stopped before it wrote its settings; start it again without --resume",
                 a.out.display()

@@ -6,7 +6,6 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Context as _};
 use clap::Args;
-use serde_json::json;
 
 use super::args::{EngineArgs, RequirementArgs, ScenarioArgs};
 use crate::engine::{evaluate_detailed, make_engine_for, Detailed, EngineKind};
@@ -94,7 +93,8 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     if a.json {
         let mut v = crate::engine::summary::simulation_json(&scenario, &design, engine.name(), &det);
         if let (Some(r), Some(x)) = (&requirements, &assessment) {
-            v["requirements"] = requirements_json(r, &[(scenario.environment.alpha_deg, x.clone())]);
+            v["requirements"] =
+                crate::engine::slopes::requirements_json(r, &[(scenario.environment.alpha_deg, x.clone())]);
         }
         writeln!(out, "{}", serde_json::to_string_pretty(&v)?).context("writing output")?;
     } else {
@@ -107,7 +107,7 @@ pub fn run(a: SimulateArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
 }
 
 /// `simulate --alpha FROM..TO`: the design's figures at every slope (req. 1.6.3), and with
-/// requirements their verdict at the worst slope.
+/// requirements their verdict at the worst slope (`engine::slopes`), as JSON or a table.
 fn over_slopes(
     out: &mut dyn Write,
     scenario: &Scenario,
@@ -117,48 +117,9 @@ fn over_slopes(
     requirements: Option<&Requirements>,
     json: bool,
 ) -> anyhow::Result<ExitCode> {
-    let mut rows = Vec::new();
-    for &alpha in slopes {
-        let mut s = scenario.clone();
-        s.environment.alpha_deg = alpha;
-        // a design the model rejects at one slope (e.g. the 5.3.1 spill check on a level
-        // conveyor) is reported there and fails the requirements there, not the whole command
-        let det = evaluate_detailed(engine, &s, design, false);
-        let assessment = requirements.map(|r| match &det {
-            Ok(det) => r.assess(&det.evaluation.performance, &s.performance, det.evaluation.sim.lost_fraction),
-            Err(_) => r.assess_rejected(&s, design),
-        });
-        rows.push((alpha, det, assessment));
-    }
-    let assessed: Vec<(f64, Assessment)> =
-        rows.iter().filter_map(|(alpha, _, x)| x.clone().map(|x| (*alpha, x))).collect();
+    let rows = crate::engine::slopes::over_slopes(engine, scenario, design, slopes, requirements);
     if json {
-        let per_slope: Vec<serde_json::Value> = rows
-            .iter()
-            .map(|(alpha, det, _)| match det {
-                Ok(det) => {
-                    let e = &det.evaluation;
-                    json!({
-                        "alpha_deg": alpha,
-                        "distribution": e.sim.distribution,
-                        "d_avg_m": e.sim.d_avg_m,
-                        "lost_fraction": e.sim.lost_fraction,
-                        "performance": e.performance,
-                    })
-                }
-                Err(invalid) => json!({"alpha_deg": alpha, "invalid": invalid.rule(), "reason": invalid.to_string()}),
-            })
-            .collect();
-        let mut v = json!({
-            "engine": engine.name(),
-            "mode": scenario.mode,
-            "scenario": scenario,
-            "design": design_json(design),
-            "slopes": per_slope,
-        });
-        if let Some(r) = requirements {
-            v["requirements"] = requirements_json(r, &assessed);
-        }
+        let v = crate::engine::slopes::slopes_json(engine.name(), scenario, design, &rows, requirements);
         writeln!(out, "{}", serde_json::to_string_pretty(&v)?).context("writing output")?;
         return Ok(ExitCode::SUCCESS);
     }
@@ -178,8 +139,9 @@ fn over_slopes(
         "{:>9} {:>12} {:>13} {:>10} {:>7} {:>10} {:>9}",
         "alpha_deg", "m_dot_kg_h", "W_spec_J_kg", "P_avg_W", "n_wire", "f_stroke_Hz", "lost"
     )?;
-    for (alpha, det, _) in &rows {
-        let det = match det {
+    for row in &rows {
+        let alpha = row.alpha_deg;
+        let det = match &row.result {
             Ok(det) => det,
             Err(invalid) => {
                 writeln!(out, "{alpha:>9.2}  invalid here ({}): {invalid}", invalid.rule())?;
@@ -201,8 +163,8 @@ fn over_slopes(
     }
     if let Some(r) = requirements {
         let rejected: Vec<(f64, &str)> =
-            rows.iter().filter_map(|(alpha, det, _)| det.as_ref().err().map(|e| (*alpha, e.rule()))).collect();
-        write_verdicts(out, r, &assessed, &rejected)?;
+            rows.iter().filter_map(|row| row.result.as_ref().err().map(|e| (row.alpha_deg, e.rule()))).collect();
+        write_verdicts(out, r, &crate::engine::slopes::assessed(&rows), &rejected)?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -213,19 +175,6 @@ fn status(met: bool) -> &'static str {
     } else {
         "NOT compliant"
     }
-}
-
-/// Req. 1.6.3 over the slopes evaluated: covered when they span the required range.
-fn slope_coverage(r: &Requirements, per_slope: &[(f64, Assessment)]) -> (bool, String) {
-    let lo = per_slope.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
-    let hi = per_slope.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
-    let covered = lo <= r.slope_min_deg + 1e-9 && hi >= r.slope_max_deg - 1e-9;
-    let what = if per_slope.len() == 1 {
-        format!("evaluated at {lo} deg only (give --alpha {}..{} to judge the range)", r.slope_min_deg, r.slope_max_deg)
-    } else {
-        format!("evaluated at {} slopes over {lo}..{hi} deg", per_slope.len())
-    };
-    (covered, what)
 }
 
 /// The verdicts of Table 2.2 at the worst slope, each with its margin (like Table 5.5).
@@ -239,7 +188,7 @@ fn write_verdicts(
     // a power-limited point meets its limit to the last bit: no "-0.000 W" margins
     let tidy = |m: f64| if m.abs() < 1e-9 { 0.0 } else { m };
     let all_compliant = per_slope.iter().all(|(_, x)| x.compliant());
-    let (covered, coverage) = slope_coverage(r, per_slope);
+    let (covered, coverage) = crate::engine::slopes::slope_coverage(r, per_slope);
     let op = &a.operating_point;
     writeln!(out)?;
     writeln!(out, "requirements ({}), judged at the worst slope {alpha} deg", r.source)?;
@@ -304,26 +253,6 @@ fn write_verdicts(
         (false, _) => format!("NOT compliant: {} binds", a.binding().unwrap_or("a requirement")),
     };
     writeln!(out, "verdict          {verdict}")
-}
-
-fn requirements_json(r: &Requirements, per_slope: &[(f64, Assessment)]) -> serde_json::Value {
-    let worst = worst_over_slopes(per_slope);
-    let (covered, coverage) = slope_coverage(r, per_slope);
-    json!({
-        "requirements": r,
-        "compliant": per_slope.iter().all(|(_, x)| x.compliant()),
-        "slope_range_assessed": covered,
-        "slope_coverage": coverage,
-        "worst_alpha_deg": worst.as_ref().map(|w| w.0),
-        "worst": worst.as_ref().map(|w| &w.1),
-        "binding": worst.as_ref().and_then(|w| w.1.binding()),
-        "per_slope": per_slope.iter().map(|(alpha, x)| json!({"alpha_deg": alpha, "assessment": x})).collect::<Vec<_>>(),
-        "not_assessed": NOT_ASSESSED.iter().map(|(id, n)| json!({"id": id, "requirement": n})).collect::<Vec<_>>(),
-    })
-}
-
-fn design_json(d: &Design) -> serde_json::Value {
-    json!(DesignRow::of(d))
 }
 
 fn describe(d: &Design) -> String {

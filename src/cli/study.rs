@@ -82,10 +82,7 @@ pub fn run(c: StudyCommand, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
 
 fn target(c: &Common, s: &Scenario) -> anyhow::Result<f64> {
     let t = c.target_mass_flow.unwrap_or(if s.environment.k_drag.is_some() { 0.008 } else { 0.022 });
-    if !(t > 0.0 && t.is_finite()) {
-        bail!("--target-mass-flow must be > 0 kg/s, got {t}");
-    }
-    Ok(t)
+    crate::schema::TARGET_MASS_FLOW.check("--target-mass-flow", t).map_err(anyhow::Error::msg)
 }
 
 fn repeatability(a: RepeatabilityArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {

@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Context as _};
+use anyhow::Context as _;
 use clap::Args;
 
 use crate::diagnose::synth::{synthesise, to_csv, SynthSettings};
@@ -50,8 +50,8 @@ pub fn run(a: SynthArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         anyhow::anyhow!("--setup {}: invalid setting: {}", a.setup.display(), super::args::in_user_terms(&e))
     })?;
     // (the setup's own resolution is checked when the file is read)
-    if let Some(r) = a.resolution_g.filter(|r| !(*r > 0.0 && r.is_finite())) {
-        bail!("--resolution-g must be a positive number of grams, got {r}");
+    if let Some(r) = a.resolution_g {
+        crate::schema::SCALE_RESOLUTION_G.check("--resolution-g", r).map_err(anyhow::Error::msg)?;
     }
     let resolution = a.resolution_g.or(file.measurement.as_ref().and_then(|m| m.scale_resolution_g)).unwrap_or(0.01);
     crate::schema::SYNTH_MASS_G.check("--mass-g", a.mass_g).map_err(anyhow::Error::msg)?;

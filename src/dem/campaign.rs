@@ -4,6 +4,12 @@
 //! killed campaign skips every run whose `result.json` exists and runs the rest. When all
 //! runs are in, `dem.csv` (measured-data format) and `setup.toml` make the campaign readable
 //! by `fit`, `diagnose` and `dem compare`.
+//!
+//! Everything read back is checked as input: the plan by [`Plan::check`] (a `runs` of
+//! 4294967295 or `[dem] particles = 0` is refused naming the field before anything is
+//! allocated), each run's dump by `gather::check_dump` before it becomes a result (a run
+//! that blew up is a failed run, kept with its reason in `failure.txt`, and never a number
+//! in `dem.csv`), each `result.json` by `gather::check_result` whenever it is read.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -12,18 +18,29 @@ use std::sync::Mutex;
 use anyhow::{bail, Context as _};
 use serde::{Deserialize, Serialize};
 
-use super::case::{Case, DUMP, SETTLED, STROKE_TIME};
+use super::case::{Case, ALL_LOST, DUMP, SETTLED, STROKE_TIME};
 use super::conveyor::{Conveyor, SteadyRun};
-use super::gather::{measured_csv, parse_dump, parse_positions, reduce, setup_toml, RunResult};
+use super::gather::{
+    check_dump, check_result, measured_csv, parse_dump, parse_positions, reduce, setup_toml, RunResult,
+};
 use super::run::{find_liggghts, run_case};
 use super::settings::DemSettings;
-use crate::io::atomic::write_atomic;
+use crate::io::atomic::{clean_stale_temps, write_atomic};
+use crate::io::bounded::{read_text, read_text_if_present};
+use crate::io::run_dir::mark_subfolder;
 use crate::model::{Design, Scenario};
+use crate::schema;
 
 pub const PLAN: &str = "plan.json";
 pub const RESULT: &str = "result.json";
 pub const CSV: &str = "dem.csv";
 pub const SETUP: &str = "setup.toml";
+/// A failed run's reason, beside what it left (kept for inspection; removed when it runs again).
+pub const FAILURE: &str = "failure.txt";
+/// The `io::run_dir` kind of a campaign's folder (`dem run --out`, a DEM check's design).
+pub const KIND: &str = "dem";
+/// The `io::run_dir` kind of a run's folder inside a campaign.
+pub const RUN_KIND: &str = "dem-run";
 /// The DEM's restitution law measured on single grains of the campaign's case
 /// (`super::impact::measure_law`), as a `[collision]` table; `dem compare` runs the model with it.
 pub const LAW: &str = "law.toml";
@@ -49,9 +66,56 @@ pub struct Plan {
 
 impl Plan {
     pub fn case(&self, run: u32) -> Result<Case, String> {
-        Case::build(&self.scenario, &self.design, &self.settings, self.first_seed + run as u64, self.known_return)
+        let seed = self.first_seed.checked_add(u64::from(run)).ok_or("`first_seed` + the run is beyond 2^64")?;
+        Case::build(&self.scenario, &self.design, &self.settings, seed, self.known_return)
     }
 
+    /// Every rule a plan must meet, read back or made (it is input like any other): the
+    /// first broken one naming its field; else the first run's case (its mesh, grains and
+    /// their mass are every run's).
+    pub fn check(&self) -> Result<Case, String> {
+        schema::DEM_RUNS.check_u32("`runs`", self.runs)?;
+        if self.first_seed.checked_add(u64::from(self.runs)).is_none() {
+            return Err(format!("`first_seed` {} + `runs` {} is beyond 2^64", self.first_seed, self.runs));
+        }
+        self.scenario.validate().map_err(|e| format!("`scenario`: {e}"))?;
+        // a design of kilometre teeth would mesh into billions of facets before the model
+        // refused it: the bounds of a design as a user gives one come first
+        self.design.check_sensible(|i| format!("`design` {}", crate::model::design::DesignRow::COLUMNS[i]))?;
+        self.settings.validate().map_err(|e| format!("`settings`: {e}"))?;
+        // steady conveying's counts, as `dem run --strokes K --period-teeth P` bounds them
+        if self.strokes != 0 {
+            if !(3..=200).contains(&self.strokes) {
+                return Err(format!("`strokes` must lie in [3, 200] (0: single strokes), got {}", self.strokes));
+            }
+            if !(2..=64).contains(&self.period_teeth) {
+                return Err(format!("`period_teeth` must lie in [2, 64], got {}", self.period_teeth));
+            }
+        } else if self.period_teeth != 0 {
+            return Err(format!("`period_teeth` {} belongs to a steady plan (`strokes` > 0)", self.period_teeth));
+        }
+        if let Some((delay, speed)) = self.known_return {
+            schema::MOTION_DELAY.check("`known_return[0]` (motion_delay_s)", delay)?;
+            schema::MOTION_RETURN_SPEED.check("`known_return[1]` (motion_return_speed_m_s)", speed)?;
+        }
+        self.case(0).map_err(|e| format!("`design`/`scenario`: {e}"))
+    }
+}
+
+/// Read and check `dir/plan.json` (a campaign's plan); an error names the file and the field.
+pub fn read_plan(dir: &Path) -> anyhow::Result<(Plan, Case)> {
+    let path = dir.join(PLAN);
+    parse_plan(&read_text(&path, &schema::PLAN_FILE)?, &path.display().to_string())
+}
+
+/// A plan's text checked by every rule ([`Plan::check`]); `name` is the file named in messages.
+pub fn parse_plan(text: &str, name: &str) -> anyhow::Result<(Plan, Case)> {
+    let plan: Plan = serde_json::from_str(text).with_context(|| format!("reading {name}"))?;
+    let case = plan.check().map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+    Ok((plan, case))
+}
+
+impl Plan {
     /// Run `run`'s periodic conveyor (a steady plan's).
     pub fn conveyor(&self, run: u32) -> Result<Conveyor, String> {
         Conveyor::build(&self.scenario, self.case(run)?, self.period_teeth, self.strokes)
@@ -63,6 +127,15 @@ impl Plan {
     }
 }
 
+/// The runs of a campaign without a result yet, said as a resumption where some have one.
+fn runs_to_do<T>(done: &[Option<T>], say: &(dyn Fn(String) + Sync)) -> Vec<u32> {
+    let todo: Vec<u32> = (0..done.len() as u32).filter(|r| done[*r as usize].is_none()).collect();
+    if todo.len() < done.len() {
+        say(format!("resuming: {} of {} runs already done", done.len() - todo.len(), done.len()));
+    }
+    todo
+}
+
 /// A steady run's result file (in place of [`RESULT`]).
 pub const STEADY_RESULT: &str = "steady.json";
 
@@ -71,10 +144,7 @@ pub fn steady_results(dir: &Path, runs: u32) -> anyhow::Result<Vec<Option<Steady
     (0..runs)
         .map(|r| {
             let p = run_dir(dir, r).join(STEADY_RESULT);
-            if !p.is_file() {
-                return Ok(None);
-            }
-            let text = std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
+            let Some(text) = read_text_if_present(&p, &schema::DEM_RESULT_FILE)? else { return Ok(None) };
             Ok(Some(serde_json::from_str(&text).with_context(|| format!("reading {}", p.display()))?))
         })
         .collect()
@@ -92,10 +162,7 @@ pub fn run_steady(
     let binary = find_liggghts()?;
     record_plan(dir, plan)?;
     let done = steady_results(dir, plan.runs)?;
-    let todo: Vec<u32> = (0..plan.runs).filter(|r| done[*r as usize].is_none()).collect();
-    if todo.len() < plan.runs as usize {
-        say(format!("resuming: {} of {} runs already done", plan.runs as usize - todo.len(), plan.runs));
-    }
+    let todo = runs_to_do(&done, say);
     say(format!(
         "{} steady runs to do, {} at a time: {} cycles on a periodic conveyor of {} full teeth, {} grains of {:.0} um, time step {:.2e} s",
         todo.len(),
@@ -155,26 +222,32 @@ pub fn run_dir(dir: &Path, run: u32) -> PathBuf {
     dir.join(format!("run-{:03}", run + 1))
 }
 
-/// The results present in `dir`, in run order (None where a run has none yet).
-pub fn results(dir: &Path, runs: u32) -> anyhow::Result<Vec<Option<RunResult>>> {
-    (0..runs)
-        .map(|r| {
-            let p = run_dir(dir, r).join(RESULT);
-            if !p.is_file() {
-                return Ok(None);
-            }
-            let text = std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
-            Ok(Some(serde_json::from_str(&text).with_context(|| format!("reading {}", p.display()))?))
-        })
-        .collect()
+/// Run `r`'s result in `dir`, checked against the plan's first case (`None`: not there yet).
+/// A result that breaks a rule is an error naming the file and the field.
+pub fn read_result(dir: &Path, plan: &Plan, case: &Case, r: u32) -> anyhow::Result<Option<RunResult>> {
+    let p = run_dir(dir, r).join(RESULT);
+    let Some(text) = read_text_if_present(&p, &schema::DEM_RESULT_FILE)? else { return Ok(None) };
+    let result: RunResult = serde_json::from_str(&text).with_context(|| format!("reading {}", p.display()))?;
+    check_result(&result, case, plan.first_seed, r).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: {e}; it is not the result of this run (delete it, and the same command runs that seed again)",
+            p.display()
+        )
+    })?;
+    Ok(Some(result))
+}
+
+/// The results present in `dir`, in run order (None where a run has none yet), each checked.
+pub fn results(dir: &Path, plan: &Plan, case: &Case) -> anyhow::Result<Vec<Option<RunResult>>> {
+    (0..plan.runs).map(|r| read_result(dir, plan, case, r)).collect()
 }
 
 /// Record `plan` in `dir`, or check that it is the plan already there.
 pub fn record_plan(dir: &Path, plan: &Plan) -> anyhow::Result<()> {
     let path = dir.join(PLAN);
     let text = serde_json::to_string_pretty(plan)?;
-    if path.is_file() {
-        let old: Plan = serde_json::from_str(&std::fs::read_to_string(&path)?)
+    if std::fs::symlink_metadata(&path).is_ok() {
+        let old: Plan = serde_json::from_str(&read_text(&path, &schema::PLAN_FILE)?)
             .with_context(|| format!("reading {}", path.display()))?;
         if &old != plan {
             bail!(
@@ -192,15 +265,12 @@ pub fn record_plan(dir: &Path, plan: &Plan) -> anyhow::Result<()> {
 /// `say` gets progress lines. Runs already done are skipped. Every run is tried; the first
 /// failure is returned after the others finish (their results are kept for a resume).
 pub fn run(dir: &Path, plan: &Plan, jobs: usize, say: &(dyn Fn(String) + Sync)) -> anyhow::Result<Vec<RunResult>> {
-    // cheap checks first: the case builds and the engine is there
-    let first = plan.case(0).map_err(anyhow::Error::msg)?;
+    // cheap checks first: the plan holds, the case builds and the engine is there
+    let first = plan.check().map_err(anyhow::Error::msg)?;
     let binary = find_liggghts()?;
     record_plan(dir, plan)?;
-    let done = results(dir, plan.runs)?;
-    let todo: Vec<u32> = (0..plan.runs).filter(|r| done[*r as usize].is_none()).collect();
-    if todo.len() < plan.runs as usize {
-        say(format!("resuming: {} of {} runs already done", plan.runs as usize - todo.len(), plan.runs));
-    }
+    let done = results(dir, plan, &first)?;
+    let todo = runs_to_do(&done, say);
     say(format!(
         "{} runs to do, {} at a time: {} grains of {:.0} um, slab {:.2} mm, {} teeth, time step {:.2e} s (moduli softened x{:.2e})",
         todo.len(),
@@ -219,7 +289,7 @@ pub fn run(dir: &Path, plan: &Plan, jobs: usize, say: &(dyn Fn(String) + Sync)) 
             scope.spawn(|| loop {
                 let k = next.fetch_add(1, Ordering::SeqCst);
                 let Some(&r) = todo.get(k) else { break };
-                if let Err(e) = one_run(dir, plan, r, &binary, say) {
+                if let Err(e) = one_run(dir, plan, &first, r, &binary, say) {
                     say(format!("run {} failed: {e:#}", r + 1));
                     failures.lock().expect("no panic holds it").push(format!("run {}: {e:#}", r + 1));
                 }
@@ -230,9 +300,11 @@ pub fn run(dir: &Path, plan: &Plan, jobs: usize, say: &(dyn Fn(String) + Sync)) 
     if let Some(f) = failures.first() {
         bail!("{} of {} runs failed (rerun the same command to resume); first: {f}", failures.len(), todo.len());
     }
-    let all = gather(dir, plan)?;
+    let all = gather_checked(dir, plan, &first)?;
     if !dir.join(LAW).is_file() {
         say("measuring the DEM's restitution law on single grains of the case (dem impact)".into());
+        // the impact runs' folder is the campaign's own, marked so that the campaign's folder counts it
+        mark_subfolder(&dir.join("law"), "dem-law")?;
         let law = super::impact::measure_law(&first, &binary, &dir.join("law"), jobs)?;
         write_atomic(&dir.join(LAW), super::impact::law_toml(&law, &first).as_bytes())?;
     }
@@ -255,23 +327,20 @@ pub fn run_one(dir: &Path, plan: &Plan, r: u32, say: &(dyn Fn(String) + Sync)) -
     if r >= plan.runs {
         bail!("run {} of a campaign of {} runs", r + 1, plan.runs);
     }
+    let first = plan.check().map_err(anyhow::Error::msg)?;
     record_plan(dir, plan)?;
-    if run_dir(dir, r).join(RESULT).is_file() {
+    if read_result(dir, plan, &first, r)?.is_some() {
         return Ok(false);
     }
-    plan.case(r).map_err(anyhow::Error::msg)?;
     let binary = find_liggghts()?;
-    one_run(dir, plan, r, &binary, say)?;
+    one_run(dir, plan, &first, r, &binary, say)?;
     Ok(true)
 }
 
 /// The campaign's measured DEM law ([`LAW`]), if it has one.
 pub fn law(dir: &Path) -> anyhow::Result<Option<crate::model::Collision>> {
     let path = dir.join(LAW);
-    if !path.is_file() {
-        return Ok(None);
-    }
-    let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let Some(text) = read_text_if_present(&path, &schema::CONFIG_FILE)? else { return Ok(None) };
     let file = crate::io::config::ConfigFile::parse(&text).with_context(|| format!("reading {}", path.display()))?;
     let collision = file.scenario().with_context(|| format!("reading {}", path.display()))?.collision;
     Ok(Some(collision))
@@ -281,14 +350,19 @@ pub fn law(dir: &Path) -> anyhow::Result<Option<crate::model::Collision>> {
 /// from them (the same bytes whichever process ran the runs); an error naming the runs
 /// without a result otherwise.
 pub fn gather(dir: &Path, plan: &Plan) -> anyhow::Result<Vec<RunResult>> {
-    let found = results(dir, plan.runs)?;
+    let first = plan.check().map_err(anyhow::Error::msg)?;
+    gather_checked(dir, plan, &first)
+}
+
+/// [`gather`] with the plan checked and its first case built.
+fn gather_checked(dir: &Path, plan: &Plan, first: &Case) -> anyhow::Result<Vec<RunResult>> {
+    let found = results(dir, plan, first)?;
     let missing: Vec<String> =
         found.iter().enumerate().filter(|(_, r)| r.is_none()).map(|(i, _)| format!("run {}", i + 1)).collect();
     if !missing.is_empty() {
         bail!("{}: {} of {} runs have no result yet ({})", dir.display(), missing.len(), plan.runs, missing.join(", "));
     }
     let all: Vec<RunResult> = found.into_iter().flatten().collect();
-    let first = plan.case(0).map_err(anyhow::Error::msg)?;
     let provenance = vec![
         format!(
             "DEM campaign (LIGGGHTS, `sawtooth dem run`): {} runs, seeds {}..{}; {} grains of {:.1} um in a {:.3} mm periodic slab; {} teeth of the mesh",
@@ -304,14 +378,24 @@ pub fn gather(dir: &Path, plan: &Plan) -> anyhow::Result<Vec<RunResult>> {
     ];
     write_atomic(&dir.join(CSV), measured_csv(&provenance, &all)?.as_bytes())?;
     let description = format!("DEM campaign of {} runs (docs/dem.md)", plan.runs);
-    write_atomic(&dir.join(SETUP), setup_toml(&first, plan.known_return, &description)?.as_bytes())?;
+    write_atomic(&dir.join(SETUP), setup_toml(first, plan.known_return, &description)?.as_bytes())?;
     Ok(all)
 }
 
-fn one_run(dir: &Path, plan: &Plan, r: u32, binary: &Path, say: &(dyn Fn(String) + Sync)) -> anyhow::Result<()> {
+fn one_run(
+    dir: &Path,
+    plan: &Plan,
+    first: &Case,
+    r: u32,
+    binary: &Path,
+    say: &(dyn Fn(String) + Sync),
+) -> anyhow::Result<()> {
     let case = plan.case(r).map_err(anyhow::Error::msg)?;
     let rd = run_dir(dir, r);
-    std::fs::create_dir_all(&rd).with_context(|| format!("creating {}", rd.display()))?;
+    mark_subfolder(&rd, RUN_KIND)?;
+    // this run is the folder's only writer: what a killed attempt left half-written is stale
+    clean_stale_temps(&rd)?;
+    remove_if_present(&rd.join(FAILURE))?;
     case.write(&rd)?;
     say(format!("run {} (seed {}) started", r + 1, case.seed));
     let mut lines = crate::io::progress::Lines::new();
@@ -322,17 +406,29 @@ fn one_run(dir: &Path, plan: &Plan, r: u32, binary: &Path, say: &(dyn Fn(String)
             say(format!("run {}: {phase}, {} grains, rms speed {:.3} m/s", r + 1, t.atoms, t.rms_speed_m_s));
         }
     })?;
-    let dump =
-        std::fs::read_to_string(rd.join(DUMP)).with_context(|| format!("reading {}", rd.join(DUMP).display()))?;
-    // a case written before the stop time was recorded ran every movement of the mesh
-    let stroke_time = match std::fs::read_to_string(rd.join(STROKE_TIME)) {
-        Ok(t) => t.trim().parse::<f64>().with_context(|| format!("reading {}", rd.join(STROKE_TIME).display()))?,
-        Err(_) => f64::INFINITY,
+    let result = match read_run(&case, &rd, finished.wall_s) {
+        Ok(result) => result,
+        Err(reason) => {
+            // a failed run: its folder stays as LIGGGHTS left it, with the reason beside it
+            write_atomic(&rd.join(FAILURE), format!("{reason}\n").as_bytes())?;
+            bail!(
+                "the DEM result of {} is not a believable run: {reason}; the folder is kept for inspection ({}), nothing of it enters {CSV}; rerun the same command to try the seed again",
+                rd.display(),
+                rd.join(FAILURE).display()
+            );
+        }
     };
-    let mut result = reduce(&case, &parse_dump(&dump)?, stroke_time, finished.wall_s);
+    check_result(&result, first, plan.first_seed, r)
+        .map_err(|e| anyhow::anyhow!("the DEM result of {}: {e}", rd.display()))?;
+    let mut result = result;
     // the bed before the stroke (cases written before it was dumped have none)
-    if let Ok(text) = std::fs::read_to_string(rd.join(SETTLED)) {
-        result.settled_xy_m = parse_positions(&text)?.into_iter().map(|p| [p[0], p[1]]).collect();
+    let settled = rd.join(SETTLED);
+    if let Some(text) = read_text_if_present(&settled, &schema::DEM_DUMP_FILE)? {
+        result.settled_xy_m = parse_positions(&text)
+            .with_context(|| format!("reading {}", settled.display()))?
+            .into_iter()
+            .map(|p| [p[0], p[1]])
+            .collect();
     }
     write_atomic(&rd.join(RESULT), serde_json::to_string_pretty(&result)?.as_bytes())?;
     say(format!(
@@ -345,4 +441,39 @@ fn one_run(dir: &Path, plan: &Plan, r: u32, binary: &Path, say: &(dyn Fn(String)
         result.moving
     ));
     Ok(())
+}
+
+/// What LIGGGHTS left in `rd`, checked and reduced to a result; the reason it is not a
+/// believable run otherwise.
+fn read_run(case: &Case, rd: &Path, wall_s: f64) -> Result<RunResult, String> {
+    let at = |p: &Path, e: anyhow::Error| format!("{}: {e:#}", p.display());
+    // every grain left the box (the deck stopped before a run LIGGGHTS would refuse): a
+    // result with everything lost, which the rule credits nothing
+    if rd.join(ALL_LOST).is_file() && !rd.join(DUMP).is_file() {
+        return Ok(reduce(case, &[], 0.0, wall_s));
+    }
+    let dump_path = rd.join(DUMP);
+    let dump = read_text(&dump_path, &schema::DEM_DUMP_FILE).map_err(|e| at(&dump_path, e))?;
+    let grains = parse_dump(&dump).map_err(|e| at(&dump_path, e))?;
+    // a case written before the stop time was recorded ran every movement of the mesh
+    let time_path = rd.join(STROKE_TIME);
+    let stroke_time = match read_text_if_present(&time_path, &schema::DEM_STROKE_TIME_FILE)
+        .map_err(|e| at(&time_path, e))?
+    {
+        Some(t) => Some(
+            t.trim().parse::<f64>().map_err(|_| format!("{}: `{}` is not a number", time_path.display(), t.trim()))?,
+        ),
+        None => None,
+    };
+    check_dump(case, &grains, stroke_time)?;
+    Ok(reduce(case, &grains, stroke_time.unwrap_or(f64::INFINITY), wall_s))
+}
+
+fn remove_if_present(p: &Path) -> anyhow::Result<()> {
+    match std::fs::remove_file(p) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            Err(e).with_context(|| format!("removing {}", p.display()))
+        }
+        _ => Ok(()),
+    }
 }

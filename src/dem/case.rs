@@ -15,7 +15,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::contact::{contact, property_commands, Contact, CONTACT_MODEL};
+use super::contact::{contact, model_normal_cor, property_commands, Contact, CONTACT_MODEL};
 use super::grains::{mass_matching_diameter, place, place_sized, Placement};
 use super::motion::SledMotion;
 use super::settings::{check_representable, DemSettings};
@@ -23,6 +23,7 @@ use super::sizes::{reference_diameter, size_classes};
 use super::stl::{extrude, profile_polyline, stl_text, subdivide, MAX_FACET_M};
 use crate::engine::{evaluate_detailed, make_engine, EngineKind};
 use crate::io::atomic::write_atomic;
+use crate::io::config::DemRestitution;
 use crate::model::geometry::Profile;
 use crate::model::{prepare, Design, ParticleState, Scenario};
 
@@ -35,6 +36,11 @@ pub const DUMP: &str = "final.dump";
 pub const SETTLED: &str = "settled.dump";
 /// The stroke time at which the run ended, s (the mesh's position then is the binning frame).
 pub const STROKE_TIME: &str = "stroke_time.txt";
+/// Written instead of [`DUMP`] when every grain has left the box: LIGGGHTS refuses to `run`
+/// (or dump) a granular case with no grains ("Atom types must start from 1": the mesh's type 2
+/// is then the lowest type present), so the deck stops there and says so, and the run is a
+/// result with every grain lost rather than a failure.
+pub const ALL_LOST: &str = "all_lost.txt";
 
 /// Simulated time per rest check, s.
 const CHUNK_S: f64 = 0.02;
@@ -135,7 +141,11 @@ impl Case {
         // tooth's height onto the next; the smallest grain has the shortest contact (t_c ∝ d)
         let design_speed = 1.5 * design.v0;
         let d_min = placement.classes.iter().map(|c| c.diameter_m).fold(f64::INFINITY, f64::min);
-        let contact = contact(scenario, d_min, design_speed, settings.rolling_friction, settings.max_overlap_fraction);
+        let mut contact =
+            contact(scenario, d_min, design_speed, settings.rolling_friction, settings.max_overlap_fraction);
+        if settings.restitution == DemRestitution::Model {
+            contact.restitution = model_normal_cor(scenario, design.v0).clamp(0.01, 1.0);
+        }
         let drag_gamma_kg_s = k_drag.map(|k| placement.grain_mass_kg * k);
         let profile = Profile::new(design, prep.profile.local, scenario.environment.alpha_deg, teeth);
         let line = subdivide(&profile_polyline(&profile, teeth), MAX_FACET_M);
@@ -263,18 +273,25 @@ impl Case {
              fix stroke all move/mesh mesh sled linear/variable v_vx v_vy v_vz\n\
              fix integrate all nve/sphere\n\
              compute ke all ke\nvariable m equal mass(all)\nvariable vrms equal sqrt(2*c_ke/(v_m+1e-30))\n\
+             variable grains equal atoms\n\
              thermo_style custom step atoms ke v_vrms v_t\nthermo {chunk}\nthermo_modify lost ignore norm no\n\
-             # settle\nvariable settle loop {settle_chunks}\nlabel settling\nrun {chunk}\n\
+             # before every run and dump: a case with no grains left cannot run (ALL_LOST)\n\
+             # settle\nvariable settle loop {settle_chunks}\nlabel settling\n{gone}run {chunk}\n\
              if \"${{vrms}} < {rest:e}\" then \"jump SELF settled\"\nnext settle\njump SELF settling\nlabel settled\n\
-             write_dump all custom {SETTLED} id x y z\n\
+             {gone}write_dump all custom {SETTLED} id x y z\n\
              variable now equal step\nvariable s0 equal ${{now}}\nprint \"sawtooth: stroke starts at step ${{s0}}\"\n\
              # the stroke\nrun {stroke}\n\
-             # until the grains rest (and a return is not under way)\nvariable rest loop {rest_chunks}\nlabel resting\nrun {chunk}\n\
+             # until the grains rest (and a return is not under way)\nvariable rest loop {rest_chunks}\nlabel resting\n{gone}run {chunk}\n\
              if \"{rested}\" then \"jump SELF rested\"\nnext rest\njump SELF resting\nlabel rested\n\
              print \"sawtooth: stroke time at the end ${{t}} s\"\n\
              # where the mesh stopped: the gather bins the grains in its frame then\n\
              print \"${{t}}\" file {STROKE_TIME} screen no\n\
-             write_dump all custom {DUMP} id type diameter mass x y z vx vy vz",
+             {gone}write_dump all custom {DUMP} id type diameter mass x y z vx vy vz\n\
+             jump SELF finished\n\
+             label gone\nvariable at equal step\nprint \"sawtooth: every grain left the box by step ${{at}}\"\n\
+             print \"every grain left the box by step ${{at}}\" file {ALL_LOST} screen no\n\
+             label finished",
+            gone = "if \"${grains} == 0\" then \"jump SELF gone\"\n",
             rest = self.settings.rest_speed_m_s,
         );
         s
@@ -382,6 +399,23 @@ mod tests {
     }
 
     #[test]
+    fn the_model_restitution_gives_the_dem_the_thesis_laws_cor_at_the_launch_speed() {
+        let s = Scenario::lunar();
+        let d = Design::lunar_solution_c();
+        let plain = Case::build(&s, &d, &settings(60), 0, None).unwrap();
+        assert_eq!(plain.contact.restitution, s.collision.k_elastic);
+        let model = DemSettings { restitution: DemRestitution::Model, ..settings(60) };
+        let case = Case::build(&s, &d, &model, 0, None).unwrap();
+        // Eq. 4.9 at |v_n| = v0, above the limit velocity: k_el (v_limit / v0)^(1/4)
+        let v_limit = crate::model::collision::limit_velocity(&s.material);
+        let expect = s.collision.k_elastic * (v_limit / d.v0).powf(0.25);
+        assert!((case.contact.restitution - expect).abs() < 1e-12, "{} vs {expect}", case.contact.restitution);
+        assert!(case
+            .script()
+            .contains(&format!("coefficientRestitution peratomtypepair 2 {0} {0} {0} {0}", case.contact.restitution)));
+    }
+
+    #[test]
     fn one_size_keeps_one_drag_on_every_grain() {
         let (s, d) = rig();
         let case = Case::build(&s, &d, &settings(60), 0, None).unwrap();
@@ -449,6 +483,36 @@ mod tests {
         // without a return, rest alone ends the run
         let still = Case::build(&s, &d, &settings(60), 0, None).unwrap().script();
         assert!(still.contains("if \"${vrms} < 5e-3\" then \"jump SELF rested\""), "{still}");
+    }
+
+    /// LIGGGHTS stops with an error on a run (or a dump) of a granular case with no grains
+    /// left; the deck checks the count after every run, before the next run or dump, and
+    /// stops at `gone` (ALL_LOST) instead.
+    #[test]
+    fn no_run_or_dump_follows_a_run_without_the_grain_count_checked() {
+        let (s, d) = rig();
+        let script = Case::build(&s, &d, &settings(60), 0, None).unwrap().script();
+        let guard = "if \"${grains} == 0\" then \"jump SELF gone\"";
+        let lines: Vec<&str> = script.lines().collect();
+        let mut checked = true; // read_data's grains are all there
+        let mut acts = 0;
+        for line in &lines {
+            if *line == guard {
+                checked = true;
+            } else if line.starts_with("run ") || line.starts_with("write_dump ") {
+                assert!(checked, "`{line}` may meet a case with no grains: {script}");
+                acts += 1;
+                if line.starts_with("run ") {
+                    checked = false;
+                }
+            }
+        }
+        assert_eq!(acts, 5, "settle, dump, stroke, rest, dump: {script}");
+        let gone = lines.iter().position(|l| *l == "label gone").expect("a `gone` label");
+        assert!(lines[gone..].iter().any(|l| l.contains(&format!("file {ALL_LOST}"))), "{script}");
+        // the normal end jumps past it
+        let finished = lines.iter().position(|l| *l == "jump SELF finished").unwrap();
+        assert!(finished < gone && lines.last() == Some(&"label finished"), "{script}");
     }
 
     #[test]

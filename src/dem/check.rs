@@ -6,10 +6,11 @@
 //! Every design is run at the slope its front figures are at (the worst slope of a run over
 //! several). A check is a plan ([`CheckPlan`], `plan.json` in the check's folder): its
 //! finalists, each with the DEM campaign of its seeds in a folder of its own, and its members,
-//! one DEM run each (finalist × seed). The members run here one design after another
-//! ([`check`]) or one per process (`sawtooth campaign run DIR --task I`: a Slurm array task,
-//! [`run_member`]); either way [`gather`] builds `check.json` from the runs' result files, so
-//! both give the same report, and a killed check resumes run by run.
+//! one DEM run each (finalist × seed). It is a kind of `protocol::Campaign`: the members run
+//! here one design after another ([`check`], `campaign run DIR`) or one per process
+//! (`campaign run DIR --task I`: a Slurm array task, [`run_member`]); either way [`gather`]
+//! builds `check.json` from the runs' result files, so both give the same report, and a
+//! killed check resumes run by run.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -22,13 +23,14 @@ use super::compare::Spread;
 use super::gather::RunResult;
 use super::settings::DemSettings;
 use crate::io::atomic::write_atomic;
-use crate::io::run_dir::{kind_of, Access, RunDir};
+use crate::io::run_dir::{kind_of, mark_subfolder, Access, RunDir};
 use crate::model::design::DesignRow;
 use crate::model::performance::performance;
 use crate::model::prepare;
 use crate::model::requirements::{Limit, Requirements};
 use crate::optim::front::{picks, read_pareto_csv, FrontPoint};
 use crate::optim::manifest::read_manifest;
+use crate::protocol::{Campaign, MemberState, Ran};
 
 /// The `io::run_dir` kind of a check's folder.
 pub const CHECK_KIND: &str = "dem-check";
@@ -143,8 +145,13 @@ impl CheckPlan {
         if self.format != CHECK_PLAN_FORMAT {
             return Err(format!("`format` {} (this sawtooth reads format {CHECK_PLAN_FORMAT})", self.format));
         }
-        if !(1..=1000).contains(&self.seeds) {
-            return Err(format!("`seeds` must lie in [1, 1000], got {}", self.seeds));
+        crate::schema::DEM_SEEDS.check_u32("`seeds`", self.seeds)?;
+        // printed in tables and copied into the Slurm scripts' comments
+        crate::schema::one_line("`command`", &self.command)?;
+        crate::schema::one_line("`run_dir`", &self.run_dir)?;
+        crate::schema::DEM_PARTICLES.check_u32("`particles`", self.particles)?;
+        if let Some(r) = &self.requirements {
+            r.validate().map_err(|e| format!("`requirements`: {e}"))?;
         }
         if self.finalists.is_empty() || self.members() > MAX_MEMBERS {
             return Err(format!(
@@ -168,8 +175,24 @@ impl CheckPlan {
             if f.campaign.runs != self.seeds {
                 return Err(at(format!("`campaign.runs` {} differs from `seeds` {}", f.campaign.runs, self.seeds)));
             }
-            f.campaign.settings.validate().map_err(|e| at(format!("`campaign.settings`: {e}")))?;
-            f.campaign.case(0).map_err(|e| at(format!("`campaign`: {e}")))?;
+            if f.campaign.settings.particles != self.particles {
+                return Err(at(format!(
+                    "`campaign.settings.particles` {} differs from `particles` {}",
+                    f.campaign.settings.particles, self.particles
+                )));
+            }
+            // the optimisation's figures are printed beside the DEM's: numbers, not NaN
+            for (name, v) in [
+                ("model_d_avg_m", Some(f.model_d_avg_m)),
+                ("model_m_dot_kg_s", Some(f.model_m_dot_kg_s)),
+                ("model_w_spec_j_kg", Some(f.model_w_spec_j_kg)),
+                ("model_m_dot_op_kg_h", f.model_m_dot_op_kg_h),
+            ] {
+                if let Some(v) = v.filter(|v| !(v.is_finite() && *v >= 0.0)) {
+                    return Err(at(format!("`{name}` is {v}; it is a finite number >= 0")));
+                }
+            }
+            f.campaign.check().map_err(|e| at(format!("`campaign`: {e}")))?;
         }
         Ok(())
     }
@@ -223,7 +246,7 @@ pub fn plan(run_dir: &Path, settings: &DemSettings, seeds: u32, k: usize, comman
             strokes: 0,
             period_teeth: 0,
         };
-        campaign.case(0).map_err(|e| anyhow::anyhow!("design {label}: {e}"))?;
+        campaign.check().map_err(|e| anyhow::anyhow!("design {label}: {e}"))?;
         finalists.push(Finalist {
             label,
             model_d_avg_m: p.d_avg_m,
@@ -278,8 +301,14 @@ pub fn write_plan(root: &Path, plan: &CheckPlan) -> anyhow::Result<RunDir> {
 pub fn read_plan(root: &Path) -> anyhow::Result<CheckPlan> {
     let path = root.join(CHECK_PLAN);
     let text = crate::io::bounded::read_text(&path, &crate::schema::PLAN_FILE)?;
-    let plan: CheckPlan = serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
-    plan.validate().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    parse_plan(&text, &path.display().to_string())
+}
+
+/// A check plan's text checked by every rule ([`CheckPlan::validate`]); `name` is the file
+/// named in messages.
+pub fn parse_plan(text: &str, name: &str) -> anyhow::Result<CheckPlan> {
+    let plan: CheckPlan = serde_json::from_str(text).with_context(|| format!("reading {name}"))?;
+    plan.validate().map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
     Ok(plan)
 }
 
@@ -296,7 +325,7 @@ pub fn run_member(root: &Path, plan: &CheckPlan, i: usize, say: &(dyn Fn(String)
     }
     let (f, r) = plan.member(i);
     let dir = plan.finalist_dir(root, f);
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    mark_subfolder(&dir, campaign::KIND)?;
     campaign::run_one(&dir, &plan.finalists[f].campaign, r, say)
 }
 
@@ -377,16 +406,89 @@ pub fn gather(root: &Path, plan: &CheckPlan) -> anyhow::Result<CheckReport> {
 /// long check shows its first designs early); the final report is [`gather`]'s.
 pub fn check(root: &Path, plan: &CheckPlan, jobs: usize, say: &(dyn Fn(String) + Sync)) -> anyhow::Result<CheckReport> {
     let _owned = write_plan(root, plan)?;
+    check_owned(root, plan, jobs, say)
+}
+
+/// [`check`] in a folder the caller holds exclusively, its plan there.
+fn check_owned(
+    root: &Path,
+    plan: &CheckPlan,
+    jobs: usize,
+    say: &(dyn Fn(String) + Sync),
+) -> anyhow::Result<CheckReport> {
     let mut report = empty_report(plan);
     for (i, f) in plan.finalists.iter().enumerate() {
         let dir = plan.finalist_dir(root, i);
-        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        mark_subfolder(&dir, campaign::KIND)?;
         say(format!("design {}: {}", f.label, DesignRow::of(&f.campaign.design)));
         let results = campaign::run(&dir, &f.campaign, jobs, say)?;
         report.designs.push(design_check(plan, f, &results)?);
         write_report(root, &report)?;
     }
     gather(root, plan)
+}
+
+/// The report's table and where its file is: what `dem check` and `campaign run/gather` print.
+pub fn write_summary(out: &mut dyn Write, r: &CheckReport, root: &Path) -> anyhow::Result<()> {
+    write_table(out, r)?;
+    writeln!(out, "\nwrote {}/{}", root.display(), CHECK_JSON)?;
+    Ok(())
+}
+
+/// A DEM check as a campaign: members are DEM runs (design x seed), each resumed run by run
+/// from the results its design's campaign holds.
+impl Campaign for CheckPlan {
+    fn kind(&self) -> &'static str {
+        CHECK_KIND
+    }
+    fn what(&self) -> &'static str {
+        "DEM check"
+    }
+    fn command(&self) -> &str {
+        &self.command
+    }
+    fn members(&self) -> usize {
+        CheckPlan::members(self)
+    }
+    fn label(&self, i: usize) -> String {
+        self.member_label(i)
+    }
+    fn member_dir(&self, root: &Path, i: usize) -> PathBuf {
+        CheckPlan::member_dir(self, root, i)
+    }
+    fn state(&self, root: &Path, i: usize) -> MemberState {
+        if self.member_done(root, i) {
+            MemberState::Finished
+        } else if CheckPlan::member_dir(self, root, i).is_dir() {
+            MemberState::Started
+        } else {
+            MemberState::NotStarted
+        }
+    }
+    fn run_member(&self, root: &Path, i: usize) -> anyhow::Result<Ran> {
+        let label = self.member_label(i);
+        Ok(if run_member(root, self, i, &|l| eprintln!("member {i} ({label}): {l}"))? {
+            Ran::Finished(CheckPlan::member_dir(self, root, i).display().to_string())
+        } else {
+            Ran::AlreadyFinished
+        })
+    }
+    fn run_all(&self, root: &Path, out: &mut dyn Write) -> anyhow::Result<Ran> {
+        let jobs = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let report = check_owned(root, self, jobs, &|l| eprintln!("dem check: {l}"))?;
+        write_summary(out, &report, root)?;
+        Ok(Ran::Finished(String::new()))
+    }
+    fn gather(&self, root: &Path, out: &mut dyn Write) -> anyhow::Result<()> {
+        write_summary(out, &gather(root, self)?, root)
+    }
+    fn label_width(&self) -> usize {
+        16
+    }
+    fn tally(&self, states: &[MemberState]) -> String {
+        let finished = states.iter().filter(|s| **s == MemberState::Finished).count();
+        format!("finished {finished}, not finished {}", states.len() - finished)
+    }
 }
 
 pub fn write_table(out: &mut dyn Write, r: &CheckReport) -> anyhow::Result<()> {

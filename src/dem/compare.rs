@@ -32,8 +32,12 @@ pub struct Spread {
     pub sd: f64,
 }
 
+/// Mean and sample sd of `v` (sd 0 for one value; both NaN for none).
 fn spread(v: &[f64]) -> Spread {
-    let n = v.len().max(1) as f64;
+    if v.is_empty() {
+        return Spread { mean: f64::NAN, sd: f64::NAN };
+    }
+    let n = v.len() as f64;
     let mean = v.iter().sum::<f64>() / n;
     let sd = if v.len() > 1 { (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() } else { 0.0 };
     Spread { mean, sd }
@@ -158,7 +162,7 @@ pub fn compare(
     let model_pct: Vec<f64> = model.iter().map(|f| 100.0 * f).collect();
     let errors: Vec<f64> = model_pct.iter().zip(&dem_pct).map(|(m, d)| (m - d.mean).abs()).collect();
     let (mc, md) = centre_and_dispersion(&model);
-    let com: Vec<(f64, f64)> = fractions.iter().map(|f| centre_and_dispersion(f)).collect();
+    let (dem_centre, dem_dispersion) = centre_spreads(&fractions);
     let dem_d: Vec<f64> = runs.iter().map(|r| r.d_avg_m * 1e3).collect();
     let dem_d_avg_mm = spread(&dem_d);
     let model_d_avg_mm = sim.d_avg_m * 1e3;
@@ -192,9 +196,9 @@ pub fn compare(
         model_d_avg_mm,
         dem_d_avg_mm,
         model_centre: mc,
-        dem_centre: spread(&com.iter().map(|c| c.0).collect::<Vec<_>>()),
+        dem_centre,
         model_dispersion: md,
-        dem_dispersion: spread(&com.iter().map(|c| c.1).collect::<Vec<_>>()),
+        dem_dispersion,
         model_s,
         dem_s: spread(&runs.iter().map(|r| r.wall_s).collect::<Vec<_>>()),
         model_particles: scenario.sim.particles,
@@ -345,5 +349,28 @@ impl Figure for ComparisonPlot<'_> {
                 .drawn()?;
         }
         plot::legend(&key, &Self::legend())
+    }
+}
+
+/// The spread over runs of the centre of mass and the dispersion (Eq. 4.57-4.58) of each run's
+/// per-tooth fractions. A run that lost every grain has no centre: the spread is over the runs
+/// with grains on the teeth (NaN only when no run kept one).
+fn centre_spreads(fractions: &[Vec<f64>]) -> (Spread, Spread) {
+    let com: Vec<(f64, f64)> =
+        fractions.iter().map(|f| centre_and_dispersion(f)).filter(|(c, d)| c.is_finite() && d.is_finite()).collect();
+    (spread(&com.iter().map(|c| c.0).collect::<Vec<_>>()), spread(&com.iter().map(|c| c.1).collect::<Vec<_>>()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_run_that_lost_every_grain_leaves_the_centre_to_the_runs_that_kept_some() {
+        let (c, d) = centre_spreads(&[vec![0.0, 1.0, 0.0], vec![0.0; 3], vec![0.0, 0.0, 1.0]]);
+        assert_eq!((c.mean, d.mean), (2.5, 0.0));
+        assert!((c.sd - 0.5f64.sqrt()).abs() < 1e-12, "{c:?}");
+        let (c, d) = centre_spreads(&[vec![0.0; 3], vec![0.0; 3]]);
+        assert!(c.mean.is_nan() && c.sd.is_nan() && d.mean.is_nan(), "{c:?} {d:?}");
     }
 }

@@ -385,7 +385,7 @@ pub struct SteadyRun {
 pub fn reduce(dir: &Path, conveyor: &Conveyor, wall_s: f64) -> anyhow::Result<SteadyRun> {
     let read = |k: u32| -> anyhow::Result<Vec<Unwrapped>> {
         let p = dir.join(cycle_dump(k));
-        let text = std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
+        let text = crate::io::bounded::read_text(&p, &crate::schema::DEM_DUMP_FILE)?;
         parse_unwrapped(&text).with_context(|| format!("reading {}", p.display()))
     };
     let first = read(0)?;

@@ -6,6 +6,12 @@
 //!
 //! A grain is lost when LIGGGHTS deleted it (it left the box), when it ends behind tooth 0's
 //! start (no surface there), or past the mesh's last tooth.
+//!
+//! What the engine wrote is checked before it becomes a number ([`check_dump`]): a run that
+//! blew up (NaN or infinite positions, grains outside the box, duplicated or unknown ids,
+//! masses that are not the placed grains', a stroke time that is not a time) is a failed
+//! run, not a perfect one. A `result.json` read back is checked again ([`check_result`]):
+//! it is input like any other, and an edited one must not reach `dem.csv` or a comparison.
 
 use std::fmt::Write as _;
 
@@ -40,14 +46,149 @@ pub fn parse_dump(text: &str) -> anyhow::Result<Vec<DumpGrain>> {
         let num = |i: usize| -> anyhow::Result<f64> {
             f.get(i).and_then(|s| s.parse().ok()).with_context(|| format!("dump atom line {}: bad field {i}", n + 1))
         };
+        let id = f
+            .get(idx[0])
+            .and_then(|s| s.parse::<u64>().ok())
+            .with_context(|| format!("dump atom line {}: the id is not a whole number >= 0", n + 1))?;
         out.push(DumpGrain {
-            id: num(idx[0])? as u64,
+            id,
             mass_kg: num(idx[1])?,
             pos: [num(idx[2])?, num(idx[3])?, num(idx[4])?],
             vel: [num(idx[5])?, num(idx[6])?, num(idx[7])?],
         });
     }
     Ok(out)
+}
+
+/// Relative tolerance of a grain's mass, and of the sum of the masses, against what was
+/// placed: LIGGGHTS writes a dump's numbers with 6 significant digits (`%g`), so a grain's
+/// mass reads back within 5e-6 of the placed one; 1e-4 leaves room for that and nothing else.
+pub const MASS_TOLERANCE: f64 = 1e-4;
+
+/// Every grain of the dump a grain that was placed, where a grain can be: a finite position
+/// inside the case's box (LIGGGHTS deletes a grain that leaves it), a finite velocity, an id
+/// in 1..=placed that no other grain has, the mass of the grain placed with that id (within
+/// [`MASS_TOLERANCE`], so the masses add up to what was placed); and a stroke time that is
+/// finite and not negative (`None`: a case of an older sawtooth, which recorded none).
+pub fn check_dump(case: &Case, grains: &[DumpGrain], stroke_time_s: Option<f64>) -> Result<(), String> {
+    if let Some(t) = stroke_time_s {
+        if !(t.is_finite() && t >= 0.0) {
+            return Err(format!("the stroke time at the end of the run is {t} s; a run ends at a finite time >= 0"));
+        }
+    }
+    let placed = &case.placement.grains;
+    if grains.len() > placed.len() {
+        return Err(format!("the dump holds {} grains; {} were placed", grains.len(), placed.len()));
+    }
+    let rho = case.contact.density_kg_m3;
+    let b = &case.bounds;
+    // a grain on the box's face is inside; rounding of the dump's 6 digits is allowed for
+    let slack: Vec<f64> = b.iter().map(|[lo, hi]| 1e-5 * (hi - lo).abs().max(lo.abs()).max(hi.abs())).collect();
+    let mut seen = vec![false; placed.len()];
+    let mut sum_g = 0.0;
+    for g in grains {
+        let what = format!("grain {}", g.id);
+        if let Some(k) = (0..3).find(|&k| !g.pos[k].is_finite()) {
+            return Err(format!("{what}: position {} is {} (a run that blew up)", ["x", "y", "z"][k], g.pos[k]));
+        }
+        if let Some(k) = (0..3).find(|&k| !g.vel[k].is_finite()) {
+            return Err(format!("{what}: velocity v{} is {} (a run that blew up)", ["x", "y", "z"][k], g.vel[k]));
+        }
+        for k in 0..3 {
+            let [lo, hi] = b[k];
+            if g.pos[k] < lo - slack[k] || g.pos[k] > hi + slack[k] {
+                return Err(format!(
+                    "{what}: {} = {:e} m lies outside the case's box [{lo:e}, {hi:e}] m (LIGGGHTS deletes a grain that leaves it)",
+                    ["x", "y", "z"][k],
+                    g.pos[k]
+                ));
+            }
+        }
+        let i = match usize::try_from(g.id).ok().and_then(|id| id.checked_sub(1)).filter(|&i| i < placed.len()) {
+            Some(i) => i,
+            None => return Err(format!("{what}: the id is not one of the placed grains' (1..={})", placed.len())),
+        };
+        if std::mem::replace(&mut seen[i], true) {
+            return Err(format!("{what}: the id appears twice in the dump"));
+        }
+        let expected = grain_mass(placed[i].diameter_m, rho);
+        if !(g.mass_kg.is_finite() && g.mass_kg > 0.0 && (g.mass_kg / expected - 1.0).abs() <= MASS_TOLERANCE) {
+            return Err(format!(
+                "{what}: mass {:e} kg is not the {expected:e} kg placed (within a relative {MASS_TOLERANCE:e})",
+                g.mass_kg
+            ));
+        }
+        sum_g += g.mass_kg * 1e3;
+    }
+    let missing_g: f64 =
+        placed.iter().zip(&seen).filter(|(_, s)| !**s).map(|(p, _)| grain_mass(p.diameter_m, rho) * 1e3).sum();
+    let placed_g = case.placement.mass_kg * 1e3;
+    if ((sum_g + missing_g) / placed_g - 1.0).abs() > MASS_TOLERANCE {
+        return Err(format!(
+            "the grains weigh {:e} g with the deleted ones; {placed_g:e} g were placed (within a relative {MASS_TOLERANCE:e})",
+            sum_g + missing_g
+        ));
+    }
+    Ok(())
+}
+
+/// A result read back from `result.json` against the run it claims to be: run `run` of a
+/// campaign whose first case is `case` (the mesh's teeth, the placed grains and their mass
+/// are the same for every seed) and whose first seed is `first_seed`. The first broken rule,
+/// naming its field.
+pub fn check_result(r: &RunResult, case: &Case, first_seed: u64, run: u32) -> Result<(), String> {
+    let seed = first_seed.checked_add(u64::from(run));
+    if Some(r.seed) != seed {
+        return Err(format!(
+            "`seed` {} is not run {}'s seed {} in the campaign's plan",
+            r.seed,
+            run + 1,
+            seed.map_or("(beyond 2^64)".into(), |s| s.to_string())
+        ));
+    }
+    if r.teeth_g.len() != case.teeth as usize {
+        return Err(format!("`teeth_g` holds {} teeth; the campaign's mesh has {}", r.teeth_g.len(), case.teeth));
+    }
+    if let Some((j, m)) = r.teeth_g.iter().enumerate().find(|(_, m)| !(m.is_finite() && **m >= 0.0)) {
+        return Err(format!("`teeth_g[{j}]` is {m:?} g; a tooth holds a finite mass >= 0"));
+    }
+    let placed_g = case.placement.mass_kg * 1e3;
+    if !(r.input_mass_g.is_finite()
+        && r.input_mass_g > 0.0
+        && (r.input_mass_g / placed_g - 1.0).abs() <= MASS_TOLERANCE)
+    {
+        return Err(format!(
+            "`input_mass_g` {:?} is not the {placed_g:e} g the campaign's case places (within a relative {MASS_TOLERANCE:e})",
+            r.input_mass_g
+        ));
+    }
+    let in_teeth: f64 = r.teeth_g.iter().sum();
+    if in_teeth > r.input_mass_g * (1.0 + MASS_TOLERANCE) {
+        return Err(format!(
+            "`teeth_g` adds up to {in_teeth:?} g, more than the {:?} g loaded (`input_mass_g`)",
+            r.input_mass_g
+        ));
+    }
+    let placed = case.placement.grains.len();
+    if r.grains != placed {
+        return Err(format!("`grains` {} is not the {placed} grains the campaign's case places", r.grains));
+    }
+    for (name, v) in [("lost", r.lost), ("moving", r.moving)] {
+        if v > r.grains {
+            return Err(format!("`{name}` {v} exceeds `grains` {}", r.grains));
+        }
+    }
+    if r.left_box > r.lost {
+        return Err(format!("`left_box` {} exceeds `lost` {} (a grain that left the box is lost)", r.left_box, r.lost));
+    }
+    let farthest = case.profile().credited_distance(case.teeth as i64);
+    if !(r.d_avg_m.is_finite() && r.d_avg_m >= 0.0 && r.d_avg_m <= farthest * (1.0 + MASS_TOLERANCE)) {
+        return Err(format!("`d_avg_m` {:?} m lies outside [0, {farthest}] m (the mesh's last tooth)", r.d_avg_m));
+    }
+    if !(r.wall_s.is_finite() && r.wall_s >= 0.0) {
+        return Err(format!("`wall_s` {:?} is not a duration (finite, >= 0)", r.wall_s));
+    }
+    Ok(())
 }
 
 /// Read a dump's `x y z` columns (`write_dump ... custom id x y z`), in the dump's order.

@@ -116,8 +116,7 @@ fn run_impact(case: &Case, binary: &Path, dir: &Path, vn: f64, vt: f64) -> anyho
     write_atomic(&dir.join(GRAIN), data.as_bytes())?;
     write_atomic(&dir.join(SCRIPT), script.as_bytes())?;
     run_case(binary, dir, &mut |_| {})?;
-    let text =
-        std::fs::read_to_string(dir.join(DUMP)).with_context(|| format!("reading {}", dir.join(DUMP).display()))?;
+    let text = crate::io::bounded::read_text(&dir.join(DUMP), &crate::schema::DEM_DUMP_FILE)?;
     let grain = parse_dump(&text)?.into_iter().next().context("the impact's dump holds no grain")?;
     let r = case.placement.classes.iter().map(|k| k.diameter_m).fold(f64::INFINITY, f64::min) / 2.0;
     if grain.pos[1] <= r {
@@ -148,7 +147,9 @@ fn run_all(
     jobs: usize,
 ) -> anyhow::Result<Vec<(f64, f64, f64)>> {
     let next = AtomicUsize::new(0);
-    let out: Mutex<Vec<Option<anyhow::Result<(f64, f64, f64)>>>> = Mutex::new((0..list.len()).map(|_| None).collect());
+    // one slot per impact of `list`, filled by whichever worker runs it
+    type Slot = Option<anyhow::Result<(f64, f64, f64)>>;
+    let out: Mutex<Vec<Slot>> = Mutex::new((0..list.len()).map(|_| None).collect());
     std::thread::scope(|scope| {
         for _ in 0..jobs.max(1).min(list.len().max(1)) {
             scope.spawn(|| loop {
@@ -333,7 +334,8 @@ impl crate::plot::Figure for ImpactPlot<'_> {
             .filter(|i| i.psi.is_finite())
             .filter_map(|i| Some((i.psi, i.dem_tangential_ratio?, i.model_tangential_ratio?)))
             .collect();
-        let panels: [(&[(f64, f64, f64)], &str, &str); 2] = [
+        type Panel<'a> = (&'a [(f64, f64, f64)], &'a str, &'a str);
+        let panels: [Panel; 2] = [
             (&normal, "normal impact speed |v_n| [m/s]", "normal COR v_n'/v_n"),
             (&tangential, "psi = |v_t| / (mu (1+e) |v_n|)", "tangential ratio v_t'/v_t"),
         ];
@@ -382,7 +384,7 @@ mod tests {
         assert!(script.contains("fix walls all wall/gran model hertz tangential history rolling_friction cdt"));
         assert!(!script.contains("gravity"), "no gravity in a single impact");
         let d = case.placement.diameter_m;
-        assert!(data.contains(&format!("\n1 2e-1 -5e-1 0 0 0 0\n")), "{data}");
+        assert!(data.contains("\n1 2e-1 -5e-1 0 0 0 0\n"), "{data}");
         let atom = data.lines().find(|l| l.starts_with("1 1 ")).unwrap();
         let y: f64 = atom.split_whitespace().nth(5).unwrap().parse().unwrap();
         assert!((y - 0.5 * d * (1.0 + GAP_RADII)).abs() < 1e-12, "{atom}");

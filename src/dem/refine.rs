@@ -121,7 +121,8 @@ pub fn refine(
             p.settings.validate().map_err(anyhow::Error::msg)?;
             let rel = sub_dir(index, overlap, particles);
             let sub = dir.join(&rel);
-            std::fs::create_dir_all(&sub)?;
+            // a campaign of the refinement, the base campaign's own folder (marked as such)
+            crate::io::run_dir::mark_subfolder(&sub, "dem-refine")?;
             say(format!("refine level {}: overlap {overlap}, {particles} grains in {}", level + 1, sub.display()));
             let runs = campaign::run(&sub, &p, jobs, say)?;
             let r = rung(&p, rel, &runs);

@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context as _};
 
-use super::case::{DUMP, SCRIPT, STROKE_TIME};
+use super::case::{ALL_LOST, DUMP, SCRIPT, STROKE_TIME};
 
 /// Environment variable naming the LIGGGHTS binary (overrides the PATH lookup).
 pub const BINARY_ENV: &str = "SAWTOOTH_LIGGGHTS";
@@ -87,6 +87,7 @@ pub struct Finished {
 pub fn run_case(binary: &Path, dir: &Path, progress: &mut dyn FnMut(&Thermo)) -> anyhow::Result<Finished> {
     let _ = std::fs::remove_file(dir.join(DUMP));
     let _ = std::fs::remove_file(dir.join(STROKE_TIME));
+    let _ = std::fs::remove_file(dir.join(ALL_LOST));
     let started = Instant::now();
     let mut cmd = match on_path("stdbuf") {
         Some(stdbuf) => {
@@ -143,8 +144,12 @@ pub fn run_case(binary: &Path, dir: &Path, progress: &mut dyn FnMut(&Thermo)) ->
             screen_path.display()
         );
     }
-    if !dir.join(DUMP).is_file() {
-        bail!("LIGGGHTS finished in {} but wrote no {DUMP} (output in {})", dir.display(), screen_path.display());
+    if !dir.join(DUMP).is_file() && !dir.join(ALL_LOST).is_file() {
+        bail!(
+            "LIGGGHTS finished in {} but wrote neither {DUMP} nor {ALL_LOST} (output in {})",
+            dir.display(),
+            screen_path.display()
+        );
     }
     Ok(Finished { wall_s: started.elapsed().as_secs_f64(), last })
 }

@@ -4,7 +4,7 @@
 use std::any::Any;
 
 use super::kernel::*;
-use super::lanes;
+use super::lanes::{self, Lanes, MAX_LANES};
 use super::{Context, FlightRecord, ParticleEngine, Run};
 use crate::model::flight::Flight;
 use crate::model::geometry::Profile;
@@ -118,11 +118,15 @@ fn state_of(code: u32) -> ParticleState {
 
 /// The bounce loop (4.2.4) over one design, generic over precision: every particle as the
 /// kernel leaves it, and the iterations run. The twin of the bounce loop of WGSL `simulate`
-/// (its reduction's twin is `kernel::reduce`).
+/// (its reduction's twin is `kernel::reduce`). `lanes`: the SIMD lanes that search flights
+/// of the text's physics in f64 several at a time and draw the launch factors sixteen at a
+/// time (`lanes::Lanes::of` the engine's path; None: one particle at a time), to the same
+/// bits.
 #[inline(always)]
 pub fn run_particles<T: Real>(
     prep: &Prepared,
     ctx: &Context,
+    lanes: Option<Lanes>,
     mut trace: Option<&mut Vec<FlightRecord>>,
 ) -> (Vec<KParticle<T>>, u32) {
     let d = kernel_design::<T>(prep);
@@ -133,25 +137,25 @@ pub fn run_particles<T: Real>(
         .enumerate()
         .map(|(i, l)| init_particle(&d, &ph, [T::c(l[0]), T::c(l[1])], i as u32))
         .collect();
-    // flights of the text's physics in f64 (the lunar and Earth batches) are searched eight
-    // at a time on SIMD lanes, to the same bits (`lanes`)
+    // flights of the text's physics in f64 (the lunar and Earth batches) are searched
+    // several at a time on the SIMD lanes, to the same bits
     let any_d: &dyn Any = &d;
     let any_ph: &dyn Any = &ph;
-    let on_lanes = match (any_d.downcast_ref::<KDesign<f64>>(), any_ph.downcast_ref::<KPhysics<f64>>()) {
-        (Some(d64), Some(ph64)) if lanes::available() => Some((d64, ph64)),
+    let on_lanes = match (lanes, any_d.downcast_ref::<KDesign<f64>>(), any_ph.downcast_ref::<KPhysics<f64>>()) {
+        (Some(lanes), Some(d64), Some(ph64)) => Some((lanes, d64, ph64)),
         _ => None,
     };
-    let vector = on_lanes.filter(|(_, ph64)| lanes::applies(ph64));
+    let vector = on_lanes.filter(|(_, _, ph64)| lanes::applies(ph64));
     // flights in pieces (sled motion, quadratic drag) likewise, piece by piece
-    let piecewise = on_lanes.filter(|(_, ph64)| lanes::applies_piecewise(ph64));
+    let piecewise = on_lanes.filter(|(_, _, ph64)| lanes::applies_piecewise(ph64));
     // and the launch factors' draws of every engine run are made sixteen at a time
-    let draw_lanes = lanes::available();
+    let draw_lanes = lanes;
     // the indices of the particles still flying, for the lanes
     let mut to_fly: Vec<u32> = Vec::with_capacity(parts.len());
     let mut iterations = 0;
     for bounce in 0..ctx.max_bounces {
         let (mut flying, mut hop_sum, mut hop_n) = (0usize, 0.0f64, 0usize);
-        if draw_lanes {
+        if draw_lanes.is_some() {
             to_fly.clear();
             to_fly.extend((0..parts.len() as u32).filter(|&i| parts[i as usize].state == STATE_FLYING));
         }
@@ -161,19 +165,19 @@ pub fn run_particles<T: Real>(
             RANDOMISE_FIRST_LAUNCH => bounce == 0,
             _ => false,
         };
-        if draw_lanes && factors_drawn {
+        if let (Some(draws), true) = (draw_lanes, factors_drawn) {
             // the launch factors' draws sixteen particles at a time, and in f64 the launches
-            // eight at a time (unless the launch spread draws more)
-            let launch_lanes = vector.filter(|(_, ph64)| lanes::randomises(ph64));
+            // on the lanes too (unless the launch spread draws more)
+            let launch_lanes = vector.filter(|(_, _, ph64)| lanes::randomises(ph64));
             for group in to_fly.chunks(16) {
-                let angle = lanes::uniforms(ph.seed, group, bounce, DRAW_ANGLE);
-                let speed = lanes::uniforms(ph.seed, group, bounce, DRAW_SPEED);
-                if let Some((d64, ph64)) = launch_lanes {
+                let angle = draws.uniforms(ph.seed, group, bounce, DRAW_ANGLE);
+                let speed = draws.uniforms(ph.seed, group, bounce, DRAW_SPEED);
+                if let Some((lanes, d64, ph64)) = launch_lanes {
                     let any_parts: &mut dyn Any = &mut parts;
                     let parts64 = any_parts.downcast_mut::<Vec<KParticle<f64>>>().expect("T is f64 here");
-                    for (h, half) in group.chunks(lanes::LANES).enumerate() {
-                        let from = h * lanes::LANES;
-                        lanes::randomise_launches(d64, ph64, parts64, half, &angle[from..], &speed[from..]);
+                    for (h, part) in group.chunks(lanes.width()).enumerate() {
+                        let from = h * lanes.width();
+                        lanes.randomise_launches(d64, ph64, parts64, part, &angle[from..], &speed[from..]);
                     }
                     continue;
                 }
@@ -208,15 +212,15 @@ pub fn run_particles<T: Real>(
                 flying += 1;
             }
         };
-        if let Some((d64, ph64)) = vector {
-            for group in to_fly.chunks(lanes::LANES) {
+        if let Some((lanes, d64, ph64)) = vector {
+            for group in to_fly.chunks(lanes.width()) {
                 let any_parts: &dyn Any = &parts;
                 let parts64 = any_parts.downcast_ref::<Vec<KParticle<f64>>>().expect("T is f64 here");
-                let hits = lanes::first_hits(d64, ph64, parts64, group, bounce);
+                let hits = lanes.first_hits(d64, ph64, parts64, group, bounce);
                 // the restitution law on the lanes too, unless impact scatter draws a tilt
                 // per grain (then `land`, one grain at a time)
                 let bounced = (ph64.scatter_sigma == 0.0).then(|| {
-                    let (mut v_in, mut normal) = ([[0.0; lanes::LANES]; 2], [[0.0; lanes::LANES]; 2]);
+                    let (mut v_in, mut normal) = ([[0.0; MAX_LANES]; 2], [[0.0; MAX_LANES]; 2]);
                     for (l, (h, &i)) in hits.iter().zip(group).enumerate() {
                         // as `land`: the flight's velocity at the impact, plus a zero drift
                         let p = &parts64[i as usize];
@@ -226,7 +230,7 @@ pub fn run_particles<T: Real>(
                         (v_in[0][l], v_in[1][l]) = (v[0] + 0.0, v[1] + 0.0);
                         (normal[0][l], normal[1][l]) = (n[0], n[1]);
                     }
-                    lanes::bounce_velocities(&ph64.restitution, &v_in, &normal)
+                    lanes.bounce_velocities(&ph64.restitution, &v_in, &normal)
                 });
                 for (l, (h, &i)) in hits.iter().zip(group).enumerate() {
                     let p = &mut parts[i as usize];
@@ -243,11 +247,11 @@ pub fn run_particles<T: Real>(
                     record(i as usize, p, flown);
                 }
             }
-        } else if let Some((d64, ph64)) = piecewise {
+        } else if let Some((lanes, d64, ph64)) = piecewise {
             // as `fly_particle`: each flight's pieces searched (on the lanes), then the landing
             let any_parts: &dyn Any = &parts;
             let parts64 = any_parts.downcast_ref::<Vec<KParticle<f64>>>().expect("T is f64 here");
-            let flights = lanes::first_hits_piecewise(d64, ph64, parts64, &to_fly, bounce);
+            let flights = lanes.first_hits_piecewise(d64, ph64, parts64, &to_fly, bounce);
             for ((h, fl, start), &i) in flights.into_iter().zip(&to_fly) {
                 let p = &mut parts[i as usize];
                 let hit = hit_from_lanes(&h);
@@ -284,9 +288,14 @@ pub fn run_particles<T: Real>(
 
 /// [`run_particles`] with each particle's end state, in f64.
 #[inline(always)]
-pub fn run_design<T: Real>(prep: &Prepared, ctx: &Context, trace: Option<&mut Vec<FlightRecord>>) -> Run {
+pub fn run_design<T: Real>(
+    prep: &Prepared,
+    ctx: &Context,
+    lanes: Option<Lanes>,
+    trace: Option<&mut Vec<FlightRecord>>,
+) -> Run {
     let d = kernel_design::<T>(prep);
-    let (parts, iterations) = run_particles::<T>(prep, ctx, trace);
+    let (parts, iterations) = run_particles::<T>(prep, ctx, lanes, trace);
     let particles = parts
         .iter()
         .map(|p| {
@@ -311,13 +320,10 @@ pub fn run_design<T: Real>(prep: &Prepared, ctx: &Context, trace: Option<&mut Ve
     Run { particles, iterations }
 }
 
-/// Which compilation of the bounce loop runs on this CPU, for run manifests and `bench`.
-pub fn build() -> &'static str {
-    #[cfg(target_arch = "x86_64")]
-    if x86_64_v3::available() {
-        return "x86-64-v3 build";
-    }
-    "baseline build"
+/// The lanes the engine's path takes ([`Lanes::of`] the path `crate::simd` chose; None on
+/// the scalar path).
+pub fn engine_lanes() -> Option<Lanes> {
+    Lanes::of(crate::simd::selected())
 }
 
 impl ParticleEngine for CpuEngine {
@@ -328,32 +334,39 @@ impl ParticleEngine for CpuEngine {
         }
     }
     fn run(&self, prep: &Prepared, ctx: &Context, trace: Option<&mut Vec<FlightRecord>>) -> Run {
+        // the path this CPU takes, or the one SAWTOOTH_SIMD names (`crate::simd`)
+        let lanes = engine_lanes();
         #[cfg(target_arch = "x86_64")]
-        if x86_64_v3::available() {
-            // SAFETY: the CPU has every feature the function is compiled for (checked above).
+        if crate::simd::selected().x86_64_v3() {
+            // SAFETY: the CPU has every feature the function is compiled for (the path is one
+            // this CPU has).
             return match self.precision {
-                Precision::F64 => unsafe { x86_64_v3::run_design::<f64>(prep, ctx, trace) },
-                Precision::F32 => unsafe { x86_64_v3::run_design::<f32>(prep, ctx, trace) },
+                Precision::F64 => unsafe { x86_64_v3::run_design::<f64>(prep, ctx, lanes, trace) },
+                Precision::F32 => unsafe { x86_64_v3::run_design::<f32>(prep, ctx, lanes, trace) },
             };
         }
         match self.precision {
-            Precision::F64 => run_design::<f64>(prep, ctx, trace),
-            Precision::F32 => run_design::<f32>(prep, ctx, trace),
+            Precision::F64 => run_design::<f64>(prep, ctx, lanes, trace),
+            Precision::F32 => run_design::<f32>(prep, ctx, lanes, trace),
         }
     }
 }
 
-/// The bounce loop compiled a second time for x86-64-v3 (see [`crate::x86_64_v3`]): every
-/// kernel function is inlined into [`x86_64_v3::run_design`], so all of it gets the
-/// features; the results are the same to the bit (tested below).
+/// The bounce loop compiled a second time for x86-64-v3 (see [`crate::simd`]): every kernel
+/// function is inlined into [`x86_64_v3::run_design`], so all of it gets the features; the
+/// results are the same to the bit (tested below).
 #[cfg(target_arch = "x86_64")]
 mod x86_64_v3 {
     use super::*;
-    pub use crate::x86_64_v3::available;
 
     #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,movbe,popcnt,sse3,ssse3,sse4.1,sse4.2")]
-    pub fn run_design<T: Real>(prep: &Prepared, ctx: &Context, trace: Option<&mut Vec<FlightRecord>>) -> Run {
-        super::run_design::<T>(prep, ctx, trace)
+    pub fn run_design<T: Real>(
+        prep: &Prepared,
+        ctx: &Context,
+        lanes: Option<Lanes>,
+        trace: Option<&mut Vec<FlightRecord>>,
+    ) -> Run {
+        super::run_design::<T>(prep, ctx, lanes, trace)
     }
 }
 
@@ -377,10 +390,12 @@ mod tests {
     /// engines on, in f64 and f32.
     #[test]
     fn the_x86_64_v3_build_gives_the_baseline_bits() {
-        if !x86_64_v3::available() {
+        if !crate::simd::Simd::Avx2.supported() {
             eprintln!("skipped: this CPU lacks x86-64-v3, so only the baseline build runs here");
             return;
         }
+        // the scalar kernel's flight search, and the lanes' where the CPU has them
+        let lanes = Lanes::of(crate::simd::Simd::Avx2);
         let with_effects = |mut s: Scenario| {
             s.effects.impact_scatter = Some(ImpactScatter { sigma_deg: 3.0, form: TiltForm::default() });
             s.effects.launch_spread = Some(LaunchSpread { speed_spread: 0.2, angle_sigma_deg: 5.0 });
@@ -404,9 +419,13 @@ mod tests {
                 let prep = prepare(&s, &d).unwrap();
                 // SAFETY: the CPU has x86-64-v3 (checked above).
                 let (v3, v3_f32) = unsafe {
-                    (x86_64_v3::run_design::<f64>(&prep, &ctx, None), x86_64_v3::run_design::<f32>(&prep, &ctx, None))
+                    (
+                        x86_64_v3::run_design::<f64>(&prep, &ctx, None, None),
+                        x86_64_v3::run_design::<f32>(&prep, &ctx, lanes, None),
+                    )
                 };
-                let (base, base_f32) = (run_design::<f64>(&prep, &ctx, None), run_design::<f32>(&prep, &ctx, None));
+                let (base, base_f32) =
+                    (run_design::<f64>(&prep, &ctx, None, None), run_design::<f32>(&prep, &ctx, None, None));
                 assert_eq!(bits(&v3), bits(&base), "scenario {i}, design {d:?}");
                 assert_eq!(bits(&v3_f32), bits(&base_f32), "f32: scenario {i}, design {d:?}");
                 assert_eq!((v3.iterations, v3_f32.iterations), (base.iterations, base_f32.iterations));

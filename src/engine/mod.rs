@@ -11,6 +11,7 @@ pub mod gpu;
 pub mod kernel;
 pub mod lanes;
 pub mod listing;
+pub mod slopes;
 pub mod summary;
 
 use rayon::prelude::*;
@@ -193,12 +194,11 @@ impl BatchEvaluator for cpu::CpuEngine {
     }
     fn device(&self) -> String {
         format!(
-            "{} engine on the host CPU ({}; {} threads, {}{})",
+            "{} engine on the host CPU ({}; {} threads, {})",
             self.backend(),
             host_cpu(),
             rayon::current_num_threads(),
-            cpu::build(),
-            if lanes::available() { ", AVX-512 lanes" } else { "" }
+            crate::simd::selected().describe()
         )
     }
     fn evaluate(&self, scenario: &Scenario, designs: &[Design]) -> Vec<Result<Evaluation, Invalid>> {
@@ -338,6 +338,8 @@ pub fn make_engine_for(kind: EngineKind, scenario: &Scenario) -> anyhow::Result<
 
 /// Any engine by name. `gpu` without an adapter is an error; `auto` falls back to `cpu`.
 pub fn make_engine(kind: EngineKind) -> anyhow::Result<Box<dyn Engine>> {
+    // a SAWTOOTH_SIMD path this CPU lacks (or a retired setting) is refused before any work
+    crate::simd::check().map_err(anyhow::Error::msg)?;
     if kind == EngineKind::Auto {
         // a malformed setting is the user's error, not a missing GPU to fall back from
         gpu::slice_designs_from_env()?;

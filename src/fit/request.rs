@@ -36,8 +36,8 @@ pub struct FitRequest {
     /// None: the setup's sim.seed.
     pub seed: Option<u64>,
     pub engine: EngineKind,
-    /// Runs held out at the end of the file (0 = off).
-    pub holdout: usize,
+    /// Runs held out at the end of the file (0 = off); None: [`FitRequest::default_holdout`].
+    pub holdout: Option<usize>,
     /// Bootstrap replicates over the runs (0 = off).
     pub bootstrap: usize,
     /// Write fit.json, fit.csv, fit.svg and fit.png into this directory.
@@ -54,8 +54,16 @@ pub struct FitOutcome {
 }
 
 impl FitRequest {
+    /// Runs held out by default where the data have at least twice as many.
     pub const DEFAULT_HOLDOUT: usize = 3;
     pub const DEFAULT_BOOTSTRAP: usize = 20;
+
+    /// The held-out runs of a fit on `runs` runs when none is asked for: 3, or half the runs
+    /// (rounded down) where fewer than 6 leave 3 too few to fit on (a DEM campaign of 2 seeds
+    /// holds 1 out, one run holds none).
+    pub fn default_holdout(runs: usize) -> usize {
+        Self::DEFAULT_HOLDOUT.min(runs / 2)
+    }
 
     pub fn new(data: PathBuf, setup: PathBuf, spelling: Spelling) -> Self {
         FitRequest {
@@ -68,7 +76,7 @@ impl FitRequest {
             normalise: None,
             seed: None,
             engine: EngineKind::Cpu,
-            holdout: Self::DEFAULT_HOLDOUT,
+            holdout: None,
             bootstrap: Self::DEFAULT_BOOTSTRAP,
             out: None,
             spelling,
@@ -88,9 +96,18 @@ pub fn run(r: &FitRequest, log: &mut dyn FnMut(String)) -> anyhow::Result<FitOut
     crate::schema::FIT_BOOTSTRAP.check_usize(&name("bootstrap"), r.bootstrap).map_err(anyhow::Error::msg)?;
     let condition = measured::load(&r.data, &r.setup, stem(&r.data), r.normalise, r.seed, r.spelling)?;
     let n = condition.runs.runs.len();
-    if r.holdout >= n {
-        bail!("{} must be < the number of runs in {} ({n}), got {}", name("holdout"), r.data.display(), r.holdout);
-    }
+    // scoring given values (`at`) holds nothing out: every run is scored
+    let holdout = match (r.holdout, &r.at) {
+        (_, Some(_)) => 0,
+        (Some(k), None) if k >= n => bail!(
+            "{} must be < the number of runs in {} ({n}), got {k}: hold out at most {} (or 0: none)",
+            name("holdout"),
+            r.data.display(),
+            n.saturating_sub(1)
+        ),
+        (Some(k), None) => k,
+        (None, None) => FitRequest::default_holdout(n),
+    };
     // the output folder is owned before the work, so a busy or foreign folder costs nothing
     let _owned = match &r.out {
         Some(dir) => Some(RunDir::acquire(dir, "fit", Access::Exclusive).with_context(|| name("out"))?),
@@ -105,7 +122,7 @@ pub fn run(r: &FitRequest, log: &mut dyn FnMut(String)) -> anyhow::Result<FitOut
             .map_err(|e| anyhow::anyhow!("{}: {e}", name("at")))?,
         None => {
             let params = r.params.clone().unwrap_or_else(|| shared_params(std::slice::from_ref(&condition)));
-            let settings = FitSettings { objective: r.objective, effort, bootstrap: r.bootstrap, holdout: r.holdout };
+            let settings = FitSettings { objective: r.objective, effort, bootstrap: r.bootstrap, holdout };
             let report = super::fit(engine.as_ref(), &condition, &params, settings, log)
                 .with_context(|| format!("{} {}", name("data"), r.data.display()))?;
             log(format!("fit: done in {:.1} s", started.elapsed().as_secs_f64()));

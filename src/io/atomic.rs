@@ -16,6 +16,16 @@ use anyhow::Context as _;
 /// Suffix of every temporary file this helper creates.
 pub const TMP_SUFFIX: &str = ".sawtooth-tmp";
 
+/// Asked before every file is written: `io::run_dir` records a file written at the top of a
+/// folder the process holds in that folder's marker first (a hook rather than a call, as
+/// `run_dir` writes its marker through this module).
+static BEFORE_WRITE: std::sync::OnceLock<fn(&Path) -> anyhow::Result<()>> = std::sync::OnceLock::new();
+
+/// Install the question [`write_atomic`] asks before it writes (once per process).
+pub fn set_before_write(hook: fn(&Path) -> anyhow::Result<()>) {
+    let _ = BEFORE_WRITE.set(hook);
+}
+
 /// Refuse an output file that is one of the command's inputs (`synth --out my.toml --setup
 /// my.toml` would replace the setup with the data it made), compared by resolved path so that
 /// `./a.toml` and `a.toml` match. `out_flag` and each input's flag name the user's flags.
@@ -88,6 +98,9 @@ pub fn write_atomic_with(path: &Path, write: impl FnOnce(&mut dyn Write) -> anyh
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
+    if let Some(hook) = BEFORE_WRITE.get() {
+        hook(path).with_context(|| format!("writing {}: recording it in its folder's marker", path.display()))?;
+    }
     // a file named in a folder that is not there yet (`--trajectories out/traj.csv` in a
     // fresh checkout) gets the folder, as the user asked for the file in it
     std::fs::create_dir_all(dir)

@@ -62,6 +62,21 @@ pub struct DemTable {
     pub rest_speed_m_s: Option<f64>,
     /// Teeth of the mesh; absent: the model's reach plus a margin (at most `sim.teeth`).
     pub teeth: Option<u32>,
+    /// Where the DEM's constant normal COR comes from: `"k_elastic"` (the default) or
+    /// `"model"` (the thesis law's k_n at the design's launch speed).
+    pub restitution: Option<DemRestitution>,
+}
+
+/// The source of a DEM case's normal coefficient of restitution (LIGGGHTS's is one constant).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DemRestitution {
+    /// `[collision] k_elastic` itself, the law's elastic limit (4.1.2).
+    #[default]
+    KElastic,
+    /// The thesis law's k_n (Eq. 4.9) at a normal speed equal to the design's launch speed v0:
+    /// the DEM's constant closest to the model's law at the impacts that carry the grains.
+    Model,
 }
 
 #[derive(Clone, Debug, Default, Deserialize)]
@@ -211,14 +226,12 @@ impl MeasurementTable {
     /// Numbers must be finite and > 0 (the motion ones inside the sled-motion effect's
     /// bounds); `motion_profile` must be `poc` or `delayed`.
     pub fn validate(&self) -> anyhow::Result<()> {
-        for (key, v) in [("scale_resolution_g", self.scale_resolution_g), ("particle_mass_g", self.particle_mass_g)] {
+        for (bound, key, v) in [
+            (&crate::schema::SCALE_RESOLUTION_G, "scale_resolution_g", self.scale_resolution_g),
+            (&crate::schema::PARTICLE_MASS_G, "particle_mass_g", self.particle_mass_g),
+        ] {
             if let Some(v) = v {
-                if !v.is_finite() {
-                    bail!("measurement.{key} must be finite, got {v}");
-                }
-                if v <= 0.0 {
-                    bail!("measurement.{key} must be > 0, got {v}");
-                }
+                bound.check(&format!("measurement.{key}"), v).map_err(anyhow::Error::msg)?;
             }
         }
         // the bounds of the sled-motion effect (`Effects::validate`)
@@ -371,10 +384,12 @@ mod tests {
         assert_eq!(m.scale_resolution_g, Some(0.01));
         assert_eq!(m.motion_profile.as_deref(), Some("delayed"));
         for (text, key) in [
-            ("scale_resolution_g = 0.0", "measurement.scale_resolution_g must be > 0"),
-            ("particle_mass_g = -2.0", "measurement.particle_mass_g must be > 0"),
-            ("particle_mass_g = nan", "measurement.particle_mass_g must be finite"),
-            ("scale_resolution_g = inf", "measurement.scale_resolution_g must be finite"),
+            ("scale_resolution_g = 0.0", "measurement.scale_resolution_g must lie in [1e-15, 1000] g"),
+            ("scale_resolution_g = 1e308", "measurement.scale_resolution_g must lie in [1e-15, 1000] g"),
+            ("particle_mass_g = -2.0", "measurement.particle_mass_g must lie in [1e-12, 1000000] g"),
+            ("particle_mass_g = 1e308", "measurement.particle_mass_g must lie in"),
+            ("particle_mass_g = nan", "measurement.particle_mass_g must lie in"),
+            ("scale_resolution_g = inf", "measurement.scale_resolution_g must lie in"),
             ("motion_profile = \"fast\"", "measurement.motion_profile must be `poc` or `delayed`"),
             ("motion_delay_s = -0.1", "measurement.motion_delay_s must lie in [0, 100]"),
             ("motion_return_speed_m_s = 0.0", "measurement.motion_return_speed_m_s must lie in"),
@@ -416,7 +431,7 @@ mod tests {
         assert!(e.contains("requirements.preset") && e.contains("table-2.2"), "{e}");
         let c = ConfigFile::parse("[requirements]\npreset = \"table-2.2\"\npower_max_w = -1\n").unwrap();
         let e = c.requirements.unwrap().requirements("x.toml").unwrap_err().to_string();
-        assert!(e.contains("requirements.power_max_w must be a positive number"), "{e}");
+        assert!(e.contains("requirements.power_max_w must lie in [0.001, 1000000] W"), "{e}");
         assert!(load_requirements("table-2.2").is_ok());
         let e = load_requirements("/nonexistent/req.toml").unwrap_err().to_string();
         assert!(e.contains("neither a preset"), "{e}");

@@ -3,12 +3,22 @@
 //! however it exits), so two processes started into one `--out` cannot interleave their
 //! writes; the second is refused at once with a message naming the folder.
 //!
-//! Only the project's own marker makes a folder the project's: `DIR/.sawtooth-run`, a small
-//! TOML file with the kind of run, the command that made it and a run id. A folder holding
-//! anything else (a user's `run.toml`, `pareto.csv`, `fit.json`: names alone prove nothing)
-//! is refused rather than written into. Stale temporary files of the project's own killed
-//! atomic writes (`io::atomic`) are removed as soon as the folder is owned, before it is
-//! judged, so a kill in the first milliseconds (between the marker's temporary file and its
+//! Only the project's own marker makes a folder the project's: `DIR/.sawtooth-run`, a TOML
+//! file with its format, the kind of run, the command that made it, a run id and `wrote`,
+//! the files the run wrote at the top of the folder. The run records a file there before it
+//! writes it ([`RunDir`] registers the folder; `io::atomic` asks before every write), so a
+//! kill between the two leaves a name without a file, never a file without its name. A
+//! folder the run made inside its own carries a marker of its own ([`mark_subfolder`]). A
+//! folder is the project's when everything in it is accounted for: the lock, the marker,
+//! stale temporary files, files its marker lists, and folders that are marked or hold
+//! nothing but such bookkeeping. Anything else (a user's `pareto.csv` beside a marker
+//! written by hand or by an older sawtooth, a link to a folder elsewhere) makes the folder
+//! someone else's: it is refused and nothing in it is touched, not even by a lock file,
+//! as the folder is judged before the lock is taken (and judged again under it).
+//!
+//! Stale temporary files of the project's own killed atomic writes (`io::atomic`) are
+//! removed as soon as the folder is owned, before it is judged, in its marked subfolders
+//! too, so a kill in the first milliseconds (between the marker's temporary file and its
 //! rename) never leaves a folder that neither a rerun nor a resume accepts.
 //!
 //! The lock is advisory and per folder: on a cluster it needs a shared filesystem whose
@@ -16,13 +26,20 @@
 
 use std::fs::{File, OpenOptions, TryLockError};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use anyhow::{bail, Context as _};
 
-use super::atomic::{clean_stale_temps, is_temp_name, write_atomic};
+use super::atomic::{clean_stale_temps, is_temp_name, set_before_write, write_atomic};
 
 pub const LOCK_FILE: &str = ".sawtooth.lock";
 pub const MARKER_FILE: &str = ".sawtooth-run";
+/// The marker's format: 2 records what the run wrote. Older markers (the kind alone on a
+/// line, or a table without `format`) record nothing and no longer make a folder the project's.
+pub const MARKER_FORMAT: u32 = 2;
+/// How deep owning a folder looks for stale temporary files in its marked subfolders (a
+/// DEM check: its root, a design's campaign, a run).
+const CLEAN_DEPTH: usize = 3;
 
 /// How a folder is held.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -39,6 +56,16 @@ pub enum Access {
 pub struct RunDir {
     pub path: PathBuf,
     _lock: File,
+    /// Where this process records the files it writes (exclusive holders only).
+    registered: Option<PathBuf>,
+}
+
+impl Drop for RunDir {
+    fn drop(&mut self) {
+        if let Some(dir) = &self.registered {
+            held().retain(|h| &h.dir != dir);
+        }
+    }
 }
 
 /// Open the lock file of `dir` and try to take it; `Ok(None)` when another process holds it.
@@ -71,44 +98,68 @@ pub fn is_held(dir: &Path) -> bool {
 
 /// What a marker records.
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Marker {
-    /// The kind of run (`optimize`, `campaign`, `fit`, `diagnose`).
+    /// [`MARKER_FORMAT`].
+    pub format: u32,
+    /// The kind of run (`optimize`, `campaign`, `fit`, `diagnose`, `dem`, ...).
     pub kind: String,
     /// The command line that made the folder (for people).
     #[serde(default)]
     pub command: String,
     /// Unique per folder: when, by which process.
-    #[serde(default)]
     pub run_id: String,
+    /// The files the run wrote at the top of its folder, sorted.
+    #[serde(default)]
+    pub wrote: Vec<String>,
 }
 
 impl Marker {
     fn new(kind: &str) -> Marker {
         let since_epoch = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap_or_default();
         Marker {
+            format: MARKER_FORMAT,
             kind: kind.to_string(),
             command: std::env::args().collect::<Vec<_>>().join(" "),
             run_id: format!("{}.{:09}-{}", since_epoch.as_secs(), since_epoch.subsec_nanos(), std::process::id()),
+            wrote: Vec::new(),
         }
     }
 }
 
-/// `dir`'s marker, if it has one that reads as one. Markers written before they held a TOML
-/// table hold the kind alone on one line; they are the project's own too.
-pub fn marker_of(dir: &Path) -> Option<Marker> {
+/// What `DIR/.sawtooth-run` holds.
+enum MarkerFile {
+    Absent,
+    /// A marker of this format.
+    Current(Marker),
+    /// Something else: an older sawtooth's marker, or not a marker at all.
+    Other,
+}
+
+fn read_marker(dir: &Path) -> MarkerFile {
     let path = dir.join(MARKER_FILE);
-    // a marker is a few hundred bytes; anything larger is not one
-    const MARKER_MAX: u64 = 64 * 1024;
-    if std::fs::metadata(&path).ok()?.len() > MARKER_MAX {
-        return None;
+    if std::fs::symlink_metadata(&path).is_err() {
+        return MarkerFile::Absent;
     }
-    let text = std::fs::read_to_string(&path).ok()?;
-    if let Ok(m) = toml::from_str::<Marker>(&text) {
-        return Some(m);
+    // a link, a pipe or a huge file in the marker's place is not a marker
+    if !std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file()) {
+        return MarkerFile::Other;
     }
-    let kind = text.trim();
-    let one_word = !kind.is_empty() && kind.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_');
-    one_word.then(|| Marker { kind: kind.to_string(), command: String::new(), run_id: String::new() })
+    match crate::io::bounded::read_text(&path, &crate::schema::MARKER_FILE_LIMIT) {
+        Ok(text) => match toml::from_str::<Marker>(&text) {
+            Ok(m) if m.format == MARKER_FORMAT && !m.kind.is_empty() && !m.run_id.is_empty() => MarkerFile::Current(m),
+            _ => MarkerFile::Other,
+        },
+        Err(_) => MarkerFile::Other,
+    }
+}
+
+/// `dir`'s marker, if it has one of this format.
+pub fn marker_of(dir: &Path) -> Option<Marker> {
+    match read_marker(dir) {
+        MarkerFile::Current(m) => Some(m),
+        _ => None,
+    }
 }
 
 /// The kind recorded in `dir`'s marker, if any.
@@ -116,13 +167,48 @@ pub fn kind_of(dir: &Path) -> Option<String> {
     marker_of(dir).map(|m| m.kind)
 }
 
-/// The files of `dir` that are not the project's own bookkeeping (its lock, and temporary
-/// files of its atomic writes): what makes an unmarked folder someone else's.
-fn foreign_entries(dir: &Path) -> anyhow::Result<Vec<String>> {
+/// True for the project's bookkeeping in any folder: the lock and stale temporary files.
+fn is_bookkeeping(name: &str, entry: &std::fs::DirEntry) -> bool {
+    name == LOCK_FILE || (is_temp_name(name) && entry.file_type().is_ok_and(|t| t.is_file()))
+}
+
+/// True when `dir` (not a link) holds nothing but the project's bookkeeping.
+fn holds_only_bookkeeping(dir: &Path) -> bool {
+    let Ok(entries) = std::fs::read_dir(dir) else { return false };
+    entries.into_iter().all(|e| {
+        e.is_ok_and(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            is_bookkeeping(&name, &e)
+        })
+    })
+}
+
+/// The entries of `dir` its marker does not account for (all but the bookkeeping where it
+/// has none): a file it does not list, a link, a folder neither marked nor empty of all
+/// but bookkeeping.
+fn foreign_entries(dir: &Path, marker: Option<&Marker>) -> anyhow::Result<Vec<String>> {
     let mut names = Vec::new();
     for e in std::fs::read_dir(dir).with_context(|| format!("listing {}", dir.display()))? {
-        let name = e.with_context(|| format!("listing {}", dir.display()))?.file_name().to_string_lossy().into_owned();
-        if name != LOCK_FILE && !is_temp_name(&name) {
+        let e = e.with_context(|| format!("listing {}", dir.display()))?;
+        let name = e.file_name().to_string_lossy().into_owned();
+        if name == MARKER_FILE || is_bookkeeping(&name, &e) {
+            continue;
+        }
+        let ours = match marker {
+            None => false,
+            Some(m) => {
+                // the entry itself, not what a link points at
+                let t = e.file_type().with_context(|| format!("listing {}", dir.display()))?;
+                if t.is_file() {
+                    m.wrote.contains(&name)
+                } else if t.is_dir() {
+                    marker_of(&e.path()).is_some() || holds_only_bookkeeping(&e.path())
+                } else {
+                    false
+                }
+            }
+        };
+        if !ours {
             names.push(name);
         }
     }
@@ -130,13 +216,153 @@ fn foreign_entries(dir: &Path) -> anyhow::Result<Vec<String>> {
     Ok(names)
 }
 
+/// A few names for a message: `a, b, c, …`.
+fn shown(names: &[String]) -> String {
+    let mut s = names.iter().take(3).map(String::as_str).collect::<Vec<_>>().join(", ");
+    if names.len() > 3 {
+        s.push_str(", …");
+    }
+    s
+}
+
+/// Whether `dir` may be held for a run of `kind`: its marker when it has one, `None` when it
+/// holds nothing but bookkeeping (a new folder); an error naming what is not the project's.
+fn judge(dir: &Path, kind: &str, access: Access) -> anyhow::Result<Option<Marker>> {
+    let marker = match read_marker(dir) {
+        MarkerFile::Current(m) => {
+            if m.kind != kind {
+                bail!("{} holds a `{}` run, not a `{kind}` one; choose another folder", dir.display(), m.kind);
+            }
+            let foreign = foreign_entries(dir, Some(&m))?;
+            if !foreign.is_empty() {
+                bail!(
+                    "{} is a `{kind}` folder of sawtooth's but holds what its runs did not write ({}); refusing to write into it: move them out, or choose another folder",
+                    dir.display(),
+                    shown(&foreign)
+                );
+            }
+            Some(m)
+        }
+        other => {
+            let foreign = foreign_entries(dir, None)?;
+            if !foreign.is_empty() {
+                let why = if matches!(other, MarkerFile::Other) {
+                    format!(
+                        "its {MARKER_FILE} is not a marker of this sawtooth (an older version's, or not one at all)"
+                    )
+                } else {
+                    format!("no {MARKER_FILE}")
+                };
+                bail!(
+                    "{} holds files ({}) but is not a folder of sawtooth's ({why}); refusing to write into it: choose an empty or new folder",
+                    dir.display(),
+                    shown(&foreign)
+                );
+            }
+            None
+        }
+    };
+    if marker.is_none() && access == Access::Shared {
+        bail!("{} is not a `{kind}` folder (no {MARKER_FILE})", dir.display());
+    }
+    Ok(marker)
+}
+
+/// Folders this process holds exclusively, with their markers: where it records what it writes.
+struct Held {
+    dir: PathBuf,
+    marker: Marker,
+}
+
+static HELD: Mutex<Vec<Held>> = Mutex::new(Vec::new());
+
+fn held() -> std::sync::MutexGuard<'static, Vec<Held>> {
+    // a panic elsewhere leaves the list as it was: still a list
+    HELD.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// `io::atomic`'s question before every write: a file about to be written at the top of a
+/// folder this process holds is recorded in the folder's marker first.
+fn record_before_write(path: &Path) -> anyhow::Result<()> {
+    let Some(name) = path.file_name().and_then(|n| n.to_str()) else { return Ok(()) };
+    if name == MARKER_FILE || name == LOCK_FILE || is_temp_name(name) {
+        return Ok(());
+    }
+    let mut held = held();
+    if held.is_empty() {
+        return Ok(());
+    }
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let Ok(parent) = std::fs::canonicalize(parent) else { return Ok(()) };
+    let Some(h) = held.iter_mut().find(|h| h.dir == parent) else { return Ok(()) };
+    if h.marker.wrote.iter().any(|w| w == name) {
+        return Ok(());
+    }
+    let mut marker = h.marker.clone();
+    marker.wrote.push(name.to_string());
+    marker.wrote.sort();
+    write_marker(&h.dir, &marker)?;
+    h.marker = marker;
+    Ok(())
+}
+
+/// Record an entry written at the top of a folder this process holds by other means than
+/// `io::atomic` (a file appended to), before it is written.
+pub fn record_write(path: &Path) -> anyhow::Result<()> {
+    record_before_write(path)
+}
+
+fn write_marker(dir: &Path, marker: &Marker) -> anyhow::Result<()> {
+    write_atomic(&dir.join(MARKER_FILE), toml::to_string(marker)?.as_bytes())
+}
+
+/// Create `dir` inside a folder the run holds, marked as the run's own (`kind` says what it
+/// is), so that the folder above it counts it as the run's. Marking a folder already marked
+/// leaves its marker; a folder there that the run did not make is refused.
+pub fn mark_subfolder(dir: &Path, kind: &str) -> anyhow::Result<()> {
+    if std::fs::symlink_metadata(dir).is_ok_and(|m| m.file_type().is_symlink()) {
+        bail!("{} is a link to another folder; a run's folders lie inside its own folder", dir.display());
+    }
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    match read_marker(dir) {
+        MarkerFile::Current(_) => Ok(()),
+        _ if holds_only_bookkeeping(dir) => write_marker(dir, &Marker::new(kind)),
+        _ => bail!(
+            "{} holds files but is not a folder of sawtooth's (no {MARKER_FILE} of this sawtooth); refusing to write into it",
+            dir.display()
+        ),
+    }
+}
+
+/// Remove stale temporary files from `dir` and from its marked subfolders that no process
+/// holds, `depth` levels down. Only while owning `dir` exclusively.
+fn clean_tree(dir: &Path, depth: usize) -> anyhow::Result<()> {
+    clean_stale_temps(dir)?;
+    if depth == 0 {
+        return Ok(());
+    }
+    for e in std::fs::read_dir(dir).with_context(|| format!("listing {}", dir.display()))?.flatten() {
+        if e.file_type().is_ok_and(|t| t.is_dir()) && marker_of(&e.path()).is_some() && !is_held(&e.path()) {
+            clean_tree(&e.path(), depth - 1)?;
+        }
+    }
+    Ok(())
+}
+
 impl RunDir {
     /// Own `dir` for a run of `kind` (created if missing). A folder is the project's only by
-    /// its marker; an unmarked folder must hold nothing but the project's own bookkeeping.
+    /// its marker, and only while everything in it is accounted for (module docs); it is
+    /// judged before its lock file is created, so a refused folder is left as it was.
     pub fn acquire(dir: &Path, kind: &str, access: Access) -> anyhow::Result<RunDir> {
-        if access == Access::Exclusive {
+        let exists = std::fs::metadata(dir).is_ok_and(|m| m.is_dir());
+        if exists {
+            judge(dir, kind, access)?;
+        } else if access == Access::Exclusive {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        } else if !dir.is_dir() {
+        } else {
             bail!("{} does not exist", dir.display());
         }
         let Some(lock) = try_lock(dir, access)? else {
@@ -149,31 +375,26 @@ impl RunDir {
         if access == Access::Exclusive {
             // owned now: what a killed writer left half-written is stale (the marker's own
             // temporary file among them)
-            clean_stale_temps(dir)?;
+            clean_tree(dir, CLEAN_DEPTH)?;
         }
-        match marker_of(dir) {
-            Some(m) if m.kind == kind => {}
-            Some(m) => bail!("{} holds a `{}` run, not a `{kind}` one; choose another folder", dir.display(), m.kind),
+        let marker = match judge(dir, kind, access)? {
+            Some(m) => m,
             None => {
-                let foreign = foreign_entries(dir)?;
-                if !foreign.is_empty() {
-                    let mut shown = foreign.iter().take(3).map(String::as_str).collect::<Vec<_>>().join(", ");
-                    if foreign.len() > 3 {
-                        shown.push_str(", …");
-                    }
-                    bail!(
-                        "{} holds files ({shown}) but is not a folder of sawtooth's (no {MARKER_FILE}); refusing to write into it: choose an empty or new folder",
-                        dir.display()
-                    );
-                }
-                if access == Access::Shared {
-                    bail!("{} is not a `{kind}` folder (no {MARKER_FILE})", dir.display());
-                }
-                let marker = toml::to_string(&Marker::new(kind))?;
-                write_atomic(&dir.join(MARKER_FILE), marker.as_bytes())?;
+                let m = Marker::new(kind);
+                write_marker(dir, &m)?;
+                m
             }
-        }
-        Ok(RunDir { path: dir.to_path_buf(), _lock: lock })
+        };
+        let registered = match access {
+            Access::Exclusive => {
+                let canonical = std::fs::canonicalize(dir).with_context(|| format!("resolving {}", dir.display()))?;
+                set_before_write(record_before_write);
+                held().push(Held { dir: canonical.clone(), marker });
+                Some(canonical)
+            }
+            Access::Shared => None,
+        };
+        Ok(RunDir { path: dir.to_path_buf(), _lock: lock, registered })
     }
 }
 
@@ -231,17 +452,104 @@ mod tests {
     }
 
     #[test]
-    fn the_marker_names_the_kind_the_command_and_a_run_id_and_old_markers_still_count() {
+    fn the_marker_names_the_kind_the_command_a_run_id_and_what_the_run_wrote() {
         let d = tempfile::tempdir().unwrap();
-        drop(RunDir::acquire(d.path(), "fit", Access::Exclusive).unwrap());
+        let owned = RunDir::acquire(d.path(), "fit", Access::Exclusive).unwrap();
+        write_atomic(&d.path().join("fit.json"), b"{}").unwrap();
+        write_atomic(&d.path().join("fit.json"), b"{}").unwrap();
+        // a file deeper down is its own folder's business, not this marker's
+        std::fs::create_dir(d.path().join("sub")).unwrap();
+        write_atomic(&d.path().join("sub/x.csv"), b"x").unwrap();
+        drop(owned);
         let m = marker_of(d.path()).unwrap();
-        assert_eq!(m.kind, "fit");
+        assert_eq!((m.format, m.kind.as_str()), (MARKER_FORMAT, "fit"));
         assert!(!m.command.is_empty() && !m.run_id.is_empty(), "{m:?}");
-        // the marker of an older sawtooth: the kind alone
-        std::fs::write(d.path().join(MARKER_FILE), "optimize\n").unwrap();
-        assert_eq!(kind_of(d.path()).as_deref(), Some("optimize"));
-        std::fs::write(d.path().join(MARKER_FILE), "mine, not a marker\n").unwrap();
-        assert_eq!(kind_of(d.path()), None);
+        assert_eq!(m.wrote, ["fit.json"]);
+        // written after the folder was let go: not the run's
+        write_atomic(&d.path().join("late.csv"), b"x").unwrap();
+        assert_eq!(marker_of(d.path()).unwrap().wrote, ["fit.json"]);
+        std::fs::remove_dir_all(d.path().join("sub")).unwrap();
+        let e = RunDir::acquire(d.path(), "fit", Access::Exclusive).unwrap_err().to_string();
+        assert!(e.contains("holds what its runs did not write (late.csv)"), "{e}");
+    }
+
+    /// Issue 45: a marker written by hand, or by an older sawtooth (the kind alone, or a table
+    /// without `format`), records nothing and makes no folder the project's.
+    #[test]
+    fn old_and_forged_markers_make_no_folder_the_projects() {
+        for forged in ["optimize\n", "kind = \"optimize\"\nrun_id = \"1\"\n", "format = 2\nkind = \"optimize\"\n"] {
+            let d = tempfile::tempdir().unwrap();
+            std::fs::write(d.path().join(MARKER_FILE), forged).unwrap();
+            std::fs::write(d.path().join("pareto.csv"), "mine\n").unwrap();
+            assert_eq!(kind_of(d.path()), None, "{forged}");
+            let e = RunDir::acquire(d.path(), "optimize", Access::Exclusive).unwrap_err().to_string();
+            assert!(e.contains("is not a marker of this sawtooth"), "{e}");
+            assert_eq!(std::fs::read_to_string(d.path().join("pareto.csv")).unwrap(), "mine\n");
+            assert!(!d.path().join(LOCK_FILE).exists(), "a refused folder got a lock file");
+        }
+    }
+
+    /// Issue 45: a folder that is not the project's gets no lock file, through a link too.
+    #[cfg(unix)]
+    #[test]
+    fn a_refused_folder_is_left_as_it_was() {
+        let d = tempfile::tempdir().unwrap();
+        let user = d.path().join("user");
+        std::fs::create_dir(&user).unwrap();
+        std::fs::write(user.join("notes.txt"), "mine").unwrap();
+        let link = d.path().join("out");
+        std::os::unix::fs::symlink(&user, &link).unwrap();
+        for dir in [&user, &link] {
+            assert!(RunDir::acquire(dir, "optimize", Access::Exclusive).is_err());
+            assert!(RunDir::acquire(dir, "optimize", Access::Shared).is_err());
+        }
+        let left: Vec<_> = std::fs::read_dir(&user).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(left, ["notes.txt"]);
+    }
+
+    /// A folder the run made inside its own counts by its own marker; a link to a folder
+    /// elsewhere, or an unmarked folder with files, does not.
+    #[cfg(unix)]
+    #[test]
+    fn subfolders_count_by_their_own_markers() {
+        let d = tempfile::tempdir().unwrap();
+        let root = d.path().join("root");
+        drop(RunDir::acquire(&root, "dem", Access::Exclusive).unwrap());
+        mark_subfolder(&root.join("run-001"), "dem-run").unwrap();
+        std::fs::write(root.join("run-001/final.dump"), "x").unwrap();
+        // killed before its marker: nothing but bookkeeping in it
+        std::fs::create_dir(root.join("run-002")).unwrap();
+        std::fs::write(root.join("run-002/..sawtooth-run.Ab12Cd.sawtooth-tmp"), "x").unwrap();
+        drop(RunDir::acquire(&root, "dem", Access::Exclusive).unwrap());
+        // and the run marks it when it comes back to it
+        mark_subfolder(&root.join("run-002"), "dem-run").unwrap();
+        assert!(marker_of(&root.join("run-002")).is_some());
+        let elsewhere = d.path().join("elsewhere");
+        std::fs::create_dir(&elsewhere).unwrap();
+        std::os::unix::fs::symlink(&elsewhere, root.join("run-003")).unwrap();
+        let e = RunDir::acquire(&root, "dem", Access::Exclusive).unwrap_err().to_string();
+        assert!(e.contains("did not write (run-003)"), "{e}");
+        assert!(mark_subfolder(&root.join("run-003"), "dem-run").unwrap_err().to_string().contains("is a link"));
+        std::fs::remove_file(root.join("run-003")).unwrap();
+        std::fs::create_dir(root.join("mine")).unwrap();
+        std::fs::write(root.join("mine/notes.txt"), "x").unwrap();
+        assert!(RunDir::acquire(&root, "dem", Access::Shared).unwrap_err().to_string().contains("(mine)"));
+        assert!(mark_subfolder(&root.join("mine"), "dem-run").is_err());
+    }
+
+    /// Stale temporary files of a killed writer go when the folder is owned again, in the
+    /// marked folders inside it too (a killed DEM check's `.sled.stl.*.sawtooth-tmp`).
+    #[test]
+    fn owning_a_folder_cleans_its_marked_subfolders() {
+        let d = tempfile::tempdir().unwrap();
+        drop(RunDir::acquire(d.path(), "dem-check", Access::Exclusive).unwrap());
+        let run = d.path().join("A+C/run-001");
+        mark_subfolder(&d.path().join("A+C"), "dem").unwrap();
+        mark_subfolder(&run, "dem-run").unwrap();
+        let stale = run.join(".sled.stl.Xy12Ab.sawtooth-tmp");
+        std::fs::write(&stale, "torn").unwrap();
+        drop(RunDir::acquire(d.path(), "dem-check", Access::Exclusive).unwrap());
+        assert!(!stale.exists());
     }
 
     /// Finding 2: killed between the marker's temporary file and its rename, the folder

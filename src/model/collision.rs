@@ -5,6 +5,7 @@
 use super::real::Real;
 pub use super::scenario::{check_tangential_table, TANGENTIAL_NODES, TANGENTIAL_PSI};
 use super::scenario::{Collision, ContactLaw, Material, PhysicsMode};
+use crate::lane::{Lane, LaneMask};
 
 /// Plastic limit velocity v_limit, m/s (Eq. 4.7 as repaired by erratum 1):
 /// v_limit = π² p_limit^(5/2) / (sqrt(40 ρ_particle) E*²), with E* from Eq. 4.4 and
@@ -77,49 +78,82 @@ impl<T: Real> Restitution<T> {
     /// throughout the contact, where a sphere's k_t is 1 − μ (1 + e) |v_n|/|v_t|).
     #[inline(always)]
     pub fn dem_tangential(&self, psi: T) -> T {
-        let last = TANGENTIAL_NODES - 1;
-        let psi_last = T::c(TANGENTIAL_PSI[last]);
-        if !(psi < psi_last) {
-            // also ψ = ∞ (no friction or no normal speed): the tangential speed is kept
-            return T::one() - (T::one() - self.tangential_table[last]) * psi_last / psi;
-        }
-        let mut i = 0;
-        while i + 1 < last && !(psi < T::c(TANGENTIAL_PSI[i + 1])) {
-            i += 1;
-        }
-        let (p0, p1) = (T::c(TANGENTIAL_PSI[i]), T::c(TANGENTIAL_PSI[i + 1]));
-        let (k0, k1) = (self.tangential_table[i], self.tangential_table[i + 1]);
-        k0 + (k1 - k0) * (psi - p0) / (p1 - p0)
+        T::from_one(self.dem_tangential_on(psi.to_one()))
     }
 
     /// Rebound velocity for impact velocity `v` on a surface with unit normal `n` (into the air).
     #[inline(always)]
     pub fn bounce(&self, v: [T; 2], n: [T; 2]) -> [T; 2] {
+        self.bounce_on(v.map(T::to_one), n.map(T::to_one)).map(T::from_one)
+    }
+}
+
+impl<S: Copy + Into<f64>> Restitution<S> {
+    /// [`Restitution::dem_tangential`] on lanes (`crate::lane`): the node below ψ found by
+    /// selects over the table (the scalar walk stops at the same node, the nodes rising),
+    /// both forms computed and the one ψ asks for kept.
+    #[inline(always)]
+    pub fn dem_tangential_on<L: Lane<Scalar = S>>(&self, psi: L) -> L {
+        // (no closures here: the lanes' `#[target_feature]` code inlines plain calls only)
+        let one = L::splat(1.0);
+        let last = TANGENTIAL_NODES - 1;
+        let (psi_last, k_last) = (L::splat(TANGENTIAL_PSI[last]), L::splat(self.tangential_table[last].into()));
+        // also ψ = ∞ (no friction or no normal speed): the tangential speed is kept
+        let coulomb = one - (one - k_last) * psi_last / psi;
+        let (mut p0, mut p1) = (L::splat(TANGENTIAL_PSI[0]), L::splat(TANGENTIAL_PSI[1]));
+        let (mut k0, mut k1) = (L::splat(self.tangential_table[0].into()), L::splat(self.tangential_table[1].into()));
+        for i in 1..last {
+            let past = !psi.lt(L::splat(TANGENTIAL_PSI[i]));
+            p0 = L::select(past, L::splat(TANGENTIAL_PSI[i]), p0);
+            p1 = L::select(past, L::splat(TANGENTIAL_PSI[i + 1]), p1);
+            k0 = L::select(past, L::splat(self.tangential_table[i].into()), k0);
+            k1 = L::select(past, L::splat(self.tangential_table[i + 1].into()), k1);
+        }
+        let between = k0 + (k1 - k0) * (psi - p0) / (p1 - p0);
+        L::select(psi.lt(psi_last), between, coulomb)
+    }
+
+    /// Eq. 4.47-4.49 with the thesis's k_n (Eq. 4.9) and k_t (Eq. 4.14, or the listing's
+    /// line 316), or the DEM's: the rebound velocity for impact velocity `v` on a surface
+    /// with unit normal `n` (into the air), on lanes (`crate::lane`). Written once for the
+    /// scalar kernel ([`Restitution::bounce`], f64 and f32) and the cpu engine's SIMD lanes:
+    /// each branch a select of both sides, so every lane gives the scalar law's bits.
+    #[inline(always)]
+    pub fn bounce_on<L: Lane<Scalar = S>>(&self, v: [L; 2], n: [L; 2]) -> [L; 2] {
+        let (k_elastic, v_limit) = (L::splat(self.k_elastic.into()), L::splat(self.v_limit.into()));
+        let (mu, tangential_factor) = (L::splat(self.mu_friction.into()), L::splat(self.tangential_factor.into()));
+        let (zero, one) = (L::splat(0.0), L::splat(1.0));
         let vn_s = v[0] * n[0] + v[1] * n[1]; // Eq. 4.47
         let vn = [vn_s * n[0], vn_s * n[1]];
         let vt = [v[0] - vn[0], v[1] - vn[1]]; // Eq. 4.48
         let vn_abs = vn_s.abs();
         let vt_abs = (vt[0] * vt[0] + vt[1] * vt[1]).sqrt();
         // Eq. 4.9: k_plastic = k_elastic (v_limit / |v_n|)^(1/4) above the limit velocity.
-        let k_norm = if self.plastic && vn_abs > self.v_limit {
-            self.k_elastic * (self.v_limit / vn_abs).sqrt().sqrt()
+        // (a side no lane takes is not computed: one number's bounce stays a branch)
+        let above = vn_abs.gt(v_limit);
+        let k_norm = if self.plastic && above.any() {
+            L::select(above, k_elastic * (v_limit / vn_abs).sqrt().sqrt(), k_elastic)
         } else {
-            self.k_elastic
+            k_elastic
         };
         // Eq. 4.14 (or the listing's line 316): k_t = 1 - c μ (k_n + 1) |v_n| / |v_t|.
-        let mut k_tang = if self.dem {
+        let k_tang = if self.dem {
             // the DEM's measured k_t(ψ); a zero friction impulse makes ψ infinite
-            let impulse = self.mu_friction * (k_norm + T::one()) * vn_abs;
-            let psi = if impulse > T::zero() { vt_abs / impulse } else { T::c(f64::INFINITY) };
-            self.dem_tangential(psi)
-        } else if vt_abs > T::zero() {
-            T::one() - self.tangential_factor * self.mu_friction * (k_norm + T::one()) * vn_abs / vt_abs
+            let impulse = mu * (k_norm + one) * vn_abs;
+            self.dem_tangential_on(L::select(impulse.gt(zero), vt_abs / impulse, L::splat(f64::INFINITY)))
         } else {
-            T::zero()
+            let sliding = vt_abs.gt(zero);
+            let k_tang = if sliding.any() {
+                L::select(sliding, one - tangential_factor * mu * (k_norm + one) * vn_abs / vt_abs, zero)
+            } else {
+                zero
+            };
+            if self.clamp_tangential {
+                k_tang.max(zero).min(one)
+            } else {
+                k_tang
+            }
         };
-        if self.clamp_tangential && !self.dem {
-            k_tang = k_tang.max(T::zero()).min(T::one());
-        }
         // Eq. 4.49
         [k_tang * vt[0] - k_norm * vn[0], k_tang * vt[1] - k_norm * vn[1]]
     }

@@ -41,25 +41,16 @@ pub const VARIABLES: [(&str, &str); 8] = [
 pub const LOWER_BOUND_CLI: [f64; 8] = [5.0, 3.0, 2.0, 2.0, 0.0, 0.0, 0.8, 20.0];
 pub const UPPER_BOUND_CLI: [f64; 8] = [50.0, 50.0, 50.0, 50.0, 120.0, 45.0, 2.0, 80.0];
 
-/// Largest values a design may take in CLI units: far beyond the optimisation bounds (a user
-/// may explore outside them), but short of values no conveyor has, which would overflow the
-/// performance model (a = 1e300 m/s² asks for 4 294 967 295 wires): 1 m teeth, 100 m/s,
-/// 10 000 m/s² (about 1000 g).
-pub const SENSIBLE_MAX_CLI: [f64; 8] = [1000.0, 1000.0, 1000.0, 1000.0, 180.0, 90.0, 100.0, 10_000.0];
-
 impl Design {
-    /// Every variable finite and within [`SENSIBLE_MAX_CLI`]; `field` names a variable the way
-    /// the user wrote it (e.g. `--design a` or `design.a_m_s2`). Signs and the angle ranges
-    /// the model needs are judged later, with the geometry (`model::validity`).
+    /// Every variable within what a sawtooth can be (`schema::DESIGN`, in CLI units: far
+    /// beyond the optimisation bounds, as a user may explore outside them, but short of values
+    /// no conveyor has: a = 1e300 m/s² would ask the performance model for 4 294 967 295
+    /// wires, v0 = 1e-320 m/s launches nothing); `field` names a variable the way the user
+    /// wrote it (e.g. `--design a` or `design.a_m_s2`). The chain and the constraints of 5.2
+    /// are judged later, with the geometry (`model::validity`).
     pub fn check_sensible(&self, field: impl Fn(usize) -> String) -> Result<(), String> {
-        for (i, (v, max)) in self.to_cli_units().iter().zip(SENSIBLE_MAX_CLI).enumerate() {
-            let unit = VARIABLES[i].1;
-            if !v.is_finite() {
-                return Err(format!("{} must be a finite number, got {v}", field(i)));
-            }
-            if v.abs() > max {
-                return Err(format!("{} = {v:e} {unit} is beyond any conveyor (at most {max} {unit})", field(i)));
-            }
+        for (i, (v, bound)) in self.to_cli_units().iter().zip(&crate::schema::DESIGN).enumerate() {
+            bound.check(&field(i), *v)?;
         }
         Ok(())
     }
@@ -272,9 +263,17 @@ mod tests {
         assert!(row.checked_design("design.").is_ok());
         row.a_m_s2 = 1e300;
         let e = row.checked_design("design.").unwrap_err();
-        assert!(e.starts_with("design.a_m_s2 = 1e300 m/s^2 is beyond any conveyor"), "{e}");
+        assert!(e.starts_with("design.a_m_s2 must lie in [0.01, 10000] m/s^2"), "{e}");
+        assert!(e.ends_with("got 1e300"), "{e}");
         row.a_m_s2 = f64::NAN;
-        assert!(row.checked_design("[design] ").unwrap_err().starts_with("[design] a_m_s2 must be a finite number"));
+        assert!(row.checked_design("[design] ").unwrap_err().starts_with("[design] a_m_s2 must lie in"));
+        // issue 45: a launch of 1e-320 m/s launches nothing; delta 0 is Table 5.1's lower bound
+        let mut row = DesignRow::of(&Design::validation_rig());
+        row.v0_m_s = 1e-320;
+        assert!(row.checked_design("").unwrap_err().starts_with("v0_m_s must lie in [0.01, 100] m/s"));
+        let mut row = DesignRow::of(&Design::validation_rig());
+        row.delta_deg = 0.0;
+        assert!(row.checked_design("").is_ok());
     }
 
     #[test]

@@ -262,7 +262,8 @@ pub fn build_fill(
             let angles: Vec<f64> = (0..PHYSICAL_ARC_POINTS)
                 .map(|k| a2 + (k as f64 / (PHYSICAL_ARC_POINTS - 1) as f64) * (a4 - a2))
                 .collect();
-            polygon.extend(angles.iter().map(|&a| arc_point(crate::lane_math::sin_cos(a))));
+            let (sin, cos) = arc_sin_cos(&angles);
+            polygon.extend(sin.into_iter().zip(cos).map(arc_point));
         }
         PhysicsMode::Listing => {
             // Listing lines 165-183: linspace(a2, a4 - 0.05, 1000), every 100th point.
@@ -294,6 +295,37 @@ pub fn build_fill(
         }
     });
     Ok(Fill { surface_angle, p_fill, polygon, area, exact })
+}
+
+/// The sines and cosines of the fill arc's angles (`lane_math::sin_cos`), in the x86-64-v3
+/// build where the cpu engine's path takes it: there the compiler runs the loop four angles
+/// at a time (the function has no branch), to the same bits.
+fn arc_sin_cos(angles: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let (mut sin, mut cos) = (vec![0.0; angles.len()], vec![0.0; angles.len()]);
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::selected().x86_64_v3() {
+        // SAFETY: the CPU has every feature the function is compiled for (the path is one
+        // this CPU has).
+        unsafe { x86_64_v3_arc_sin_cos(angles, &mut sin, &mut cos) };
+        return (sin, cos);
+    }
+    arc_sin_cos_inlined(angles, &mut sin, &mut cos);
+    (sin, cos)
+}
+
+/// [`arc_sin_cos`]'s loop, into slices (a loop that writes pairs was left scalar).
+#[inline(always)]
+fn arc_sin_cos_inlined(angles: &[f64], sin: &mut [f64], cos: &mut [f64]) {
+    for ((&a, s), c) in angles.iter().zip(sin.iter_mut()).zip(cos.iter_mut()) {
+        (*s, *c) = crate::lane_math::sin_cos(a);
+    }
+}
+
+/// [`arc_sin_cos_inlined`] compiled for x86-64-v3 ([`crate::simd`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,movbe,popcnt,sse3,ssse3,sse4.1,sse4.2")]
+fn x86_64_v3_arc_sin_cos(angles: &[f64], sin: &mut [f64], cos: &mut [f64]) {
+    arc_sin_cos_inlined(angles, sin, cos)
 }
 
 /// Shoelace area (MATLAB polyarea).
@@ -396,14 +428,15 @@ pub fn launch_points(
     seed: u64,
 ) -> Result<Vec<V2>, Invalid> {
     #[cfg(target_arch = "x86_64")]
-    if crate::x86_64_v3::available() {
-        // SAFETY: the CPU has every feature the function is compiled for (checked above).
+    if crate::simd::selected().x86_64_v3() {
+        // SAFETY: the CPU has every feature the function is compiled for (the path is one
+        // this CPU has).
         return unsafe { x86_64_v3_launch_points(fill, n, mode, sampling, seed) };
     }
     launch_points_inlined(fill, n, mode, sampling, seed)
 }
 
-/// [`launch_points`] compiled for x86-64-v3 ([`crate::x86_64_v3`]): the candidate tests run
+/// [`launch_points`] compiled for x86-64-v3 ([`crate::simd`]): the candidate tests run
 /// on four f64 lanes instead of two (preparation 14–16 % faster, `cargo bench -p
 /// sawtooth-benches --bench engines -- prepare`), to the same bits (tested below).
 #[cfg(target_arch = "x86_64")]
@@ -582,9 +615,10 @@ mod tests {
                         Ok(ps) => Ok(ps.iter().map(|p| [p[0].to_bits(), p[1].to_bits()]).collect::<Vec<_>>()),
                         Err(e) => Err(e.to_string()),
                     };
+                    #[allow(unused_mut)] // the x86-64-v3 build joins it on x86-64 only
                     let mut builds = vec![("baseline", launch_points_inlined(fill, n, *mode, sampling, 5))];
                     #[cfg(target_arch = "x86_64")]
-                    if crate::x86_64_v3::available() {
+                    if crate::simd::Simd::Avx2.supported() {
                         // SAFETY: the CPU has x86-64-v3 (checked above).
                         builds.push(("x86-64-v3", unsafe { x86_64_v3_launch_points(fill, n, *mode, sampling, 5) }));
                     }
@@ -599,6 +633,27 @@ mod tests {
             }
         }
         assert!(seated > 50 && refused >= 4, "{seated} seated, {refused} refused");
+    }
+
+    /// The fill arc's sines and cosines in the x86-64-v3 build (vectorised by the compiler)
+    /// are the scalar `lane_math::sin_cos`'s to the bit, over the arcs' angles and beyond.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn the_arcs_sines_and_cosines_are_the_same_in_both_builds() {
+        if !crate::simd::Simd::Avx2.supported() {
+            eprintln!("skipped: this CPU lacks x86-64-v3, so only the baseline build runs here");
+            return;
+        }
+        for n in [1, 3, 4, 5, 512, 1003] {
+            let angles: Vec<f64> = (0..n).map(|k| -7.0 + 14.0 * ((k as f64 * 0.618_033_988_749_895) % 1.0)).collect();
+            let (mut s, mut c) = (vec![0.0; n], vec![0.0; n]);
+            // SAFETY: the CPU has x86-64-v3 (checked above).
+            unsafe { x86_64_v3_arc_sin_cos(&angles, &mut s, &mut c) };
+            for (k, &a) in angles.iter().enumerate() {
+                let (ws, wc) = crate::lane_math::sin_cos(a);
+                assert_eq!((s[k].to_bits(), c[k].to_bits()), (ws.to_bits(), wc.to_bits()), "sin_cos({a})");
+            }
+        }
     }
 
     /// Every lane of [`radical_inverse_lanes`] is [`radical_inverse`] to the bit, also where

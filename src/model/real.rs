@@ -4,9 +4,10 @@
 //! WGSL kernels have), so the kernel code is generic over this small trait, as parry does
 //! with its `Real` alias.
 
+use crate::lane::Lane;
 use num_traits::{Float, FloatConst};
 
-pub trait Real: Float + FloatConst + Default + Send + Sync + std::fmt::Debug + 'static {
+pub trait Real: Float + FloatConst + Default + Into<f64> + Send + Sync + std::fmt::Debug + 'static {
     /// Convert a constant (always exactly representable or rounded once).
     fn c(x: f64) -> Self;
     fn f64(self) -> f64;
@@ -20,9 +21,23 @@ pub trait Real: Float + FloatConst + Default + Send + Sync + std::fmt::Debug + '
     fn kln(self) -> Self;
     /// ln(1 + x) as the kernels compute it.
     fn kln_1p(self) -> Self;
+    /// The number as a lane of one (`crate::lane`), for code written once over lanes that
+    /// the scalar kernel runs too (the restitution law); it is the number itself.
+    type One: Lane<Scalar = Self>;
+    fn to_one(self) -> Self::One;
+    fn from_one(x: Self::One) -> Self;
 }
 
 impl Real for f32 {
+    type One = f32;
+    #[inline(always)]
+    fn to_one(self) -> f32 {
+        self
+    }
+    #[inline(always)]
+    fn from_one(x: f32) -> Self {
+        x
+    }
     #[inline(always)]
     fn c(x: f64) -> Self {
         x as f32
@@ -54,6 +69,15 @@ impl Real for f32 {
 }
 
 impl Real for f64 {
+    type One = f64;
+    #[inline(always)]
+    fn to_one(self) -> f64 {
+        self
+    }
+    #[inline(always)]
+    fn from_one(x: f64) -> Self {
+        x
+    }
     #[inline(always)]
     fn c(x: f64) -> Self {
         x
@@ -62,7 +86,7 @@ impl Real for f64 {
     fn f64(self) -> f64 {
         self
     }
-    // the project's own functions, which the AVX-512 lanes run too (`crate::lane_math`):
+    // the project's own functions, which the SIMD lanes run too (`crate::lane_math`):
     // the same bits on both paths and on every libm
     #[inline(always)]
     fn ksin_cos(self) -> (Self, Self) {

@@ -83,16 +83,14 @@ impl Requirements {
 
     /// Every rule a requirement set must follow; the error names the field.
     pub fn validate(&self) -> Result<(), String> {
-        let positive = [
-            ("feed_rate_min_kg_h", self.feed_rate_min_kg_h),
-            ("feed_rate_target_kg_h", self.feed_rate_target_kg_h),
-            ("power_max_w", self.power_max_w),
-            ("transport_length_m", self.transport_length_m),
-        ];
-        for (name, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(format!("requirements.{name} must be a positive number, got {v}"));
-            }
+        use crate::schema as b;
+        for (bound, name, v) in [
+            (&b::REQ_FEED_RATE, "feed_rate_min_kg_h", self.feed_rate_min_kg_h),
+            (&b::REQ_FEED_RATE, "feed_rate_target_kg_h", self.feed_rate_target_kg_h),
+            (&b::REQ_POWER, "power_max_w", self.power_max_w),
+            (&b::REQ_TRANSPORT_LENGTH, "transport_length_m", self.transport_length_m),
+        ] {
+            bound.check(&format!("requirements.{name}"), v)?;
         }
         if self.feed_rate_target_kg_h < self.feed_rate_min_kg_h {
             return Err(format!(
@@ -101,11 +99,7 @@ impl Requirements {
             ));
         }
         for (name, v) in [("slope_min_deg", self.slope_min_deg), ("slope_max_deg", self.slope_max_deg)] {
-            if !(v.is_finite() && (0.0..=80.0).contains(&v)) {
-                return Err(format!(
-                    "requirements.{name} must lie in 0..=80 degrees (environment.alpha_deg's range), got {v}"
-                ));
-            }
+            b::REQ_SLOPE.check(&format!("requirements.{name}"), v)?;
         }
         if self.slope_min_deg > self.slope_max_deg {
             return Err(format!(

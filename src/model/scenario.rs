@@ -344,21 +344,6 @@ impl Scenario {
 
     /// Check every number for range and finiteness; the error names the field and the rule.
     pub fn validate(&self) -> Result<(), String> {
-        fn finite(name: &str, v: f64) -> Result<(), String> {
-            if v.is_finite() {
-                Ok(())
-            } else {
-                Err(format!("`{name}` must be a finite number, got {v}"))
-            }
-        }
-        fn positive(name: &str, v: f64) -> Result<(), String> {
-            finite(name, v)?;
-            if v > 0.0 {
-                Ok(())
-            } else {
-                Err(format!("`{name}` must be > 0, got {v}"))
-            }
-        }
         // every bound is declared once, in crate::schema, beside the names a user meets it by
         use crate::schema as b;
         let named = |bound: &b::Real, name: &str, v: f64| bound.check(&format!("`{name}`"), v).map(|_| ());
@@ -409,12 +394,12 @@ impl Scenario {
         ] {
             bound.check(&format!("`{}`", bound.lib), v)?;
         }
-        finite("performance.wire_bias_stress", p.wire_bias_stress)?;
+        named(&b::PERF_WIRE_BIAS_STRESS, "performance.wire_bias_stress", p.wire_bias_stress)?;
         if p.t_high <= p.t_low {
             return Err(format!("`performance.t_high` ({}) must exceed `performance.t_low` ({})", p.t_high, p.t_low));
         }
         if let Some(g) = p.spill_check_g {
-            positive("performance.spill_check_g", g)?;
+            named(&b::PERF_SPILL_CHECK_G, "performance.spill_check_g", g)?;
         }
         self.effects.validate()
     }

@@ -7,11 +7,23 @@
 
 use super::nsga2::{Config, State};
 
-/// The shape of the problem a checkpoint must fit: its variables and objectives.
+/// The shape of the problem a checkpoint must fit: its variables and objectives, and where
+/// known the box the solver keeps every variable in and the least value each objective takes.
 #[derive(Debug, Clone, Copy)]
 pub struct Shape {
     pub dim: usize,
     pub objectives: usize,
+    /// Lower and upper bounds of the variables (`BatchProblem::bounds`).
+    pub bounds: Option<(&'static [f64], &'static [f64])>,
+    /// The least value of each objective the problem can give.
+    pub objective_min: Option<&'static [f64]>,
+}
+
+impl Shape {
+    /// A problem of `dim` variables and `objectives` objectives, nothing more known.
+    pub const fn new(dim: usize, objectives: usize) -> Shape {
+        Shape { dim, objectives, bounds: None, objective_min: None }
+    }
 }
 
 /// Check `state` against the run's `config` and the problem's `shape`.
@@ -61,6 +73,25 @@ pub fn validate_state(state: &State, config: &Config, shape: Shape) -> Result<()
         if let Some(v) = ind.x.iter().find(|v| !v.is_finite()) {
             return Err(format!("`population[{i}].x` holds {v}; a design's variables are finite"));
         }
+        // the solver keeps every candidate inside the problem's box (creation, crossover and
+        // mutation clamp to it)
+        if let Some((lo, hi)) = shape.bounds {
+            if let Some(k) = (0..shape.dim).find(|&k| !(lo[k]..=hi[k]).contains(&ind.x[k])) {
+                return Err(format!(
+                    "`population[{i}].x[{k}]` is {:?}; the problem keeps it within [{}, {}]",
+                    ind.x[k], lo[k], hi[k]
+                ));
+            }
+        }
+        // a NaN objective is stored as +inf (`Evaluation::sanitised`), so NaN is an edit
+        for (k, f) in ind.eval.objectives.iter().enumerate() {
+            let least = shape.objective_min.map_or(f64::NEG_INFINITY, |m| m[k]);
+            if f.is_nan() || *f < least {
+                return Err(format!(
+                    "`population[{i}].eval.objectives[{k}]` is {f:?}; the problem's objectives are numbers >= {least}"
+                ));
+            }
+        }
         if ind.eval.objectives.len() != shape.objectives {
             return Err(format!(
                 "`population[{i}].eval.objectives` has {} entries; the problem has {}",
@@ -92,7 +123,7 @@ mod tests {
         for _ in 0..2 {
             ga.step(&mut state, &mut problem);
         }
-        (state, config, Shape { dim: 5, objectives: 2 })
+        (state, config, Shape::new(5, 2))
     }
 
     #[test]
@@ -115,6 +146,7 @@ mod tests {
             ("`spread_history` holds 1", Box::new(|s| s.spread_history.truncate(1))),
             ("`population[2].eval.objectives` has 1", Box::new(|s| s.population[2].eval.objectives.truncate(1))),
             ("`prev_extremes`", Box::new(|s| s.prev_extremes = vec![vec![1.0]])),
+            ("`population[4].eval.objectives[1]` is NaN", Box::new(|s| s.population[4].eval.objectives[1] = f64::NAN)),
         ];
         for (want, edit) in cases {
             let mut s = state.clone();
@@ -122,5 +154,25 @@ mod tests {
             let e = validate_state(&s, &config, shape).unwrap_err();
             assert!(e.contains(want), "{want}: {e}");
         }
+    }
+
+    /// Issue 45: a checkpoint of the thesis's problem with `x[0]` = 1e308 or an objective of
+    /// -1e308 is refused; the solver never makes either.
+    #[test]
+    fn variables_outside_the_box_and_objectives_below_their_least_are_refused() {
+        let (state, config, _) = a_real_state();
+        let shape =
+            Shape { dim: 5, objectives: 2, bounds: Some((&[0.0; 5], &[1.0; 5])), objective_min: Some(&[0.0, 0.0]) };
+        validate_state(&state, &config, shape).unwrap();
+        let mut s = state.clone();
+        s.population[0].x[0] = 1e308;
+        assert!(validate_state(&s, &config, shape).unwrap_err().contains("`population[0].x[0]` is 1e308"));
+        let mut s = state.clone();
+        s.population[2].eval.objectives[0] = -1e308;
+        let e = validate_state(&s, &config, shape).unwrap_err();
+        assert!(e.contains("`population[2].eval.objectives[0]` is -1e308"), "{e}");
+        let mut s = state;
+        s.population[2].eval.objectives[0] = f64::INFINITY;
+        validate_state(&s, &config, shape).unwrap();
     }
 }

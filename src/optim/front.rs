@@ -285,7 +285,7 @@ pub fn write_outputs(dir: &Path, front: &[FrontPoint], evaluations_csv: &Path) -
 /// designs without mass flow (or not simulated) have empty cells there and are left out.
 fn evaluation_cloud(evaluations_csv: &Path) -> anyhow::Result<Vec<[f64; 2]>> {
     let mut r =
-        csv::Reader::from_path(evaluations_csv).with_context(|| format!("reading {}", evaluations_csv.display()))?;
+        csv::Reader::from_reader(crate::io::bounded::open_bounded(evaluations_csv, &crate::schema::EVALUATIONS_FILE)?);
     let headers = r.headers()?.clone();
     let column = |name: &str| {
         headers
@@ -573,7 +573,14 @@ pub fn pareto_csv(front: &[FrontPoint]) -> anyhow::Result<Vec<u8>> {
 
 /// Read a finished run's pareto.csv back (resuming sweeps and studies skip finished runs).
 pub fn read_pareto_csv(path: &Path) -> anyhow::Result<Vec<FrontPoint>> {
-    let mut r = csv::Reader::from_path(path).with_context(|| format!("reading {}", path.display()))?;
+    let text = crate::io::bounded::read_text(path, &crate::schema::PARETO_FILE)?;
+    parse_pareto_csv(&text, &path.display().to_string())
+}
+
+/// The rows of a pareto.csv's `text` (`name`: the file, for messages).
+pub fn parse_pareto_csv(text: &str, name: &str) -> anyhow::Result<Vec<FrontPoint>> {
+    let path = Path::new(name);
+    let mut r = csv::Reader::from_reader(text.as_bytes());
     let mut out = Vec::new();
     for (i, row) in r.deserialize::<ParetoRow>().enumerate() {
         let row = row.with_context(|| format!("{}: row {}", path.display(), i + 2))?;

@@ -142,8 +142,8 @@ pub struct GenerationRow {
 /// generation that the checkpoint does not hold yet). Rows are appended, not written
 /// atomically: a row torn by a kill mid-append has no newline yet and is dropped even
 /// where what is left of its generation field reads as an old generation.
-fn truncate_csv(path: &Path, last: u64) -> anyhow::Result<()> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+fn truncate_csv(path: &Path, limit: &crate::schema::FileLimit, last: u64) -> anyhow::Result<()> {
+    let text = crate::io::bounded::read_text(path, limit)?;
     let complete = match text.rfind('\n') {
         Some(i) => &text[..=i],
         None => text.as_str(),
@@ -160,6 +160,7 @@ fn truncate_csv(path: &Path, last: u64) -> anyhow::Result<()> {
 }
 
 fn append(path: &Path, lines: &str) -> anyhow::Result<()> {
+    crate::io::run_dir::record_write(path)?;
     let mut f = OpenOptions::new()
         .append(true)
         .create(true)
@@ -361,8 +362,8 @@ pub fn run(
             // an edited or damaged checkpoint is refused by its field, not believed
             super::checkpoint::validate_state(&state, &m.config, SawtoothProblem::SHAPE)
                 .map_err(|e| anyhow::anyhow!("resuming: {}: {e}", paths.checkpoint.display()))?;
-            truncate_csv(&paths.evaluations, state.generation)?;
-            truncate_csv(&paths.generations, state.generation)?;
+            truncate_csv(&paths.evaluations, &crate::schema::EVALUATIONS_FILE, state.generation)?;
+            truncate_csv(&paths.generations, &crate::schema::GENERATIONS_FILE, state.generation)?;
             eprintln!("{}resuming from the checkpoint at generation {}", opts.label, state.generation);
             // an extension (a larger --generations) is on disk before the first new generation
             write_atomic(&paths.manifest, toml::to_string_pretty(&m)?.as_bytes())?;
@@ -465,7 +466,7 @@ mod tests {
         let p = d.path().join("generations.csv");
         // generation 12's row was torn after its first character by a kill mid-append
         std::fs::write(&p, "generation,x\n1,a\n2,b\n3,c\n1").unwrap();
-        truncate_csv(&p, 2).unwrap();
+        truncate_csv(&p, &crate::schema::GENERATIONS_FILE, 2).unwrap();
         assert_eq!(std::fs::read_to_string(&p).unwrap(), "generation,x\n1,a\n2,b\n");
     }
 }

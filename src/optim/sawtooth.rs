@@ -142,7 +142,14 @@ pub struct SawtoothProblem<'a> {
 impl SawtoothProblem<'_> {
     /// Eight design variables (l_c, l_a, l_b, r, ω, δ, v0, a) and two objectives
     /// (f_stroke, W_spec): what a checkpoint of a run must fit.
-    pub const SHAPE: super::checkpoint::Shape = super::checkpoint::Shape { dim: 8, objectives: 2 };
+    /// The objectives' least values: f_stroke >= 0, or -F_LIMIT + a positive penalty (Eq.
+    /// 5.17); W_spec >= 0, or W_spec plus a positive penalty, or a sentinel (D.6, D.7).
+    pub const SHAPE: super::checkpoint::Shape = super::checkpoint::Shape {
+        dim: 8,
+        objectives: 2,
+        bounds: Some((&LOWER_BOUND_CLI, &UPPER_BOUND_CLI)),
+        objective_min: Some(&[-F_LIMIT, 0.0]),
+    };
 
     pub fn seed_for(&self, generation: u64) -> u64 {
         self.base_seed.wrapping_add(generation.wrapping_mul(0x9E37_79B9_7F4A_7C15))

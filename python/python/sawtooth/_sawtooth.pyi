@@ -128,10 +128,15 @@ def simulate(
     *,
     engine: _Engine = "cpu",
     trajectories: bool = False,
+    slopes_deg: Optional[Sequence[float]] = None,
+    requirements: Optional[str] = None,
 ) -> Dict[str, Any]:
     """One design (default: the config's [design]): ``sawtooth simulate --json``'s object plus
     ``particles`` {state, x_m, y_m, bounces} and, with trajectories=True, ``flights``
-    {particle, bounce, x_m, y_m, vx_m_s, vy_m_s, t_s, state} (each flight's start, global m)."""
+    {particle, bounce, x_m, y_m, vx_m_s, vy_m_s, t_s, state} (each flight's start, global m).
+    ``requirements`` ("table-2.2" or a TOML file) adds their verdicts. ``slopes_deg``: the
+    design at every slope instead (``simulate --alpha FROM..TO --json``'s object: ``slopes``,
+    and with requirements their verdict at the worst slope)."""
 
 def load_measured(path: _Path) -> Dict[str, Any]:
     """Measured tooth masses (data/validation format): path, provenance, teeth, run,
