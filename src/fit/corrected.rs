@@ -11,15 +11,6 @@ use crate::calibrate::Param;
 /// The file `fit --out DIR` writes.
 pub const CORRECTED: &str = "corrected.toml";
 
-/// Where a fitted parameter lives in a config file.
-fn key(p: Param) -> (&'static str, &'static str) {
-    match p {
-        Param::KElastic => ("collision", "k_elastic"),
-        Param::MuFric => ("collision", "mu_friction"),
-        Param::KDrag => ("environment", "k_drag_per_s"),
-    }
-}
-
 /// `setup_text` (a config TOML) with `values` of `params` set, and `provenance` lines and
 /// each value's sd (where known) as comments at the top. The result is checked to read back
 /// as a config with exactly those values.
@@ -33,7 +24,7 @@ pub fn corrected_toml(
     let mut table: toml::Table = toml::from_str(setup_text).context("the setup is not a TOML table")?;
     for (&p, &v) in params.iter().zip(values) {
         anyhow::ensure!(v.is_finite(), "the fitted {} is {v}, not a number to write", p.name());
-        let (section, name) = key(p);
+        let (section, name) = p.config_key();
         let entry = table.entry(section).or_insert_with(|| toml::Value::Table(toml::Table::new()));
         let toml::Value::Table(t) = entry else {
             anyhow::bail!("the setup's `{section}` is not a table");
@@ -48,7 +39,7 @@ pub fn corrected_toml(
         text.push_str(&format!("# {line}\n"));
     }
     for (j, (&p, &v)) in params.iter().zip(values).enumerate() {
-        let (section, name) = key(p);
+        let (section, name) = p.config_key();
         let spread = match sd.and_then(|s| s.get(j)) {
             Some(s) if s.is_finite() => format!(", bootstrap sd {s:.4}"),
             _ => String::new(),
