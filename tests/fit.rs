@@ -211,6 +211,21 @@ fn json_on_test3_has_the_documented_keys_and_files_are_written() {
     // axes with tick numbers and units, tooth categories, the legend
     assert_figure(&svg, 5, &["tooth", "particle fraction [%]", "1", "2", "measured mean", "fitted simulation"]);
     assert!(!std::fs::read_dir(&dir).unwrap().any(|e| e.unwrap().file_name().to_string_lossy().contains(".tmp")));
+    // the corrected model (issue 43, 3): the setup with the fitted values, read as any config
+    let corrected = dir.join("corrected.toml");
+    let text = std::fs::read_to_string(&corrected).unwrap();
+    assert!(text.contains("# sawtooth ") && text.contains("test3.csv"), "provenance: {text}");
+    let (code, out, err) = sawtooth(&["simulate", "--config", corrected.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let fitted = |p: &str| v["params"][p].as_f64().unwrap();
+    let line = out.lines().find(|l| l.starts_with("scenario")).unwrap();
+    for shown in [
+        format!("k_elastic {}", fitted("k_elastic")),
+        format!("mu {}", fitted("mu_fric")),
+        format!("drag {} 1/s", fitted("k_drag")),
+    ] {
+        assert!(line.contains(&shown), "simulate --config corrected.toml shows `{line}`, not {shown}");
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -47,6 +47,15 @@ impl Param {
         }
     }
 
+    /// Where the parameter lives in a config file: its table and key.
+    pub fn config_key(self) -> (&'static str, &'static str) {
+        match self {
+            Param::KElastic => ("collision", "k_elastic"),
+            Param::MuFric => ("collision", "mu_friction"),
+            Param::KDrag => ("environment", "k_drag_per_s"),
+        }
+    }
+
     /// The scenario's value (k_drag 0 in vacuum).
     pub fn get(self, s: &Scenario) -> f64 {
         match self {

@@ -215,6 +215,18 @@ impl Case {
         s
     }
 
+    /// The largest grain's diameter, m: it sets the neighbour skin and the bins.
+    pub fn largest_diameter_m(&self) -> f64 {
+        self.placement.classes.iter().map(|c| c.diameter_m).fold(self.placement.diameter_m, f64::max)
+    }
+
+    /// LIGGGHTS's neighbour skin, m (`neighbor SKIN bin`). A grain past a periodic face is
+    /// mapped back into the box only when the neighbour lists are rebuilt, which happens before
+    /// any grain has moved half the skin, so a dump may show a grain that far outside.
+    pub fn neighbour_skin_m(&self) -> f64 {
+        0.5 * self.largest_diameter_m()
+    }
+
     /// Steps of `seconds` at the case's time step.
     fn steps(&self, seconds: f64) -> u64 {
         (seconds / self.contact.timestep_s).ceil().max(1.0) as u64
@@ -223,7 +235,7 @@ impl Case {
     fn script(&self) -> String {
         let c = &self.contact;
         // the largest grain sets the neighbour skin and the bins
-        let d = self.placement.classes.iter().map(|c| c.diameter_m).fold(self.placement.diameter_m, f64::max);
+        let d = self.largest_diameter_m();
         let dt = c.timestep_s;
         let [vx, vy] = self.motion.velocity_expressions("t");
         let chunk = self.steps(CHUNK_S);
@@ -240,7 +252,7 @@ impl Case {
             ),
             None => format!("${{vrms}} < {:e}", self.settings.rest_speed_m_s),
         };
-        let skin = 0.5 * d;
+        let skin = self.neighbour_skin_m();
         // bins no finer than the box can afford (LIGGGHTS bins the whole box)
         let area = (self.bounds[0][1] - self.bounds[0][0]) * (self.bounds[1][1] - self.bounds[1][0]);
         let binsize = (d + skin).max((area / 2e5).sqrt());

@@ -215,8 +215,8 @@ impl Conveyor {
     fn script(&self) -> String {
         let t = &self.tooth;
         let c = &t.contact;
-        let d = t.placement.classes.iter().map(|c| c.diameter_m).fold(t.placement.diameter_m, f64::max);
-        let skin = 0.5 * d;
+        let d = t.largest_diameter_m();
+        let skin = t.neighbour_skin_m();
         let area = (self.bounds[0][1] - self.bounds[0][0]) * (self.bounds[1][1] - self.bounds[1][0]);
         let binsize = (d + skin).max((area / 2e5).sqrt());
         let alpha = t.scenario.environment.alpha_deg.to_radians();

@@ -3,7 +3,7 @@
 //! (`sawtooth.fit`) both build a [`FitRequest`] and call [`run`], so the checks, the numbers,
 //! the files and the JSON are the same from either.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _};
 use serde_json::Value;
@@ -142,6 +142,32 @@ pub fn run(r: &FitRequest, log: &mut dyn FnMut(String)) -> anyhow::Result<FitOut
     let json = report::to_json(&report, &meta);
     if let Some(dir) = &r.out {
         report::write_dir(dir, &report, &meta, &json)?;
+        if report.solver.is_some() {
+            write_corrected(dir, &r.setup, &report, &meta)?;
+        }
     }
     Ok(FitOutcome { report, meta, json })
+}
+
+/// `corrected.toml` beside the fit's other files: the setup with the fitted values, its
+/// provenance as comments ([`super::corrected`]).
+fn write_corrected(dir: &Path, setup: &Path, report: &FitReport, meta: &Meta) -> anyhow::Result<()> {
+    let text = crate::io::bounded::read_text(setup, &crate::schema::CONFIG_FILE)?;
+    let mut provenance = vec![
+        format!("sawtooth {}: fit of {} with the setup {}", env!("CARGO_PKG_VERSION"), meta.data, meta.setup),
+        format!(
+            "{} runs, engine {}, {} particles, seed {}; SSE {:.2} %^2, MAE {:.2} pp over the weighed teeth",
+            report.runs, meta.engine, meta.particles, meta.seed, report.sse_percent2, report.mae_percent
+        ),
+    ];
+    if let Some(h) = &report.heldout {
+        provenance.push(format!(
+            "held-out runs: SSE {:.2} %^2 (in sample {:.2})",
+            h.sse_heldout_percent2, h.sse_in_sample_percent2
+        ));
+    }
+    let sd = report.uncertainty.as_ref().map(|u| u.sd.as_slice());
+    let body = super::corrected::corrected_toml(&text, &report.params, &report.x, sd, &provenance)
+        .with_context(|| format!("the corrected config from {}", setup.display()))?;
+    crate::io::atomic::write_atomic(&dir.join(super::corrected::CORRECTED), body.as_bytes())
 }
