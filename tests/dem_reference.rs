@@ -129,25 +129,31 @@ fn a_lone_grain_lands_on_the_same_tooth_in_the_dem_and_in_the_model_with_the_dem
 /// the deck checks the count before every run and dump and stops with `all_lost.txt`. The
 /// grains are made to leave by a LIGGGHTS wrapper that deletes them all right after they are
 /// read (a lone grain rolling out of the box while it settles did this on a lunar design).
+/// A LIGGGHTS wrapper beside `dir` that deletes every grain of a conveyor's (or a single
+/// stroke's) case right after reading it; the campaign's impact cases, which measure its law,
+/// run as they are.
+fn emptying_liggghts(dir: &std::path::Path) -> std::path::PathBuf {
+    let liggghts = sawtooth::dem::run::find_liggghts().unwrap();
+    let wrapper = dir.with_extension("liggghts.sh");
+    std::fs::write(
+        &wrapper,
+        format!(
+            "#!/bin/sh\nif grep -q '^# sawtooth dem \\(case\\|conveyor\\)' in.sawtooth; then\n  sed -i 's/^read_data .*$/&\\ndelete_atoms group all/' in.sawtooth\nfi\nexec '{}' \"$@\"\n",
+            liggghts.display()
+        ),
+    )
+    .unwrap();
+    std::fs::set_permissions(&wrapper, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    wrapper
+}
+
 #[test]
 fn a_run_whose_every_grain_leaves_the_box_is_a_result_with_every_grain_lost() {
     if !liggghts_present("dem_reference::a_run_whose_every_grain_leaves_the_box_is_a_result_with_every_grain_lost") {
         return;
     }
     let (_d, dir) = tmp("gone");
-    let liggghts = sawtooth::dem::run::find_liggghts().unwrap();
-    let wrapper = dir.with_extension("liggghts.sh");
-    // only the conveyor's case is emptied (the campaign's impact cases, which measure its law,
-    // run as they are)
-    std::fs::write(
-        &wrapper,
-        format!(
-            "#!/bin/sh\nif grep -q '^# sawtooth dem case' in.sawtooth; then\n  sed -i 's/^read_data .*$/&\\ndelete_atoms group all/' in.sawtooth\nfi\nexec '{}' \"$@\"\n",
-            liggghts.display()
-        ),
-    )
-    .unwrap();
-    std::fs::set_permissions(&wrapper, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let wrapper = emptying_liggghts(&dir);
     let config = coarse_rig(&dir.with_extension("cfg"), "particles = 4\ngrain_diameter_m = 0.001\n");
     let out = dir.to_str().unwrap();
     let (code, _, err) = sawtooth_env(
@@ -255,4 +261,28 @@ fn strokes_convey_grains_steadily_and_report_the_advance_beside_the_models() {
     for k in 0..=3 {
         assert!(dir.join(format!("run-001/cycle-{k:03}.dump")).is_file());
     }
+}
+
+/// A steady conveyor whose every grain leaves the box conveys nothing: the deck stops
+/// before a run LIGGGHTS would refuse, and every stroke's advance is zero.
+#[test]
+fn a_conveyor_whose_every_grain_leaves_the_box_advances_nothing() {
+    if !liggghts_present("dem_reference::a_conveyor_whose_every_grain_leaves_the_box_advances_nothing") {
+        return;
+    }
+    let (_d, dir) = tmp("steady-gone");
+    let wrapper = emptying_liggghts(&dir);
+    let config = coarse_rig(&dir.with_extension("cfg"), "particles = 4\ngrain_diameter_m = 0.001\n");
+    let out = dir.to_str().unwrap();
+    let args =
+        ["dem", "run", "--config", &config, "--strokes", "3", "--period-teeth", "2", "--runs", "1", "--out", out];
+    let (code, _, err) = sawtooth_env(&args, &[("SAWTOOTH_LIGGGHTS", wrapper.to_str().unwrap())]);
+    assert_eq!(code, 0, "{err}");
+    let run = dir.join("run-001");
+    assert!(read(&run.join("in.sawtooth")).contains("delete_atoms group all"), "the wrapper did not empty the case");
+    assert!(run.join("all_lost.txt").is_file(), "{err}");
+    let r = json(&read(&run.join("steady.json")));
+    let advance: Vec<f64> = r["cycles"].as_array().unwrap().iter().map(|c| f(&c["advance_m"])).collect();
+    assert_eq!(advance, vec![0.0; 3], "{r}");
+    assert_eq!(f(&r["mass_per_tooth_kg"]), 0.0, "{r}");
 }

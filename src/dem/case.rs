@@ -42,6 +42,33 @@ pub const STROKE_TIME: &str = "stroke_time.txt";
 /// result with every grain lost rather than a failure.
 pub const ALL_LOST: &str = "all_lost.txt";
 
+/// `deck` with the grain count checked before every `run` and `write_dump`: LIGGGHTS stops
+/// with an error ("Atom types must start from 1") on a run or a dump of a granular case with
+/// no grains left, so a case whose every grain has left the box jumps to `gone` instead,
+/// which writes ALL_LOST and ends. A deck's normal end jumps past it.
+pub(super) fn stop_when_every_grain_is_gone(deck: &str) -> String {
+    const GUARD: &str = "if \"${grains} == 0\" then \"jump SELF gone\"\n";
+    let mut s = String::with_capacity(deck.len() + 4096);
+    for line in deck.lines() {
+        if line.starts_with("run ") || line.starts_with("write_dump ") {
+            s.push_str(GUARD);
+        }
+        s.push_str(line);
+        s.push('\n');
+        if line.starts_with("read_data ") {
+            s.push_str("# before every run and dump: a case with no grains left cannot run (ALL_LOST)\nvariable grains equal atoms\n");
+        }
+    }
+    let _ = write!(
+        s,
+        "jump SELF finished\n\
+         label gone\nvariable at equal step\nprint \"sawtooth: every grain left the box by step ${{at}}\"\n\
+         print \"every grain left the box by step ${{at}}\" file {ALL_LOST} screen no\n\
+         label finished"
+    );
+    s
+}
+
 /// Simulated time per rest check, s.
 const CHUNK_S: f64 = 0.02;
 /// Longest settling before the stroke, s (the grains start a fraction of a diameter apart).
@@ -285,28 +312,21 @@ impl Case {
              fix stroke all move/mesh mesh sled linear/variable v_vx v_vy v_vz\n\
              fix integrate all nve/sphere\n\
              compute ke all ke\nvariable m equal mass(all)\nvariable vrms equal sqrt(2*c_ke/(v_m+1e-30))\n\
-             variable grains equal atoms\n\
              thermo_style custom step atoms ke v_vrms v_t\nthermo {chunk}\nthermo_modify lost ignore norm no\n\
-             # before every run and dump: a case with no grains left cannot run (ALL_LOST)\n\
-             # settle\nvariable settle loop {settle_chunks}\nlabel settling\n{gone}run {chunk}\n\
+             # settle\nvariable settle loop {settle_chunks}\nlabel settling\nrun {chunk}\n\
              if \"${{vrms}} < {rest:e}\" then \"jump SELF settled\"\nnext settle\njump SELF settling\nlabel settled\n\
-             {gone}write_dump all custom {SETTLED} id x y z\n\
+             write_dump all custom {SETTLED} id x y z\n\
              variable now equal step\nvariable s0 equal ${{now}}\nprint \"sawtooth: stroke starts at step ${{s0}}\"\n\
              # the stroke\nrun {stroke}\n\
-             # until the grains rest (and a return is not under way)\nvariable rest loop {rest_chunks}\nlabel resting\n{gone}run {chunk}\n\
+             # until the grains rest (and a return is not under way)\nvariable rest loop {rest_chunks}\nlabel resting\nrun {chunk}\n\
              if \"{rested}\" then \"jump SELF rested\"\nnext rest\njump SELF resting\nlabel rested\n\
              print \"sawtooth: stroke time at the end ${{t}} s\"\n\
              # where the mesh stopped: the gather bins the grains in its frame then\n\
              print \"${{t}}\" file {STROKE_TIME} screen no\n\
-             {gone}write_dump all custom {DUMP} id type diameter mass x y z vx vy vz\n\
-             jump SELF finished\n\
-             label gone\nvariable at equal step\nprint \"sawtooth: every grain left the box by step ${{at}}\"\n\
-             print \"every grain left the box by step ${{at}}\" file {ALL_LOST} screen no\n\
-             label finished",
-            gone = "if \"${grains} == 0\" then \"jump SELF gone\"\n",
+             write_dump all custom {DUMP} id type diameter mass x y z vx vy vz",
             rest = self.settings.rest_speed_m_s,
         );
-        s
+        stop_when_every_grain_is_gone(&s)
     }
 }
 
@@ -393,6 +413,36 @@ fn bounds(line: &[[f64; 2]], motion: &SledMotion, d: &Design, g: f64, depth: f64
     let margin = 2.0 * d.l_c;
     let apex = (1.5 * d.v0).powi(2) / (2.0 * g);
     [[x0 + dx0 - margin, x1 + dx1 + margin], [y0 + dy0 - margin, y1.max(d.l_b + apex) + dy1 + margin], [0.0, depth]]
+}
+
+/// Every `run` and `write_dump` in `script` is preceded by a check of the grain count since
+/// the last run, and `gone` writes ALL_LOST after the normal end; the number of runs and
+/// dumps (a panic naming the first unchecked one otherwise).
+#[cfg(test)]
+pub(super) fn runs_and_dumps_checked(script: &str) -> usize {
+    let guard = "if \"${grains} == 0\" then \"jump SELF gone\"";
+    let lines: Vec<&str> = script.lines().collect();
+    let defined = lines.iter().position(|l| *l == "variable grains equal atoms").expect("the count is defined");
+    let mut checked = true; // read_data's grains are all there
+    let mut acts = 0;
+    for (i, line) in lines.iter().enumerate() {
+        if *line == guard {
+            assert!(i > defined, "the count is checked before it is defined: {script}");
+            checked = true;
+        } else if line.starts_with("run ") || line.starts_with("write_dump ") {
+            assert!(checked, "`{line}` may meet a case with no grains: {script}");
+            acts += 1;
+            if line.starts_with("run ") {
+                checked = false;
+            }
+        }
+    }
+    let gone = lines.iter().position(|l| *l == "label gone").expect("a `gone` label");
+    assert!(lines[gone..].iter().any(|l| l.contains(&format!("file {ALL_LOST}"))), "{script}");
+    // the normal end jumps past it
+    let finished = lines.iter().position(|l| *l == "jump SELF finished").unwrap();
+    assert!(finished < gone && lines.last() == Some(&"label finished"), "{script}");
+    acts
 }
 
 #[cfg(test)]
@@ -484,7 +534,11 @@ mod tests {
         let (t0, t1) = case.motion.return_window().unwrap();
         let script = case.script();
         // the stroke's own run covers the launch only
-        assert!(script.contains(&format!("# the stroke\nrun {}\n", case.steps(case.motion.t_launch()))), "{script}");
+        let stroke = format!(
+            "# the stroke\nif \"${{grains}} == 0\" then \"jump SELF gone\"\nrun {}\n",
+            case.steps(case.motion.t_launch())
+        );
+        assert!(script.contains(&stroke), "{script}");
         assert!(
             script.contains(&format!(
                 "if \"${{vrms}} < 5e-3 && (${{t}} >= {t1:e} || ${{t}} < {t0:e})\" then \"jump SELF rested\""
@@ -504,27 +558,7 @@ mod tests {
     fn no_run_or_dump_follows_a_run_without_the_grain_count_checked() {
         let (s, d) = rig();
         let script = Case::build(&s, &d, &settings(60), 0, None).unwrap().script();
-        let guard = "if \"${grains} == 0\" then \"jump SELF gone\"";
-        let lines: Vec<&str> = script.lines().collect();
-        let mut checked = true; // read_data's grains are all there
-        let mut acts = 0;
-        for line in &lines {
-            if *line == guard {
-                checked = true;
-            } else if line.starts_with("run ") || line.starts_with("write_dump ") {
-                assert!(checked, "`{line}` may meet a case with no grains: {script}");
-                acts += 1;
-                if line.starts_with("run ") {
-                    checked = false;
-                }
-            }
-        }
-        assert_eq!(acts, 5, "settle, dump, stroke, rest, dump: {script}");
-        let gone = lines.iter().position(|l| *l == "label gone").expect("a `gone` label");
-        assert!(lines[gone..].iter().any(|l| l.contains(&format!("file {ALL_LOST}"))), "{script}");
-        // the normal end jumps past it
-        let finished = lines.iter().position(|l| *l == "jump SELF finished").unwrap();
-        assert!(finished < gone && lines.last() == Some(&"label finished"), "{script}");
+        assert_eq!(runs_and_dumps_checked(&script), 5, "settle, dump, stroke, rest, dump: {script}");
     }
 
     #[test]

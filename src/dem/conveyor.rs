@@ -32,7 +32,7 @@ use std::path::Path;
 use anyhow::{bail, Context as _};
 use serde::{Deserialize, Serialize};
 
-use super::case::{drag_commands, Case, DUMP, GRAINS, MESH, SCRIPT};
+use super::case::{drag_commands, stop_when_every_grain_is_gone, Case, ALL_LOST, DUMP, GRAINS, MESH, SCRIPT};
 use super::contact::{property_commands, CONTACT_MODEL};
 use super::grains::{Grain, Placement};
 use super::stl::{extrude, profile_polyline, stl_text, subdivide, MAX_FACET_M};
@@ -303,7 +303,7 @@ impl Conveyor {
             );
         }
         let _ = writeln!(s, "write_dump all custom {DUMP} id type diameter mass x y z vx vy vz");
-        s
+        stop_when_every_grain_is_gone(&s)
     }
 }
 
@@ -383,8 +383,14 @@ pub struct SteadyRun {
 
 /// Read the cycle dumps of a finished conveyor run in `dir`.
 pub fn reduce(dir: &Path, conveyor: &Conveyor, wall_s: f64) -> anyhow::Result<SteadyRun> {
+    // every grain left the box (the deck stopped at `gone`): the cycles it did not reach
+    // carry nothing, so they convey nothing
+    let all_lost = dir.join(ALL_LOST).is_file();
     let read = |k: u32| -> anyhow::Result<Vec<Unwrapped>> {
         let p = dir.join(cycle_dump(k));
+        if all_lost && !p.exists() {
+            return Ok(Vec::new());
+        }
         let text = crate::io::bounded::read_text(&p, &crate::schema::DEM_DUMP_FILE)?;
         parse_unwrapped(&text).with_context(|| format!("reading {}", p.display()))
     };
@@ -405,10 +411,16 @@ pub fn reduce(dir: &Path, conveyor: &Conveyor, wall_s: f64) -> anyhow::Result<St
                 mass += g.mass_kg;
             }
         }
+        let lost = before.len().saturating_sub(after.len());
         if mass <= 0.0 {
-            bail!("{}: no grain is left after cycle {k}", dir.display());
+            if !all_lost {
+                bail!("{}: no grain is left after cycle {k}", dir.display());
+            }
+            cycles.push(Cycle { stroke: k, advance_m: 0.0, lost });
+            before = after;
+            continue;
         }
-        cycles.push(Cycle { stroke: k, advance_m: moved / mass, lost: before.len().saturating_sub(after.len()) });
+        cycles.push(Cycle { stroke: k, advance_m: moved / mass, lost });
         before = after;
     }
     let total: f64 = first.iter().map(|g| g.mass_kg).sum();
@@ -532,6 +544,48 @@ mod tests {
             "stroke and return, 3 cycles"
         );
         assert_eq!(script.matches("unfix sled0").count(), 6);
+    }
+
+    /// The conveyor's deck, as the single stroke's, stops at `gone` rather than run or dump a
+    /// case whose every grain has left the box.
+    #[test]
+    fn no_run_or_dump_of_the_conveyor_follows_a_run_without_the_grain_count_checked() {
+        let (_, c) = lunar_conveyor(3);
+        let script = c.script();
+        // settle and its dump; per cycle: stroke, rest, return, rest, dump; the final dump
+        assert_eq!(super::super::case::runs_and_dumps_checked(&script), 2 + 5 * c.strokes as usize + 1);
+    }
+
+    /// A run whose grains all left the box conveys nothing from the cycle where the last
+    /// one went: the cycles the deck did not reach have no dump and advance nothing.
+    #[test]
+    fn the_cycles_after_every_grain_left_advance_nothing() {
+        let dir = std::env::temp_dir().join(format!("sawtooth-conveyor-lost-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (_, mut c) = lunar_conveyor(3);
+        c.grains.truncate(2);
+        let dump = "ITEM: TIMESTEP\n0\nITEM: ATOMS id mass xu yu zu\n1 1.0 0.0 0.01 0.001\n2 3.0 0.1 0.01 0.001\n";
+        std::fs::write(dir.join(cycle_dump(0)), dump).unwrap();
+        std::fs::write(
+            dir.join(cycle_dump(1)),
+            dump.replace(" 0.0 0.01", " 0.2 0.01").replace(" 0.1 0.01", " 0.3 0.01"),
+        )
+        .unwrap();
+        // without ALL_LOST a missing dump is an unfinished run
+        assert!(reduce(&dir, &c, 1.0).is_err());
+        std::fs::write(dir.join(ALL_LOST), "every grain left the box by step 9\n").unwrap();
+        let r = reduce(&dir, &c, 1.0).unwrap();
+        let advances: Vec<f64> = r.cycles.iter().map(|c| c.advance_m).collect();
+        assert_eq!(r.cycles.len(), 3);
+        assert!((advances[0] - 0.2).abs() < 1e-12 && advances[1] == 0.0 && advances[2] == 0.0, "{advances:?}");
+        assert_eq!(r.cycles[1].lost, 2);
+        assert_eq!(steady(&[r]).unwrap().advance_m, 0.0);
+        // lost while settling: nothing on the conveyor
+        std::fs::remove_file(dir.join(cycle_dump(0))).unwrap();
+        std::fs::remove_file(dir.join(cycle_dump(1))).unwrap();
+        let r = reduce(&dir, &c, 1.0).unwrap();
+        assert!(r.cycles.iter().all(|c| c.advance_m == 0.0) && r.mass_per_tooth_kg == 0.0);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
