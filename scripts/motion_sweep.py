@@ -47,7 +47,7 @@ def sh(args, log=None):
 
 def setup_text(v0, a, alpha, motion):
     """The rig's slow setup at (v0, a, alpha); `motion` None leaves the motion out, else
-    (delay, speed) is stated."""
+    (delay, speed, direction) is stated."""
     lines = []
     for line in open(os.path.join(ROOT, "data", "campaign_rig", "slow.toml")).read().splitlines():
         if line.startswith("motion_"):
@@ -62,6 +62,7 @@ def setup_text(v0, a, alpha, motion):
         if line.startswith("particle_mass_g") and motion is not None:
             lines.append(f"motion_delay_s = {motion[0]}")
             lines.append(f"motion_return_speed_m_s = {motion[1]}")
+            lines.append(f"motion_direction = \"{motion[2]}\"")
     return "\n".join(lines) + "\n"
 
 
@@ -114,7 +115,7 @@ def run_one(c, out, flags):
     os.makedirs(d, exist_ok=True)
     stated, unstated = [], []
     for k, (v0, a, alpha) in enumerate(c["conditions"]):
-        motion = (c["delay_s"], c["speed_m_s"])
+        motion = (c["delay_s"], c["speed_m_s"], c["direction"])
         maker = os.path.join(d, f"c{k}-maker.toml")
         text = setup_text(v0, a, alpha, None) + (
             f"\n[effects.sled_motion]\ndelay_s = {motion[0]}\nreturn_speed_m_s = {motion[1]}\n"

@@ -6,12 +6,15 @@ use crate::io::measured::MeasuredRuns;
 use crate::model::{Design, Scenario};
 
 /// What a setup states of the sled's motion after the launch ([measurement]
-/// motion_delay_s, motion_return_speed_m_s): the sled-motion effect holds these fixed for
-/// the condition and fits the values left out.
+/// motion_delay_s, motion_return_speed_m_s, motion_direction): the sled-motion effect holds
+/// these fixed for the condition and fits the delay and speed left out.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct KnownMotion {
     pub delay_s: Option<f64>,
     pub return_speed_m_s: Option<f64>,
+    /// Along what the sled returns ([measurement] motion_direction); not fitted: down the
+    /// slope where no setup says.
+    pub direction: Option<crate::model::effects::MotionDirection>,
 }
 
 impl KnownMotion {

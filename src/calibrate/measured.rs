@@ -76,6 +76,7 @@ pub fn load(
         motion: KnownMotion {
             delay_s: measurement.and_then(|m| m.motion_delay_s),
             return_speed_m_s: measurement.and_then(|m| m.motion_return_speed_m_s),
+            direction: measurement.and_then(|m| m.motion_direction),
         },
         motion_profile: measurement.and_then(|m| m.motion_profile.clone()),
         normalise,

@@ -133,6 +133,9 @@ impl Space {
                 }
             }
             e.apply(&mut s.effects, &v);
+            if let (Some(m), Some(direction)) = (s.effects.sled_motion.as_mut(), cond.motion.direction) {
+                m.direction = direction;
+            }
         }
         s
     }
@@ -177,5 +180,24 @@ mod tests {
         // only a free parameter can be pinned
         assert!(pinned.pin("delay_s", 0.0).is_none());
         assert!(space.pin("k_elastic", 0.5).is_none());
+    }
+
+    /// The direction a setup states is the candidate's (it is not fitted); where none is
+    /// stated the sled returns down the slope.
+    #[test]
+    fn a_stated_return_direction_is_the_candidates() {
+        use crate::model::effects::MotionDirection;
+        let mut cond = test3();
+        cond.motion = Default::default();
+        let conds = vec![cond.clone()];
+        let space = Space::new(shared_params(&conds), &[EffectKind::SledMotion], &conds);
+        let mut x: Vec<f64> = space.shared.iter().map(|p| p.bounds().0).collect();
+        x.extend([0.0, 0.4]);
+        let motion = space.scenario_at(&cond, &x).effects.sled_motion.expect("a moving sled");
+        assert_eq!(motion.direction, MotionDirection::Slope);
+        cond.motion.direction = Some(MotionDirection::Launch);
+        let motion = space.scenario_at(&cond, &x).effects.sled_motion.expect("a moving sled");
+        assert_eq!(motion.direction, MotionDirection::Launch);
+        assert_eq!(space.names().len(), space.shared.len() + 2, "the direction is not searched");
     }
 }

@@ -219,6 +219,9 @@ pub struct MeasurementTable {
     /// `diagnose`'s sled-motion candidate, which holds a value given here fixed for this
     /// condition and fits one left out (shared by the conditions that leave it out).
     pub motion_return_speed_m_s: Option<f64>,
+    /// ... along this direction: `slope` (down the slope, the rig's guide; the default) or
+    /// `launch` (back along the launch direction).
+    pub motion_direction: Option<crate::model::effects::MotionDirection>,
     pub description: Option<String>,
 }
 
@@ -383,7 +386,12 @@ mod tests {
         let m = c.measurement.unwrap();
         assert_eq!(m.scale_resolution_g, Some(0.01));
         assert_eq!(m.motion_profile.as_deref(), Some("delayed"));
+        assert_eq!(m.motion_direction, None);
+        let c = ConfigFile::parse("[measurement]\nmotion_direction = \"launch\"\n").unwrap();
+        assert_eq!(c.measurement.unwrap().motion_direction, Some(crate::model::effects::MotionDirection::Launch));
         for (text, key) in [
+            ("motion_direction = \"up\"", "motion_direction"),
+            ("motion_direction = \"up\"", "expected `slope` or `launch`"),
             ("scale_resolution_g = 0.0", "measurement.scale_resolution_g must lie in [1e-15, 1000] g"),
             ("scale_resolution_g = 1e308", "measurement.scale_resolution_g must lie in [1e-15, 1000] g"),
             ("particle_mass_g = -2.0", "measurement.particle_mass_g must lie in [1e-12, 1000000] g"),
