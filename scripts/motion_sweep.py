@@ -16,7 +16,6 @@ sled-motion `best` in the campaigns the stated one explains.
 Resumable: a diagnosis whose diagnosis.json exists is not run again. Nothing is committed as
 data; this script makes it.
 """
-import argparse
 import json
 import os
 import random
@@ -24,7 +23,7 @@ import subprocess
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from diagnose_sweep import ROOT, binary, main as sweep_main, record_time, sh
 DELAYS = [0.0, 0.01, 0.02, 0.05, 0.1, 0.3]
 SPEEDS = [0.05, 0.1, 0.2, 0.3, 0.5, 1.0]
 DIRECTIONS = ["slope", "launch"]
@@ -35,14 +34,6 @@ SLOPE = (0.0, 40.0)
 PAST_THE_FLIGHTS_S = 0.3
 
 
-def binary():
-    """The release build, or the binary SAWTOOTH_BIN names (a build kept for a long run)."""
-    return os.environ.get("SAWTOOTH_BIN") or os.path.join(ROOT, "target", "release", "sawtooth")
-
-
-def sh(args, log=None):
-    with open(log, "w") if log else open(os.devnull, "w") as err:
-        subprocess.run(args, check=True, stdout=subprocess.DEVNULL, stderr=err, cwd=ROOT)
 
 
 def setup_text(v0, a, alpha, motion):
@@ -90,9 +81,7 @@ def diagnose(d, pairs, flags, name, out):
         args += ["--data", data, "--setup", setup]
     start = time.time()
     sh([binary(), "diagnose", *args, "--out", d, *flags], log=d + ".log")
-    with open(os.path.join(out, "times.txt"), "a") as t:
-        t.write(f"{name} {time.time() - start:.0f} s wall (load {open('/proc/loadavg').read().split()[0]})\n")
-    print(f"{name}: {time.time() - start:.0f} s", file=sys.stderr, flush=True)
+    record_time(out, name, start)
 
 
 def run(args):
@@ -175,25 +164,10 @@ def score(args):
     print(text)
 
 
-def main():
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    sub = p.add_subparsers(dest="command", required=True)
-    r = sub.add_parser("run")
-    r.add_argument("out")
+def run_arguments(r):
     r.add_argument("--campaigns", type=int, default=24)
     r.add_argument("--seed", type=int, default=1)
-    s = sub.add_parser("score")
-    s.add_argument("out")
-    # everything after `--` goes to sawtooth diagnose
-    argv = sys.argv[1:]
-    flags = argv[argv.index("--") + 1:] if "--" in argv else []
-    a = p.parse_args(argv[: argv.index("--")] if "--" in argv else argv)
-    a.flags = flags
-    if a.command == "run":
-        run(a)
-    else:
-        score(a)
 
 
 if __name__ == "__main__":
-    main()
+    sweep_main(__doc__, run, score, run_arguments)

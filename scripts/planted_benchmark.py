@@ -20,14 +20,11 @@ effect is in the indistinguishable set with `best`, of at most three; a control 
 and the held-out seeds apart: right above the limit (planted at 1 and 2 times it), false
 `unexplained` where the planted effect is a candidate, and `no-gap` above the limit.
 """
-import argparse
 import json
 import os
-import subprocess
-import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from diagnose_sweep import ROOT, binary, main as sweep_main, record_time, sh
 RIG = ["slow", "fast", "shallow"]
 FACTORS = [0.5, 1.0, 2.0]
 # the effect's CLI form for a strength of one parameter, the others neutral (as the limits
@@ -56,14 +53,6 @@ BOXES = {
 RESHAPES = {"reshape-12-8": (0.12, 0.08), "reshape-6-4": (0.06, 0.04)}
 
 
-def binary():
-    """The release build, or the binary SAWTOOTH_BIN names (a build kept for a long run)."""
-    return os.environ.get("SAWTOOTH_BIN") or os.path.join(ROOT, "target", "release", "sawtooth")
-
-
-def sh(args, log=None):
-    with open(log, "w") if log else open(os.devnull, "w") as err:
-        subprocess.run(args, check=True, stdout=subprocess.DEVNULL, stderr=err, cwd=ROOT)
 
 
 def setups(out, stated):
@@ -126,9 +115,7 @@ def campaign(out, name, seed, effect, stated, flags, plain_from=None, shape=None
     # only the controls' limits are read; the others leave them out (a few per cent of the time)
     extra = [] if limits else ["--no-detection-limits"]
     sh([binary(), "diagnose", *args, "--out", os.path.join(d, "out"), *extra, *flags], log=os.path.join(d, "diagnose.log"))
-    with open(os.path.join(out, "times.txt"), "a") as t:
-        t.write(f"{name} {time.time() - start:.0f} s wall (load {open('/proc/loadavg').read().split()[0]})\n")
-    print(f"{name}: {time.time() - start:.0f} s", file=sys.stderr, flush=True)
+    record_time(out, name, start)
     return d
 
 
@@ -240,25 +227,10 @@ def score(args):
     print(text)
 
 
-def main():
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    sub = p.add_subparsers(dest="command", required=True)
-    r = sub.add_parser("run")
-    r.add_argument("out")
+def run_arguments(r):
     r.add_argument("--seeds", default="1,2")
     r.add_argument("--heldout", default="3")
-    s = sub.add_parser("score")
-    s.add_argument("out")
-    # everything after `--` goes to sawtooth diagnose
-    argv = sys.argv[1:]
-    flags = argv[argv.index("--") + 1:] if "--" in argv else []
-    a = p.parse_args(argv[: argv.index("--")] if "--" in argv else argv)
-    a.flags = flags
-    if a.command == "run":
-        run(a)
-    else:
-        score(a)
 
 
 if __name__ == "__main__":
-    main()
+    sweep_main(__doc__, run, score, run_arguments)
