@@ -556,6 +556,15 @@ mod tests {
         assert_eq!(super::super::case::runs_and_dumps_checked(&script), 2 + 5 * c.strokes as usize + 1);
     }
 
+    /// A cycle's dump of grains (id, mass, unwrapped x), at y 0.01 and z 0.001.
+    fn dump(rows: &[(u64, f64, f64)]) -> String {
+        let mut t = String::from("ITEM: TIMESTEP\n0\nITEM: ATOMS id mass xu yu zu\n");
+        for (id, m, x) in rows {
+            t.push_str(&format!("{id} {m} {x} 0.01 0.001\n"));
+        }
+        t
+    }
+
     /// A run whose grains all left the box conveys nothing from the cycle where the last
     /// one went: the cycles the deck did not reach have no dump and advance nothing.
     #[test]
@@ -564,13 +573,8 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let (_, mut c) = lunar_conveyor(3);
         c.grains.truncate(2);
-        let dump = "ITEM: TIMESTEP\n0\nITEM: ATOMS id mass xu yu zu\n1 1.0 0.0 0.01 0.001\n2 3.0 0.1 0.01 0.001\n";
-        std::fs::write(dir.join(cycle_dump(0)), dump).unwrap();
-        std::fs::write(
-            dir.join(cycle_dump(1)),
-            dump.replace(" 0.0 0.01", " 0.2 0.01").replace(" 0.1 0.01", " 0.3 0.01"),
-        )
-        .unwrap();
+        std::fs::write(dir.join(cycle_dump(0)), dump(&[(1, 1.0, 0.0), (2, 3.0, 0.1)])).unwrap();
+        std::fs::write(dir.join(cycle_dump(1)), dump(&[(1, 1.0, 0.2), (2, 3.0, 0.3)])).unwrap();
         // without ALL_LOST a missing dump is an unfinished run
         assert!(reduce(&dir, &c, 1.0).is_err());
         std::fs::write(dir.join(ALL_LOST), "every grain left the box by step 9\n").unwrap();
@@ -605,13 +609,6 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let (_, mut c) = lunar_conveyor(3);
         c.grains.truncate(2);
-        let dump = |rows: &[(u64, f64, f64)]| {
-            let mut t = String::from("ITEM: TIMESTEP\n0\nITEM: ATOMS id mass xu yu zu\n");
-            for (id, m, x) in rows {
-                t.push_str(&format!("{id} {m} {x} 0.01 0.001\n"));
-            }
-            t
-        };
         std::fs::write(dir.join(cycle_dump(0)), dump(&[(1, 1.0, 0.0), (2, 3.0, 0.1)])).unwrap();
         std::fs::write(dir.join(cycle_dump(1)), dump(&[(1, 1.0, 0.2), (2, 3.0, 0.3)])).unwrap();
         std::fs::write(dir.join(cycle_dump(2)), dump(&[(2, 3.0, 0.4)])).unwrap();
