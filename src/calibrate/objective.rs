@@ -72,6 +72,24 @@ pub fn sse_percent2(sim: &[f64], measured: &[f64]) -> f64 {
     sim.iter().zip(measured).map(|(s, m)| (100.0 * (s - m)).powi(2)).sum()
 }
 
+/// The handling loss s in [0, max_loss] that brings `sim` (teeth, then the not-recovered
+/// bin) closest to `measured` when (1 − s)·sim is recovered and s is lost, and the bins
+/// so adjusted. Least squares in s is a parabola: its vertex, clamped.
+pub fn handling_loss(sim: &[f64], measured: &[f64], max_loss: f64) -> (f64, Vec<f64>) {
+    let last = sim.len() - 1;
+    // residual(s)_j = a_j + s d_j
+    let (mut ad, mut dd) = (0.0, 0.0);
+    for j in 0..sim.len() {
+        let a = sim[j] - measured[j];
+        let d = if j == last { 1.0 - sim[j] } else { -sim[j] };
+        ad += a * d;
+        dd += d * d;
+    }
+    let s = if dd > 0.0 { (-ad / dd).clamp(0.0, max_loss.max(0.0)) } else { 0.0 };
+    let adjusted = sim.iter().enumerate().map(|(j, p)| (1.0 - s) * p + if j == last { s } else { 0.0 }).collect();
+    (s, adjusted)
+}
+
 /// Eq. 4.61 in percentage points: the mean absolute error over the bins.
 pub fn mae_percent(sim: &[f64], measured: &[f64]) -> f64 {
     let n = sim.len().max(1) as f64;

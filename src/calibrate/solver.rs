@@ -434,9 +434,17 @@ impl Solver {
         log: &mut dyn FnMut(String),
     ) {
         let n = models.len();
-        let measured: Vec<Vec<&[f64]>> =
-            models.iter().map(|m| m.targets.iter().map(|t| t.bins.as_slice()).collect()).collect();
-        let residuals = |m: usize, b: &Bins| b.as_ref().map(|b| levenberg::residuals(b, &measured[m]));
+        // the residuals of the bins as the objective compares them: after the handling loss
+        // each target allows (`Target::after_handling`), so that the step minimises the SSE the
+        // screen and the trials are scored on
+        let residuals = |m: usize, b: &Bins| {
+            b.as_ref().map(|b| {
+                let targets = models[m].targets;
+                let observed: Vec<Vec<f64>> = b.iter().zip(targets).map(|(b, t)| t.after_handling(b).1).collect();
+                let measured: Vec<&[f64]> = targets.iter().map(|t| t.bins.as_slice()).collect();
+                levenberg::residuals(&observed, &measured)
+            })
+        };
         let mut lambda = vec![LM_LAMBDA0; n];
         let mut failures = vec![0usize; n];
         let mut active: Vec<bool> = current.iter().map(|c| c.2.is_some() && !c.0.is_empty()).collect();

@@ -3,7 +3,7 @@
 
 use super::condition::Condition;
 use super::param::Param;
-use crate::model::effects::EffectKind;
+use crate::model::effects::{EffectKind, MotionDirection};
 use crate::model::Scenario;
 
 /// The shared parameters the conditions call for: k_elastic, mu_fric, and k_drag when any
@@ -30,6 +30,10 @@ pub struct Space {
     /// parameter index, value): a search that scans a parameter over a grid holds it at
     /// each grid value in turn ([`Space::pin`]).
     pub pinned: Vec<(usize, usize, f64)>,
+    /// The sled's return direction where a condition does not state it (`[measurement]
+    /// motion_direction`); None is the model's default, down the slope. Not a fitted
+    /// parameter: the motion screen tries each ([`Space::with_motion_direction`]).
+    pub motion_direction: Option<MotionDirection>,
 }
 
 impl Space {
@@ -49,7 +53,7 @@ impl Space {
                 }
             }
         }
-        Space { shared, effects: effects.to_vec(), free, pinned: Vec::new() }
+        Space { shared, effects: effects.to_vec(), free, pinned: Vec::new(), motion_direction: None }
     }
 
     /// This space with its free parameter `name` held at `value` (no longer fitted; a
@@ -61,6 +65,18 @@ impl Space {
         let (k, i) = s.free.remove(j);
         s.pinned.push((k, i, value));
         Some(s)
+    }
+
+    /// This space with the sled returning along `direction` in every condition that does
+    /// not state its own.
+    pub fn with_motion_direction(&self, direction: MotionDirection) -> Space {
+        Space { motion_direction: Some(direction), ..self.clone() }
+    }
+
+    /// Whether some condition leaves the return direction to the model (so that a search
+    /// over it means something).
+    pub fn direction_unstated(conditions: &[Condition]) -> bool {
+        conditions.iter().any(|c| c.motion.direction.is_none())
     }
 
     pub fn dim(&self) -> usize {
@@ -133,7 +149,9 @@ impl Space {
                 }
             }
             e.apply(&mut s.effects, &v);
-            if let (Some(m), Some(direction)) = (s.effects.sled_motion.as_mut(), cond.motion.direction) {
+            if let (Some(m), Some(direction)) =
+                (s.effects.sled_motion.as_mut(), cond.motion.direction.or(self.motion_direction))
+            {
                 m.direction = direction;
             }
         }
@@ -183,7 +201,7 @@ mod tests {
     }
 
     /// The direction a setup states is the candidate's (it is not fitted); where none is
-    /// stated the sled returns down the slope.
+    /// stated the sled returns down the slope, or along the direction the space assumes.
     #[test]
     fn a_stated_return_direction_is_the_candidates() {
         use crate::model::effects::MotionDirection;
@@ -199,5 +217,16 @@ mod tests {
         let motion = space.scenario_at(&cond, &x).effects.sled_motion.expect("a moving sled");
         assert_eq!(motion.direction, MotionDirection::Launch);
         assert_eq!(space.names().len(), space.shared.len() + 2, "the direction is not searched");
+        // a space may assume a direction for the conditions that state none; a stated one wins
+        let launch = space.with_motion_direction(MotionDirection::Launch);
+        let mut unstated = cond.clone();
+        unstated.motion.direction = None;
+        assert!(Space::direction_unstated(&[cond.clone(), unstated.clone()]));
+        assert!(!Space::direction_unstated(std::slice::from_ref(&cond)));
+        let motion = launch.scenario_at(&unstated, &x).effects.sled_motion.expect("a moving sled");
+        assert_eq!(motion.direction, MotionDirection::Launch);
+        cond.motion.direction = Some(MotionDirection::Slope);
+        let motion = launch.scenario_at(&cond, &x).effects.sled_motion.expect("a moving sled");
+        assert_eq!(motion.direction, MotionDirection::Slope);
     }
 }

@@ -26,6 +26,16 @@ pub struct Target {
     pub bins: Vec<f64>,
     /// Per run: tooth masses in scale units, padded the same way.
     pub counts: Vec<Vec<f64>>,
+    /// The largest share of the loaded mass that handling may have lost, which the
+    /// objectives let the simulated bins give up before they are compared
+    /// ([`objective::handling_loss`]): the measured "not recovered" share for fractions of the
+    /// loaded mass, 0 for D.4's fractions of the recovered mass. Every run spills a little
+    /// (App. B: 94.5–101.5 % recovered, Test 3 97.7 %) and no flight model makes spill; an
+    /// objective that asked the model for it would bend the collision parameters to lose
+    /// grains off the conveyor instead (a synthetic control spilling 2 %: k_elastic 0.56 fitted
+    /// for 0.7 planted, and every diagnosis then `unexplained`; docs/diagnosis-report.md). The
+    /// diagnosis judges its gaps the same way (`diagnose::verdict::judge`).
+    pub max_handling_loss: f64,
 }
 
 impl Target {
@@ -59,13 +69,15 @@ impl Target {
                 c
             })
             .collect();
-        Some(Target { bins, counts })
+        let max_handling_loss = bins[teeth];
+        Some(Target { bins, counts, max_handling_loss })
     }
 
     pub fn new(runs: &MeasuredRuns, teeth: usize, resolution_g: f64) -> Self {
         Target {
             bins: objective::measured_bins(&runs.mean_fractions(), teeth),
             counts: runs.runs.iter().map(|r| objective::quantised_counts(&r.teeth_g, teeth, resolution_g)).collect(),
+            max_handling_loss: 0.0,
         }
     }
 
@@ -73,17 +85,30 @@ impl Target {
     pub fn value(&self, kind: ObjectiveKind, bins: Option<&[f64]>, eps: f64) -> f64 {
         match (kind, bins) {
             (_, None) => f64::INFINITY,
-            (ObjectiveKind::Sse, Some(b)) => objective::sse_percent2(b, &self.bins),
-            (ObjectiveKind::Likelihood, Some(b)) => objective::profile_nll(&self.counts, b, eps).nll,
+            (ObjectiveKind::Sse, Some(b)) => self.sse(b),
+            (ObjectiveKind::Likelihood, Some(b)) => self.likelihood(b, eps).nll,
         }
     }
 
-    pub fn sse(&self, bins: &[f64]) -> f64 {
-        objective::sse_percent2(bins, &self.bins)
+    /// Simulated bins as the objectives compare them: with the handling loss that brings
+    /// them closest to the measured mean moved to the last bin ([`Self::max_handling_loss`];
+    /// unchanged where none is allowed), and that loss.
+    pub fn after_handling(&self, bins: &[f64]) -> (f64, Vec<f64>) {
+        if self.max_handling_loss > 0.0 {
+            objective::handling_loss(bins, &self.bins, self.max_handling_loss)
+        } else {
+            (0.0, bins.to_vec())
+        }
     }
 
+    /// Eq. 4.62 after the handling loss ([`Self::after_handling`]).
+    pub fn sse(&self, bins: &[f64]) -> f64 {
+        objective::sse_percent2(&self.after_handling(bins).1, &self.bins)
+    }
+
+    /// The runs' likelihood after the handling loss ([`Self::after_handling`]).
     pub fn likelihood(&self, bins: &[f64], eps: f64) -> Profiled {
-        objective::profile_nll(&self.counts, bins, eps)
+        objective::profile_nll(&self.counts, &self.after_handling(bins).1, eps)
     }
 
     /// The likelihood with the mean set to the measured mean distribution (a perfect mean
@@ -150,5 +175,32 @@ mod tests {
         }
         assert_eq!(t.counts[0], vec![10.0, 5.0, 0.0, 5.0]);
         assert_eq!(t.counts[1], vec![12.0, 6.0, 0.0, 2.0]);
+    }
+
+    #[test]
+    fn a_spill_the_runs_show_is_not_asked_of_the_model() {
+        // 2 g loaded each run, 1.9 g recovered in a 2:1 ratio: 5 % not recovered
+        let runs =
+            crate::io::measured::parse("run,tooth_1,tooth_2,input_mass\na,1.27,0.63,2.0\nb,1.27,0.63,2.0\n", "t.csv")
+                .unwrap();
+        let loaded = Target::of_loaded_mass(&runs, 3, 0.01).unwrap();
+        assert!((loaded.max_handling_loss - 0.05).abs() < 1e-12);
+        // a model that puts every grain on the teeth in the measured ratio loses nothing in
+        // flight: after a 5 % handling loss it is the measurement exactly
+        let sim = [1.27 / 1.9, 0.63 / 1.9, 0.0, 0.0];
+        let (s, after) = loaded.after_handling(&sim);
+        assert!((s - 0.05).abs() < 1e-12, "{s}");
+        assert!(loaded.sse(&sim) < 1e-20, "{after:?}");
+        assert!(loaded.value(ObjectiveKind::Sse, Some(&sim), 1e-3) < 1e-20);
+        // the raw comparison would charge the model the spill
+        assert!(objective::sse_percent2(&sim, &loaded.bins) > 30.0);
+        // a model that loses more than the runs did in flight is charged for it: the
+        // allowance never exceeds the measured not-recovered share
+        let lossy = [0.6, 0.3, 0.0, 0.1];
+        assert!(loaded.sse(&lossy) > 1.0);
+        // D.4's fractions of the recovered mass allow no handling loss
+        let recovered = Target::new(&runs, 3, 0.01);
+        assert_eq!(recovered.max_handling_loss, 0.0);
+        assert_eq!(recovered.after_handling(&lossy).1, lossy.to_vec());
     }
 }

@@ -9,6 +9,7 @@ use anyhow::Context as _;
 use super::baseline::Baseline;
 use super::model_result::{model_name, ModelResult};
 use super::motion_screen::{halton_point, MotionStart};
+use super::profile::{profile_starts, PROFILE_AT};
 use super::run::Run;
 use super::scoring::{bootstrap_gaps, new_result, paired_interval, paired_sd, rescore};
 use super::verdict;
@@ -123,7 +124,19 @@ pub fn rank_candidates(
     let conditions = run.conditions();
     let particles = run.particles();
     let baseline_dim = baseline.space.dim();
-    let spaces: Vec<Space> = run.effects.iter().map(|e| Space::new(run.shared.clone(), &[*e], conditions)).collect();
+    let mut spaces: Vec<Space> =
+        run.effects.iter().map(|e| Space::new(run.shared.clone(), &[*e], conditions)).collect();
+    // a return direction the setups leave out is the one the motion screen chose
+    let mut direction_note = None;
+    if let Some(d) = screened.as_ref().and_then(|s| s.direction) {
+        for sp in spaces.iter_mut().filter(|sp| sp.effects == [EffectKind::SledMotion]) {
+            *sp = sp.with_motion_direction(d);
+        }
+        direction_note = Some(format!(
+            "sled-motion: the setups leave the return direction out; the motion screen chose `{}` (both screened)",
+            d.name()
+        ));
+    }
     let base_names = baseline.space.names();
     // Each candidate draws its differential evolution from the stream of its place in the
     // list of every candidate (`EffectKind::ALL`), not in this run's batch: a candidate's fit
@@ -156,10 +169,20 @@ pub fn rank_candidates(
     // candidate is never polished from worse than the baseline); the other starts only seeded
     // the evolution, and re-scoring each at the full budget would cost a tenth of a diagnosis
     let screened = run.solver.screen(&run.sim, &models, log)?;
+    // and from each candidate's profile starts: its strength held across its box while the
+    // shared parameters leave the baseline's basin (`profile`)
+    let profiles = profile_starts(&run.solver, &run.sim, &spaces, &run.targets, &base_names, &baseline.fit.x)?;
+    log(format!(
+        "diagnose: profile starts: each candidate's strength held at {} of its box, the shared parameters polished \
+         ({} simulations of the conditions)",
+        PROFILE_AT.iter().map(|s| format!("{s:.2}")).collect::<Vec<_>>().join(" and "),
+        profiles.iter().map(|p| p.1).sum::<u64>()
+    ));
     let polished: Vec<Model> = models
         .iter()
         .zip(&screened)
-        .map(|(m, sc)| {
+        .zip(&profiles)
+        .map(|((m, sc), profile)| {
             let starts = match m.search {
                 Search::FromStarts => m.starts.clone(),
                 Search::Global { .. } => sc
@@ -168,14 +191,16 @@ pub fn rank_candidates(
                     .map(|b| b.0.clone())
                     .into_iter()
                     .chain(m.starts.iter().take(1).cloned())
+                    .chain(profile.0.iter().cloned())
                     .collect(),
             };
             Model { space: m.space, targets: m.targets, starts, search: Search::FromStarts }
         })
         .collect();
     let mut fits = run.solver.polish(&run.sim, &polished, log)?;
-    for (f, sc) in fits.iter_mut().zip(&screened) {
+    for ((f, sc), profile) in fits.iter_mut().zip(&screened).zip(&profiles) {
         f.evaluations += sc.evaluations;
+        f.evaluations += profile.1;
     }
     if let Some((i, evaluations)) = from_screen {
         fits[i].evaluations += evaluations;
@@ -191,7 +216,7 @@ pub fn rank_candidates(
     // an adaptive second rescore: where `best` hinges on an interval that the simulation's
     // noise widens, every model gets more streams (all of them, so that every paired
     // comparison keeps its common random numbers), and everything after is on those
-    let mut notes = Vec::new();
+    let mut notes: Vec<String> = direction_note.into_iter().collect();
     let mut streams = run.rescore_streams;
     let more = (SECOND_RESCORE_FACTOR * streams).min(SECOND_RESCORE_MAX_STREAMS);
     if let Some(why) = best_hinges_on_streams(conditions, &all, particles).filter(|_| more > streams) {

@@ -15,6 +15,7 @@ pub mod markdown;
 pub mod model_result;
 pub mod motion_screen;
 pub mod pair;
+pub mod profile;
 pub mod render;
 pub mod request;
 pub mod run;

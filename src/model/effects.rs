@@ -127,6 +127,13 @@ impl MotionDirection {
     fn is_slope(&self) -> bool {
         *self == MotionDirection::Slope
     }
+    /// The name a setup's `[measurement] motion_direction` and a report use.
+    pub fn name(self) -> &'static str {
+        match self {
+            MotionDirection::Slope => "slope",
+            MotionDirection::Launch => "launch",
+        }
+    }
 }
 
 /// Non-linear air drag with the Schiller-Naumann coefficient (Eq. 4.15, 4.17, 4.18) instead
