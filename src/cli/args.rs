@@ -244,7 +244,7 @@ pub struct EffortArgs {
     /// Differential-evolution population per model (>= 5), screening at 1/8 of the particles.
     #[arg(long, default_value_t = EffortSettings::DEFAULT_POP, value_parser = count::<usize>(&schema::FIT_POP))]
     pub pop: usize,
-    /// Differential-evolution generations per model [default: 20 for `fit`, 15 for
+    /// Differential-evolution generations per model [default: 20 for `fit`, 10 for
     /// `diagnose`, whose candidates start from the baseline's optimum].
     #[arg(long, value_parser = count::<usize>(&schema::FIT_GENERATIONS))]
     pub generations: Option<usize>,

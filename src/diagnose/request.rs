@@ -54,19 +54,19 @@ pub struct DiagnoseRequest {
 impl DiagnoseRequest {
     pub const DEFAULT_RESCORE_STREAMS: usize = 4;
     pub const DEFAULT_BOOTSTRAP: usize = 400;
-    /// The effort of a diagnosis: the calibration's, with three quarters of its generations
-    /// of differential evolution — every candidate's population starts from the baseline's
-    /// optimum (the effect off, and its own parameters spread over their box), and the
-    /// Levenberg–Marquardt polish takes it from there (docs/diagnosis-report.md, "Time").
-    /// Not fewer: an effect can move the shared parameters far from the baseline's optimum
-    /// (a launch spread of 0.3 and 6°: k_drag 11.7 → 5.3 s⁻¹, μ 0.63 → 0.2), and after 10
-    /// generations its candidate was still at the baseline's point (175 %² on its fit streams)
-    /// where 15 found it (1.6 %²; tests/diagnose.rs `launch_spread_is_found`).
+    /// The effort of a diagnosis: the calibration's, with half its generations of
+    /// differential evolution — every candidate's population starts from the baseline's
+    /// optimum (the effect off, and its own parameters spread over their box), its polish
+    /// also from its profile starts (`profile`: the strength held, the shared parameters
+    /// refitted), and the Levenberg–Marquardt polish takes it from there
+    /// (docs/diagnosis-report.md, "Time"). Without the profile starts 10 generations left a
+    /// launch spread of 0.3 and 6° at the baseline's point (175 %²; 15 found it), with them
+    /// 10 do (1.9 %²) at two thirds of 15's time.
     pub const DEFAULT_EFFORT: EffortSettings = EffortSettings {
         particles: None,
         max_particles: EffortSettings::DEFAULT_MAX_PARTICLES,
         pop: EffortSettings::DEFAULT_POP,
-        generations: 15,
+        generations: 10,
         polish: EffortSettings::DEFAULT_POLISH,
     };
 
