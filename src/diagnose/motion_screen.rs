@@ -18,8 +18,8 @@
 //!    the same points (the baseline's and a Halton set), so that the grid points are
 //!    compared from equal starts.
 //! 2. **Ranking at the full budget.** Each grid point's best member is simulated again at
-//!    the full particle count and the points are ranked by their *loss-adjusted* SSE
-//!    ([`super::verdict::loss_adjusted_sse`], the gap the diagnosis ranks models on). Both halves
+//!    the full particle count and the points are ranked by their *loss-adjusted* SSE (the
+//!    fit's own objective, `Target::sse`, the gap the diagnosis ranks models on). Both halves
 //!    matter. At the screen's 2000 particles a DE's minimum is partly a lucky draw of the
 //!    particle streams: on campaign uB, with the true motion stated, the screen's best
 //!    point scored 24.1 %² and 39.1 %² on the full budget's streams. And on raw SSEs a
@@ -48,7 +48,6 @@
 
 use super::baseline::Baseline;
 use super::run::Run;
-use super::verdict::loss_adjusted_sse;
 use crate::calibrate::{Fit, Model, Search, Simulator, Solver, Space, Target};
 use crate::model::effects::{EffectKind, MotionDirection};
 
@@ -105,11 +104,6 @@ pub fn common_starts(first: &[f64], bounds: &[(f64, f64)], n: usize) -> Vec<Vec<
 /// The i-th point of a Halton sequence (bases 2, 3, 5, 7, repeating) scaled into `bounds`.
 pub(crate) fn halton_point(i: usize, bounds: &[(f64, f64)]) -> Vec<f64> {
     bounds.iter().enumerate().map(|(k, (lo, hi))| lo + halton(i, [2, 3, 5, 7][k % 4]) * (hi - lo)).collect()
-}
-
-/// The loss-adjusted SSE (%²) of a fit's bins, summed over the conditions.
-fn adjusted(sim: &Simulator, targets: &[Target], fit: &Fit) -> f64 {
-    sim.conditions.iter().zip(targets).zip(&fit.bins).map(|((c, t), b)| loss_adjusted_sse(c, &t.bins, b)).sum()
 }
 
 /// The motion-screen stage of a diagnosis: where the sled-motion candidate is tried and
@@ -201,7 +195,9 @@ pub fn motion_start(
         .collect();
     let ranked = full.polish(sim, &best, &mut |_| {})?;
     evaluations += ranked.len() as u64;
-    let mut order: Vec<(usize, f64)> = ranked.iter().map(|f| adjusted(sim, targets, f)).enumerate().collect();
+    // a fit's value is its loss-adjusted SSE summed over the conditions: the diagnosis's
+    // objective allows each condition's handling loss (`Target::sse`)
+    let mut order: Vec<(usize, f64)> = ranked.iter().map(|f| f.value).enumerate().collect();
     order.sort_by(|a, b| a.1.total_cmp(&b.1));
     let describe = |g: usize, x: &[f64]| {
         let (direction, point) = &grid[g];
@@ -217,7 +213,7 @@ pub fn motion_start(
         .iter()
         .map(|(g, a)| {
             let (x, screen) = &screened[*g].members[0];
-            format!("{} (screen {screen:.1}, full {:.1}, loss-adjusted {a:.1})", describe(*g, x), ranked[*g].value)
+            format!("{} (screen {screen:.1}, full, loss-adjusted {a:.1})", describe(*g, x))
         })
         .collect();
     log(format!(
@@ -236,12 +232,9 @@ pub fn motion_start(
         .collect();
     let polished = polish.polish(sim, &models, &mut |_| {})?;
     evaluations += polished.iter().map(|f| f.evaluations).sum::<u64>();
-    let scored: Vec<(usize, f64, &Fit)> =
-        chosen.iter().zip(&polished).map(|(g, f)| (*g, adjusted(sim, targets, f), f)).collect();
-    let shown: Vec<String> = scored
-        .iter()
-        .map(|(g, a, f)| format!("{} (full {:.1}, loss-adjusted {a:.1})", describe(*g, &f.x), f.value))
-        .collect();
+    let scored: Vec<(usize, f64, &Fit)> = chosen.iter().zip(&polished).map(|(g, f)| (*g, f.value, f)).collect();
+    let shown: Vec<String> =
+        scored.iter().map(|(g, a, f)| format!("{} (full, loss-adjusted {a:.1})", describe(*g, &f.x))).collect();
     log(format!("diagnose: sled-motion: polished at the full budget, the motion held: {}", shown.join("; ")));
     let (g, _, f) = scored.iter().min_by(|a, b| a.1.total_cmp(&b.1)).expect("at least one grid point");
 
