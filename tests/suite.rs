@@ -18,6 +18,7 @@ mod documented_commands;
 mod effects;
 mod engine_agreement;
 mod fit;
+mod fit_joint;
 mod fuzz_readers;
 mod gpu_conformance;
 mod help;

@@ -26,6 +26,11 @@ impl KnownMotion {
     }
 }
 
+/// A gap is "well above" its noise floor ([`Condition::noise_floor`]) beyond this multiple
+/// of it: for noise alone the gap is a sum of a few χ²-like terms with that floor as its
+/// mean, and three times the mean is rarely reached (P(χ²₆ > 18) ≈ 0.6 %).
+pub const FLOOR_FACTOR: f64 = 3.0;
+
 /// One measured condition: runs and the setup they were measured with.
 #[derive(Clone, Debug)]
 pub struct Condition {
@@ -161,6 +166,22 @@ impl Condition {
                 s * s / n + scale
             })
             .collect()
+    }
+
+    /// Variance (fractions²) per bin of a model's simulated bins (`sim`, as compared) against
+    /// the measured mean: the measured mean's variance ([`Self::mean_variance`]) and the
+    /// simulation's Monte-Carlo variance p(1−p)/draws, `draws` the particles behind `sim`
+    /// (particles × streams where it is the mean of several).
+    pub fn bin_variance(&self, sim: &[f64], draws: f64) -> Vec<f64> {
+        let draws = draws.max(1.0);
+        self.mean_variance().iter().zip(sim).map(|(v, p)| v + (p * (1.0 - p)).max(0.0) / draws).collect()
+    }
+
+    /// The noise floor (%²) of a model's simulated bins: the SSE that a model right in every
+    /// respect would leave on these runs, Σ [`Self::bin_variance`] · 10⁴. A gap is "well
+    /// above" it beyond [`FLOOR_FACTOR`] times.
+    pub fn noise_floor(&self, sim: &[f64], draws: f64) -> f64 {
+        1e4 * self.bin_variance(sim, draws).iter().sum::<f64>()
     }
 
     /// The particle count whose Monte-Carlo variance p(1−p)/N stays at or below

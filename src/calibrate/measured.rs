@@ -2,7 +2,7 @@
 //! `fit` and `diagnose` both read, checked before anything is simulated. Errors name the
 //! two files' fields as the user spelled them ([`Spelling`]).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _};
 
@@ -14,6 +14,28 @@ use crate::io::measured;
 /// The file's stem, the condition's short name in reports.
 pub fn stem(p: &Path) -> String {
     p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| p.display().to_string())
+}
+
+/// The conditions' short names in reports: each data file's stem; where several files share
+/// a stem (every DEM campaign's CSV is `dem.csv`), each of those is named by its folder
+/// (`earth-deep-slow`), which is what the user chose to tell them apart; a name still
+/// taken gets `#` and the condition's number (`dem#2`).
+pub fn condition_names(data: &[PathBuf]) -> Vec<String> {
+    let stems: Vec<String> = data.iter().map(|p| stem(p)).collect();
+    let shared = |s: &String| stems.iter().filter(|t| *t == s).count() > 1;
+    let folder = |p: &PathBuf| {
+        let p = std::path::absolute(p).unwrap_or_else(|_| p.clone());
+        p.parent().and_then(|d| d.file_name()).map(|n| n.to_string_lossy().into_owned())
+    };
+    let mut names: Vec<String> = Vec::with_capacity(data.len());
+    for (i, (p, s)) in data.iter().zip(&stems).enumerate() {
+        let mut name = if shared(s) { folder(p).unwrap_or_else(|| s.clone()) } else { s.clone() };
+        if names.contains(&name) {
+            name = format!("{name}#{}", i + 1);
+        }
+        names.push(name);
+    }
+    names
 }
 
 /// Load `data` measured with `setup`. The seed of the setup (`sim.seed`) is used where
@@ -81,4 +103,39 @@ pub fn load(
         motion_profile: measurement.and_then(|m| m.motion_profile.clone()),
         normalise,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    fn names(paths: &[&str]) -> Vec<String> {
+        condition_names(&paths.iter().map(PathBuf::from).collect::<Vec<_>>())
+    }
+
+    #[test]
+    fn conditions_are_named_by_their_files_stem_while_it_tells_them_apart() {
+        let practice = ["data/practice_campaigns/campaign_1/c1.csv", "data/practice_campaigns/campaign_1/c2.csv"];
+        assert_eq!(names(&practice), ["c1", "c2"]);
+        assert_eq!(names(&["runs/slow.csv", "other/fast.csv", "x/dem.csv"]), ["slow", "fast", "dem"]);
+    }
+
+    /// Every DEM campaign's CSV is `dem.csv`: the campaigns' folders name the conditions
+    /// (not `dem`, `dem#2`, `dem#3`), and a stem shared with no other keeps its name.
+    #[test]
+    fn files_that_share_a_stem_are_named_by_their_folders() {
+        let dem = ["data/dem/earth-deep-slow/dem.csv", "data/dem/earth-deep-fast/dem.csv", "runs/shallow.csv"];
+        assert_eq!(names(&dem), ["earth-deep-slow", "earth-deep-fast", "shallow"]);
+        // a bare file name is named by the folder it is read from (the working directory)
+        let here = std::env::current_dir().unwrap().file_name().unwrap().to_string_lossy().into_owned();
+        assert_eq!(names(&["dem.csv", "a/dem.csv"]), [here, "a".to_string()]);
+    }
+
+    /// The same file twice, or two folders of the same name: numbered, as before.
+    #[test]
+    fn names_still_shared_are_numbered() {
+        assert_eq!(names(&["x/dem.csv", "x/dem.csv", "y/dem.csv"]), ["x", "x#2", "y"]);
+        assert_eq!(names(&["a/x/dem.csv", "b/x/dem.csv"]), ["x", "x#2"]);
+    }
 }

@@ -4,7 +4,8 @@
 //! condition into **one** engine call ([`batch`]), a solver that screens with differential
 //! evolution at a small particle budget and polishes with a compass search at the full
 //! budget, several models in lockstep ([`solver`]), the effort a user asks for turned into
-//! the solver's settings ([`effort`]), and the sample statistics of the reports ([`stats`]).
+//! the solver's settings ([`effort`]), shared parameters that vary across conditions
+//! ([`varying`]), and the sample statistics of the reports ([`stats`]).
 
 pub mod batch;
 pub mod condition;
@@ -18,6 +19,7 @@ pub mod solver;
 pub mod space;
 pub mod stats;
 pub mod target;
+pub mod varying;
 
 pub use batch::Simulator;
 pub use condition::{Condition, KnownMotion, Normalise};
@@ -27,3 +29,4 @@ pub use param::{parse_assignments, parse_params, Param};
 pub use solver::{Fit, Model, PolishMethod, Probe, Screened, Search, Solver};
 pub use space::{shared_params, Space};
 pub use target::{collapse_to_weighed, subset, MeasuredSummary, ObjectiveKind, Target};
+pub use varying::{parse_varying, Covariate, Varying};

@@ -3,6 +3,7 @@
 
 use super::condition::Condition;
 use super::param::Param;
+use super::varying::Varying;
 use crate::model::effects::{EffectKind, MotionDirection};
 use crate::model::Scenario;
 
@@ -16,7 +17,8 @@ pub fn shared_params(conditions: &[Condition]) -> Vec<Param> {
     p
 }
 
-/// One model's parameters: `shared` first, then the effects' free parameters.
+/// One model's parameters: `shared` first, then the effects' free parameters, then the
+/// slopes of the shared parameters that vary across the conditions.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Space {
     pub shared: Vec<Param>,
@@ -34,6 +36,9 @@ pub struct Space {
     /// motion_direction`); None is the model's default, down the slope. Not a fitted
     /// parameter: the motion screen tries each ([`Space::with_motion_direction`]).
     pub motion_direction: Option<MotionDirection>,
+    /// Shared parameters that vary linearly with a condition's variable (a joint fit over
+    /// regimes, [`Space::with_varying`]); each adds its slope as the space's last dimensions.
+    pub varying: Vec<Varying>,
 }
 
 impl Space {
@@ -53,7 +58,28 @@ impl Space {
                 }
             }
         }
-        Space { shared, effects: effects.to_vec(), free, pinned: Vec::new(), motion_direction: None }
+        Space {
+            shared,
+            effects: effects.to_vec(),
+            free,
+            pinned: Vec::new(),
+            motion_direction: None,
+            varying: Vec::new(),
+        }
+    }
+
+    /// This space with `varying` shared parameters: each must be one of `shared`, at most
+    /// once.
+    pub fn with_varying(&self, varying: Vec<Varying>) -> Result<Space, String> {
+        for (i, v) in varying.iter().enumerate() {
+            if !self.shared.contains(&v.param) {
+                return Err(format!("{} is not fitted here, so it cannot vary", v.param.name()));
+            }
+            if varying[..i].iter().any(|w| w.param == v.param) {
+                return Err(format!("{} varies more than once", v.param.name()));
+            }
+        }
+        Ok(Space { varying, ..self.clone() })
     }
 
     /// This space with its free parameter `name` held at `value` (no longer fitted; a
@@ -80,12 +106,13 @@ impl Space {
     }
 
     pub fn dim(&self) -> usize {
-        self.shared.len() + self.free.len()
+        self.shared.len() + self.free.len() + self.varying.len()
     }
 
     pub fn bounds(&self) -> Vec<(f64, f64)> {
         let mut b: Vec<(f64, f64)> = self.shared.iter().map(|p| p.bounds()).collect();
         b.extend(self.free.iter().map(|(k, i)| self.effects[*k].search_bounds()[*i]));
+        b.extend(self.varying.iter().map(Varying::slope_bounds));
         b
     }
 
@@ -93,19 +120,22 @@ impl Space {
     pub fn names(&self) -> Vec<&'static str> {
         let mut n: Vec<&'static str> = self.shared.iter().map(|p| p.name()).collect();
         n.extend(self.free.iter().map(|(k, i)| self.effects[*k].param_names()[*i]));
+        n.extend(self.varying.iter().map(Varying::slope_name));
         n
     }
 
     /// A start for this model from another model's point (`names`, `x`): each parameter
     /// takes the other model's value where it has one, an effect parameter the other lacks
-    /// its neutral value. From the baseline that is the baseline itself (a nested model);
-    /// None when a parameter has no such value (quadratic drag).
+    /// its neutral value, a slope the other lacks 0. From the baseline that is the baseline
+    /// itself (a nested model); None when a parameter has no such value (quadratic drag).
     pub fn start_from(&self, names: &[&'static str], x: &[f64]) -> Option<Vec<f64>> {
         let own = self.names();
         let mut v = Vec::with_capacity(own.len());
         for (j, n) in own.iter().enumerate() {
             if let Some(p) = names.iter().position(|m| m == n) {
                 v.push(x[p]);
+            } else if j >= self.shared.len() + self.free.len() {
+                v.push(0.0);
             } else if j >= self.shared.len() {
                 let (k, i) = self.free[j - self.shared.len()];
                 v.push(self.effects[k].neutral()?[i]);
@@ -121,11 +151,16 @@ impl Space {
     /// stay unless the space fits them).
     pub fn scenario_at(&self, cond: &Condition, x: &[f64]) -> Scenario {
         let mut s = cond.base.clone();
+        let slopes = &x[self.shared.len() + self.free.len()..];
         for (p, v) in self.shared.iter().zip(x) {
             if *p == Param::KDrag && !cond.has_drag() {
                 continue;
             }
-            p.apply(&mut s, *v);
+            let value = match self.varying.iter().position(|w| w.param == *p) {
+                Some(i) => self.varying[i].value_in(*v, slopes[i], cond),
+                None => *v,
+            };
+            p.apply(&mut s, value);
         }
         // the space's effects on top of the setup's own (none in a diagnosis; fixed in a fit)
         for (k, e) in self.effects.iter().enumerate() {
@@ -228,5 +263,33 @@ mod tests {
         cond.motion.direction = Some(MotionDirection::Slope);
         let motion = launch.scenario_at(&cond, &x).effects.sled_motion.expect("a moving sled");
         assert_eq!(motion.direction, MotionDirection::Slope);
+    }
+
+    /// A varying parameter takes its shared value at the conditions' mean of the variable
+    /// and moves by its slope elsewhere; the slope is the space's last dimension.
+    #[test]
+    fn a_varying_parameter_differs_between_conditions_by_its_slope() {
+        use crate::calibrate::varying::{Covariate, Varying};
+        let (mut slow, mut fast) = (test3(), test3());
+        slow.design.v0 = 1.0;
+        fast.design.v0 = 1.4;
+        let conds = vec![slow.clone(), fast.clone()];
+        let plain = Space::new(shared_params(&conds), &[], &conds);
+        let v = Varying::new(Param::KElastic, Covariate::V0, &conds).unwrap();
+        let space = plain.with_varying(vec![v]).unwrap();
+        assert_eq!(space.dim(), plain.dim() + 1);
+        assert_eq!(space.names().last(), Some(&"k_elastic_slope_v0_m_s"));
+        let (lo, hi) = *space.bounds().last().unwrap();
+        assert!((hi - 0.99 / 0.4).abs() < 1e-12 && lo == -hi, "{lo}..{hi}");
+        let x = [0.6, 0.2, 5.0, 0.5];
+        assert!((space.scenario_at(&slow, &x).collision.k_elastic - 0.5).abs() < 1e-12);
+        assert!((space.scenario_at(&fast, &x).collision.k_elastic - 0.7).abs() < 1e-12);
+        assert_eq!(space.scenario_at(&fast, &x).collision.mu_friction, 0.2);
+        // a start from the shared fit: its values, the slope 0
+        assert_eq!(space.start_from(&plain.names(), &x[..3]), Some(vec![0.6, 0.2, 5.0, 0.0]));
+        // only a fitted parameter may vary, once
+        let mu_only = Space::new(vec![Param::MuFric], &[], &conds);
+        assert!(mu_only.with_varying(vec![v]).unwrap_err().contains("k_elastic is not fitted here"));
+        assert!(plain.with_varying(vec![v, v]).unwrap_err().contains("varies more than once"));
     }
 }

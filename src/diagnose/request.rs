@@ -12,7 +12,7 @@ use serde_json::Value;
 use super::diagnose::{applicable_effects, diagnose, Condition, Diagnosis, EffectKind, Settings, NO_EFFECT_APPLIES};
 use super::json::to_json;
 use super::render;
-use crate::calibrate::measured::{self, stem};
+use crate::calibrate::measured::{self, condition_names};
 use crate::calibrate::{EffortSettings, Normalise, Spelling};
 use crate::engine::{make_engine, EngineKind};
 use crate::io::run_dir::{Access, RunDir};
@@ -87,28 +87,6 @@ impl DiagnoseRequest {
             spelling,
         }
     }
-}
-
-/// The conditions' short names in reports: each data file's stem; where several files share
-/// a stem (every DEM campaign's CSV is `dem.csv`), each of those is named by its folder
-/// (`earth-deep-slow`), which is what the user chose to tell them apart; a name still
-/// taken gets `#` and the condition's number (`dem#2`).
-pub fn condition_names(data: &[PathBuf]) -> Vec<String> {
-    let stems: Vec<String> = data.iter().map(|p| stem(p)).collect();
-    let shared = |s: &String| stems.iter().filter(|t| *t == s).count() > 1;
-    let folder = |p: &PathBuf| {
-        let p = std::path::absolute(p).unwrap_or_else(|_| p.clone());
-        p.parent().and_then(|d| d.file_name()).map(|n| n.to_string_lossy().into_owned())
-    };
-    let mut names: Vec<String> = Vec::with_capacity(data.len());
-    for (i, (p, s)) in data.iter().zip(&stems).enumerate() {
-        let mut name = if shared(s) { folder(p).unwrap_or_else(|| s.clone()) } else { s.clone() };
-        if names.contains(&name) {
-            name = format!("{name}#{}", i + 1);
-        }
-        names.push(name);
-    }
-    names
 }
 
 /// Check, load every condition, diagnose, and write `out`. Cheap checks come first:
@@ -189,38 +167,4 @@ pub fn run(r: &DiagnoseRequest, log: &mut dyn FnMut(String)) -> anyhow::Result<(
     let json = to_json(&d);
     render::write_dir(&r.out, &d, &json).with_context(|| name("out"))?;
     Ok((d, json))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn names(paths: &[&str]) -> Vec<String> {
-        condition_names(&paths.iter().map(PathBuf::from).collect::<Vec<_>>())
-    }
-
-    #[test]
-    fn conditions_are_named_by_their_files_stem_while_it_tells_them_apart() {
-        let practice = ["data/practice_campaigns/campaign_1/c1.csv", "data/practice_campaigns/campaign_1/c2.csv"];
-        assert_eq!(names(&practice), ["c1", "c2"]);
-        assert_eq!(names(&["runs/slow.csv", "other/fast.csv", "x/dem.csv"]), ["slow", "fast", "dem"]);
-    }
-
-    /// Every DEM campaign's CSV is `dem.csv`: the campaigns' folders name the conditions
-    /// (not `dem`, `dem#2`, `dem#3`), and a stem shared with no other keeps its name.
-    #[test]
-    fn files_that_share_a_stem_are_named_by_their_folders() {
-        let dem = ["data/dem/earth-deep-slow/dem.csv", "data/dem/earth-deep-fast/dem.csv", "runs/shallow.csv"];
-        assert_eq!(names(&dem), ["earth-deep-slow", "earth-deep-fast", "shallow"]);
-        // a bare file name is named by the folder it is read from (the working directory)
-        let here = std::env::current_dir().unwrap().file_name().unwrap().to_string_lossy().into_owned();
-        assert_eq!(names(&["dem.csv", "a/dem.csv"]), [here, "a".to_string()]);
-    }
-
-    /// The same file twice, or two folders of the same name: numbered, as before.
-    #[test]
-    fn names_still_shared_are_numbered() {
-        assert_eq!(names(&["x/dem.csv", "x/dem.csv", "y/dem.csv"]), ["x", "x#2", "y"]);
-        assert_eq!(names(&["a/x/dem.csv", "b/x/dem.csv"]), ["x", "x#2"]);
-    }
 }

@@ -45,7 +45,7 @@ use crate::calibrate::{Condition, Normalise};
 use crate::model::effects::EffectKind;
 
 /// A judged gap is "well above" its noise floor beyond this multiple of it.
-pub const FLOOR_FACTOR: f64 = 3.0;
+pub use crate::calibrate::condition::FLOOR_FACTOR;
 
 /// The share of the baseline's excess over its floor that the best effect must remove to
 /// stay the cause when what it leaves is still well above its own floor.
@@ -239,11 +239,10 @@ pub struct Verdict {
     pub text: String,
 }
 
-/// Variance (fractions²) per bin of a model's fresh-mean bins against the measured mean:
-/// the measured mean's variance and the simulation's Monte-Carlo variance.
+/// Variance (fractions²) per bin of a model's fresh-mean bins against the measured mean
+/// ([`Condition::bin_variance`] over the fresh streams' particles).
 fn bin_variance(cond: &Condition, sim: &[f64], particles: u32, streams: usize) -> Vec<f64> {
-    let draws = particles.max(1) as f64 * streams.max(1) as f64;
-    cond.mean_variance().iter().zip(sim).map(|(v, p)| v + (p * (1.0 - p)).max(0.0) / draws).collect()
+    cond.bin_variance(sim, particles.max(1) as f64 * streams.max(1) as f64)
 }
 
 /// The most a condition's runs can have lost in handling, as a share of the loaded mass:

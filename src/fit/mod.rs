@@ -30,6 +30,7 @@
 //!   and a parameter pinned at a bound gets a one-sided, possibly degenerate interval.
 
 pub mod corrected;
+pub mod joint;
 pub mod report;
 pub mod request;
 

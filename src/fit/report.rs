@@ -9,7 +9,9 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde_json::{json, Map, Value};
 
+use super::joint::JointReport;
 use super::FitReport;
+use crate::calibrate::condition::FLOOR_FACTOR;
 use crate::calibrate::ObjectiveKind;
 use crate::io::atomic::write_atomic;
 use crate::model::outcome::centre_and_dispersion;
@@ -427,4 +429,145 @@ pub fn write_dir(dir: &Path, r: &FitReport, meta: &Meta, json: &Value) -> anyhow
     write_atomic(&dir.join("fit.json"), format!("{}\n", serde_json::to_string_pretty(json)?).as_bytes())?;
     crate::io::table::write_table(&dir.join("fit.csv"), &csv_rows(r, meta))?;
     plot::write_figure_files(dir, "fit", &FitPlot::new(r, meta))
+}
+
+/// `joint.json`: the joint fit's parameters (shared, varying with their slopes), each
+/// condition against its own noise floor, and each condition's left-out prediction.
+pub fn joint_json(r: &JointReport, engine: &str, seed: u64) -> Value {
+    let named = |values: &[f64]| -> Map<String, Value> {
+        r.params.iter().zip(values).map(|(p, v)| (p.name().to_string(), json!(v))).collect()
+    };
+    let varying: Vec<Value> = r
+        .varying
+        .iter()
+        .map(|v| {
+            let j = r.names.iter().position(|n| *n == v.slope_name()).expect("a varying parameter has its slope");
+            let i = r.params.iter().position(|p| *p == v.param).expect("a varying parameter is fitted");
+            json!({
+                "param": v.param.name(),
+                "variable": v.covariate.name(),
+                "form": "linear",
+                "centre": v.centre,
+                "at_centre": r.x[i],
+                "slope": r.x[j],
+                "slope_name": v.slope_name(),
+            })
+        })
+        .collect();
+    let shared: Vec<&str> =
+        r.params.iter().filter(|p| !r.varying.iter().any(|v| v.param == **p)).map(|p| p.name()).collect();
+    let conditions: Vec<Value> = r
+        .conditions
+        .iter()
+        .map(|c| {
+            json!({
+                "name": c.name,
+                "data": c.data,
+                "setup": c.setup,
+                "params": named(&c.values),
+                "sse_percent2": c.sse_percent2,
+                "floor_percent2": c.floor_percent2,
+                "ratio": c.sse_percent2 / c.floor_percent2,
+                "well_above_floor": c.sse_percent2 > FLOOR_FACTOR * c.floor_percent2,
+                "measured": c.measured,
+                "fitted": c.fitted,
+                "left_out": c.left_out.as_ref().map(|l| json!({
+                    "params": named(&l.values),
+                    "sse_percent2": l.sse_percent2,
+                    "floor_percent2": l.floor_percent2,
+                    "ratio": l.sse_percent2 / l.floor_percent2,
+                    "well_above_floor": l.sse_percent2 > FLOOR_FACTOR * l.floor_percent2,
+                })),
+                "left_out_note": c.left_out_note,
+            })
+        })
+        .collect();
+    json!({
+        "kind": "joint",
+        "objective": num(r.objective_value),
+        "objective_kind": r.objective,
+        "engine": engine,
+        "particles": r.solver.particles,
+        "seed": seed,
+        "params": r.params.iter().map(|p| p.name()).collect::<Vec<_>>(),
+        "shared": shared,
+        "varying": varying,
+        "x": r.names.iter().zip(&r.x).map(|(n, v)| (n.to_string(), json!(v))).collect::<Map<String, Value>>(),
+        "sse_percent2": r.sse_percent2(),
+        "floor_percent2": r.floor_percent2(),
+        "floor_factor": FLOOR_FACTOR,
+        "conditions": conditions,
+        "evaluations": r.evaluations,
+        "notes": r.notes,
+    })
+}
+
+/// The joint fit as a table: the parameters, then each condition against its floor, fitted
+/// and left out.
+pub fn write_joint_table(out: &mut dyn Write, r: &JointReport) -> std::io::Result<()> {
+    let g = &r.solver;
+    writeln!(
+        out,
+        "joint fit of {} conditions: objective {}, {} particles, DE {} x {} generations + {} compass iterations ({} \
+         simulations)",
+        r.conditions.len(),
+        match r.objective {
+            ObjectiveKind::Sse => "sse",
+            ObjectiveKind::Likelihood => "likelihood",
+        },
+        g.particles,
+        g.pop,
+        g.generations,
+        g.polish_iterations,
+        r.evaluations
+    )?;
+    for n in &r.notes {
+        writeln!(out, "note       {n}")?;
+    }
+    for (p, v) in r.params.iter().zip(&r.x) {
+        match r.varying.iter().find(|w| w.param == *p) {
+            Some(w) => {
+                let j = r.names.iter().position(|n| *n == w.slope_name()).expect("its slope");
+                writeln!(
+                    out,
+                    "{:<12} {v:.4} at {} = {:.4}, slope {:.4} per unit of {} (varies)",
+                    p.name(),
+                    w.covariate.name(),
+                    w.centre,
+                    r.x[j],
+                    w.covariate.name()
+                )?
+            }
+            None => writeln!(out, "{:<12} {v:.4} (shared)", p.name())?,
+        }
+    }
+    writeln!(out)?;
+    let names: Vec<&str> = r.params.iter().map(|p| p.name()).collect();
+    writeln!(out, "condition            {:<24} SSE %²   floor %²  ×floor   left out: SSE %²  ×floor", names.join(" "))?;
+    for c in &r.conditions {
+        let values: Vec<String> = c.values.iter().map(|v| format!("{v:.4}")).collect();
+        let left = match (&c.left_out, &c.left_out_note) {
+            (Some(l), _) => format!("{:>10.2} {:>7.1}", l.sse_percent2, l.sse_percent2 / l.floor_percent2),
+            (None, Some(note)) => note.clone(),
+            (None, None) => "-".into(),
+        };
+        writeln!(
+            out,
+            "{:<20} {:<24} {:>8.2} {:>9.2} {:>7.1}   {left}",
+            c.name,
+            values.join(" "),
+            c.sse_percent2,
+            c.floor_percent2,
+            c.sse_percent2 / c.floor_percent2
+        )?;
+    }
+    writeln!(
+        out,
+        "all                  {:<24} {:>8.2} {:>9.2} {:>7.1}",
+        "",
+        r.sse_percent2(),
+        r.floor_percent2(),
+        r.sse_percent2() / r.floor_percent2()
+    )?;
+    writeln!(out, "(a condition is fitted to its noise where ×floor ≤ {FLOOR_FACTOR})")
 }

@@ -10,8 +10,8 @@ use serde_json::Value;
 
 use super::report::{self, Meta};
 use super::{FitReport, FitSettings};
-use crate::calibrate::measured::{self, stem};
-use crate::calibrate::{shared_params, EffortSettings, Normalise, ObjectiveKind, Param, Spelling};
+use crate::calibrate::measured::{self, condition_names, stem};
+use crate::calibrate::{shared_params, Covariate, EffortSettings, Normalise, ObjectiveKind, Param, Spelling};
 use crate::engine::{make_engine, EngineKind};
 use crate::io::run_dir::{Access, RunDir};
 
@@ -170,4 +170,119 @@ fn write_corrected(dir: &Path, setup: &Path, report: &FitReport, meta: &Meta) ->
     let body = super::corrected::corrected_toml(&text, &report.params, &report.x, sd, &provenance)
         .with_context(|| format!("the corrected config from {}", setup.display()))?;
     crate::io::atomic::write_atomic(&dir.join(super::corrected::CORRECTED), body.as_bytes())
+}
+
+/// A joint fit as the user asks for it: several (data, setup) pairs, one calibration
+/// ([`super::joint`]).
+#[derive(Clone, Debug)]
+pub struct JointRequest {
+    /// (measured runs, the setup they were measured with), one pair per condition.
+    pub pairs: Vec<(PathBuf, PathBuf)>,
+    /// None: k_elastic, mu_fric, and k_drag where any setup has drag.
+    pub params: Option<Vec<Param>>,
+    /// Parameters that vary linearly with a condition's variable.
+    pub varying: Vec<(Param, Covariate)>,
+    pub objective: ObjectiveKind,
+    pub effort: EffortSettings,
+    pub normalise: Option<Normalise>,
+    /// None: the first setup's sim.seed.
+    pub seed: Option<u64>,
+    pub engine: EngineKind,
+    /// Predict each condition from a fit of the others.
+    pub leave_out: bool,
+    /// Write joint.json and the corrected configs into this directory.
+    pub out: Option<PathBuf>,
+    pub spelling: Spelling,
+}
+
+/// The file a joint fit writes beside its corrected configs.
+pub const JOINT_JSON: &str = "joint.json";
+
+/// Check, load, fit every condition jointly, and write `out` if asked.
+pub fn run_joint(r: &JointRequest, log: &mut dyn FnMut(String)) -> anyhow::Result<(super::joint::JointReport, Value)> {
+    let name = |f: &str| r.spelling.name(f);
+    r.effort.validate(r.spelling).map_err(anyhow::Error::msg)?;
+    if r.pairs.len() < 2 {
+        bail!("a joint fit takes at least two {} / {} pairs, got {}", name("data"), name("setup"), r.pairs.len());
+    }
+    let data: Vec<PathBuf> = r.pairs.iter().map(|(d, _)| d.clone()).collect();
+    let conditions = condition_names(&data)
+        .into_iter()
+        .zip(&r.pairs)
+        .map(|(n, (data, setup))| measured::load(data, setup, n, r.normalise, r.seed, r.spelling))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let params = r.params.clone().unwrap_or_else(|| shared_params(&conditions));
+    for (p, _) in &r.varying {
+        if !params.contains(p) {
+            bail!("{}: {} varies but is not fitted ({}: {})", name("vary"), p.name(), name("params"), {
+                let n: Vec<&str> = params.iter().map(|p| p.name()).collect();
+                n.join(",")
+            });
+        }
+    }
+    let _owned = match &r.out {
+        Some(dir) => Some(RunDir::acquire(dir, "fit", Access::Exclusive).with_context(|| name("out"))?),
+        None => None,
+    };
+    let seed = conditions[0].base.sim.seed;
+    let settings = super::joint::JointSettings {
+        objective: r.objective,
+        effort: r.effort.with_seed(seed),
+        varying: r.varying.clone(),
+        leave_out: r.leave_out,
+    };
+    let engine = make_engine(r.engine)?;
+    let started = std::time::Instant::now();
+    let report = super::joint::fit_joint(engine.as_ref(), &conditions, &params, &settings, log)
+        .map_err(|e| anyhow::anyhow!("{e}").context(format!("the joint fit of {} conditions", conditions.len())))?;
+    log(format!("fit: done in {:.1} s", started.elapsed().as_secs_f64()));
+    let json = report::joint_json(&report, engine.backend(), seed);
+    if let Some(dir) = &r.out {
+        crate::io::atomic::write_atomic(&dir.join(JOINT_JSON), serde_json::to_string_pretty(&json)?.as_bytes())?;
+        write_joint_corrected(dir, &report, engine.backend(), seed)?;
+    }
+    Ok((report, json))
+}
+
+/// `corrected-NAME.toml` per condition (its setup with its own values of the fitted
+/// parameters), and `corrected.toml` (the first setup with the shared values) where no
+/// parameter varies: the corrected model any command reads as a config.
+fn write_joint_corrected(
+    dir: &Path,
+    report: &super::joint::JointReport,
+    engine: &str,
+    seed: u64,
+) -> anyhow::Result<()> {
+    let all: Vec<String> = report.conditions.iter().map(|c| format!("{} with {}", c.data, c.setup)).collect();
+    let provenance = |c: &super::joint::ConditionFit| {
+        vec![
+            format!("sawtooth {}: joint fit of {} conditions: {}", env!("CARGO_PKG_VERSION"), all.len(), all.join("; ")),
+            format!(
+                "engine {engine}, {} particles, seed {seed}; SSE {:.2} %^2 over all (floor {:.2}); this condition {}: SSE \
+                 {:.2} %^2 (floor {:.2})",
+                report.solver.particles,
+                report.sse_percent2(),
+                report.floor_percent2(),
+                c.name,
+                c.sse_percent2,
+                c.floor_percent2
+            ),
+        ]
+    };
+    for c in &report.conditions {
+        let text = crate::io::bounded::read_text(Path::new(&c.setup), &crate::schema::CONFIG_FILE)?;
+        let body = super::corrected::corrected_toml(&text, &report.params, &c.values, None, &provenance(c))
+            .with_context(|| format!("the corrected config from {}", c.setup))?;
+        crate::io::atomic::write_atomic(&dir.join(format!("corrected-{}.toml", c.name)), body.as_bytes())?;
+    }
+    if report.varying.is_empty() {
+        let first = &report.conditions[0];
+        let text = crate::io::bounded::read_text(Path::new(&first.setup), &crate::schema::CONFIG_FILE)?;
+        let mut lines = provenance(first);
+        lines.push("every parameter shared by all conditions; the design is the first condition's".into());
+        let body = super::corrected::corrected_toml(&text, &report.params, &report.x, None, &lines)
+            .with_context(|| format!("the corrected config from {}", first.setup))?;
+        crate::io::atomic::write_atomic(&dir.join(super::corrected::CORRECTED), body.as_bytes())?;
+    }
+    Ok(())
 }
