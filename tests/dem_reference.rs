@@ -261,6 +261,16 @@ fn strokes_convey_grains_steadily_and_report_the_advance_beside_the_models() {
     for k in 0..=3 {
         assert!(dir.join(format!("run-001/cycle-{k:03}.dump")).is_file());
     }
+    // the campaign is its own: the same command again resumes it (nothing left to run, the
+    // same steady.json), and `dem compare` reads it
+    let before = read(&dir.join("steady.json"));
+    let (code, _, err) = sawtooth(&args);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("started"), "a finished run ran again: {err}");
+    assert_eq!(read(&dir.join("steady.json")), before);
+    let (code, compared, err) = sawtooth(&["dem", "compare", out]);
+    assert_eq!(code, 0, "{err}");
+    assert!(compared.contains("advance"), "{compared}");
 }
 
 /// A steady conveyor whose every grain leaves the box conveys nothing: the deck stops

@@ -202,7 +202,11 @@ pub fn run_steady(
 fn one_steady_run(dir: &Path, plan: &Plan, r: u32, binary: &Path, say: &(dyn Fn(String) + Sync)) -> anyhow::Result<()> {
     let conveyor = plan.conveyor(r).map_err(anyhow::Error::msg)?;
     let rd = run_dir(dir, r);
-    std::fs::create_dir_all(&rd).with_context(|| format!("creating {}", rd.display()))?;
+    // the run's folder is the campaign's own, as a single stroke's is: unmarked, the
+    // campaign's folder held folders it did not write, and both resuming the campaign and
+    // `dem compare` refused it
+    mark_subfolder(&rd, RUN_KIND)?;
+    clean_stale_temps(&rd)?;
     conveyor.write(&rd)?;
     say(format!("run {} (seed {}) started", r + 1, conveyor.tooth.seed));
     let mut lines = crate::io::progress::Lines::new();
