@@ -141,6 +141,25 @@ fn launch_spread_is_found() {
     let d = scratch("ls");
     let v = rig_campaign(&d, Some("launch-spread=0.3,6"), 30);
     check_found(&v, "launch-spread");
+    // the corrected model (issue 43, 3): the best model's fitted values as a config that
+    // `simulate` reads, its effect on, the campaign's measurement left out
+    let text = std::fs::read_to_string(d.join("out/corrected.toml")).unwrap();
+    let t: toml::Table = toml::from_str(&text).unwrap();
+    let best = v["ranking"].as_array().unwrap().iter().find(|m| m["effect"] == "launch-spread").unwrap();
+    for (table, key, name) in [
+        (&t["effects"]["launch_spread"], "speed_spread", "speed_spread"),
+        (&t["effects"]["launch_spread"], "angle_sigma_deg", "angle_sigma_deg"),
+        (&t["collision"], "k_elastic", "k_elastic"),
+        (&t["collision"], "mu_friction", "mu_fric"),
+    ] {
+        let written = table[key].as_float().unwrap();
+        let fitted = best["params"][name].as_f64().unwrap();
+        assert!((written - fitted).abs() <= 1e-12 * fitted.abs().max(1.0), "{key}: {written} vs {fitted}\n{text}");
+    }
+    assert!(t.get("measurement").is_none(), "{text}");
+    let o = common::sawtooth().arg("simulate").arg("--config").arg(d.join("out/corrected.toml")).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("d_avg"));
     // where: the conditions are reported tooth by tooth, with the first-flight split
     let w = &v["where"]["conditions"];
     assert_eq!(w.as_array().unwrap().len(), 3);

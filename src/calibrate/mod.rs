@@ -9,6 +9,7 @@
 
 pub mod batch;
 pub mod condition;
+pub mod corrected;
 pub mod effort;
 pub mod fields;
 pub mod levenberg;

@@ -6,6 +6,8 @@
 
 use std::path::PathBuf;
 
+use crate::calibrate::corrected::{corrected_config, CORRECTED};
+
 use anyhow::{bail, Context as _};
 use serde_json::Value;
 
@@ -166,5 +168,64 @@ pub fn run(r: &DiagnoseRequest, log: &mut dyn FnMut(String)) -> anyhow::Result<(
     log(format!("diagnose: done in {:.1} s", started.elapsed().as_secs_f64()));
     let json = to_json(&d);
     render::write_dir(&r.out, &d, &json).with_context(|| name("out"))?;
+    write_corrected(r, &d).with_context(|| name("out"))?;
     Ok((d, json))
+}
+
+/// `corrected.toml`: the first setup with the fitted values of the diagnosis's best model
+/// (the baseline's where no candidate is best), its own `[effects]` replaced by the model's,
+/// so that `simulate`, `optimize` and the rest run the corrected model (issue 43, 3).
+fn write_corrected(r: &DiagnoseRequest, d: &Diagnosis) -> anyhow::Result<()> {
+    let model = d.ranking.iter().find(|m| d.best.is_some() && m.single() == d.best).unwrap_or(&d.baseline);
+    let keys: Vec<(String, &str)> = model
+        .names
+        .iter()
+        .map(|&name| match crate::calibrate::Param::ALL.iter().find(|p| p.name() == name) {
+            Some(p) => {
+                let (section, key) = p.config_key();
+                (section.to_string(), key)
+            }
+            None => {
+                let kind = model
+                    .effects
+                    .iter()
+                    .find(|e| e.param_names().contains(&name))
+                    .expect("a model's parameter is shared or an effect's");
+                (format!("effects.{}", kind.key()), name)
+            }
+        })
+        .collect();
+    let keys: Vec<(&str, &str)> = keys.iter().map(|(s, k)| (s.as_str(), *k)).collect();
+    let setup = &r.setup[0];
+    let text = crate::io::bounded::read_text(setup, &crate::schema::CONFIG_FILE)?;
+    let mut table: toml::Table =
+        toml::from_str(&text).with_context(|| format!("{} is not a TOML table", setup.display()))?;
+    table.remove("effects");
+    let mut provenance = vec![
+        format!(
+            "sawtooth {}: diagnosis of {} condition(s), verdict {}; the model written: {} (gap {:.2} %^2, floor {:.2})",
+            env!("CARGO_PKG_VERSION"),
+            d.conditions.len(),
+            d.verdict.kind.name(),
+            model.name(),
+            model.gap,
+            d.verdict.baseline.floor
+        ),
+        format!(
+            "conditions: {}",
+            r.data
+                .iter()
+                .zip(&r.setup)
+                .map(|(a, b)| format!("{} with {}", a.display(), b.display()))
+                .collect::<Vec<_>>()
+                .join("; ")
+        ),
+        format!("every parameter shared by all conditions; the rest of this file is {}'s", setup.display()),
+    ];
+    if model.effects.contains(&EffectKind::SledMotion) {
+        provenance.push("sled-motion's return direction is not written: the setup's, else the model's default".into());
+    }
+    let body =
+        corrected_config(&toml::to_string(&table)?, &keys, &model.full.x, None, "sawtooth diagnose", &provenance)?;
+    crate::io::atomic::write_atomic(&r.out.join(CORRECTED), body.as_bytes())
 }

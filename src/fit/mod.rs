@@ -29,7 +29,6 @@
 //!   with other `--seed`s for that) nor the misfit of a model that cannot reach the data,
 //!   and a parameter pinned at a bound gets a one-sided, possibly degenerate interval.
 
-pub mod corrected;
 pub mod joint;
 pub mod report;
 pub mod request;

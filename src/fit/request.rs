@@ -167,9 +167,9 @@ fn write_corrected(dir: &Path, setup: &Path, report: &FitReport, meta: &Meta) ->
         ));
     }
     let sd = report.uncertainty.as_ref().map(|u| u.sd.as_slice());
-    let body = super::corrected::corrected_toml(&text, &report.params, &report.x, sd, &provenance)
+    let body = crate::calibrate::corrected::corrected_toml(&text, &report.params, &report.x, sd, &provenance)
         .with_context(|| format!("the corrected config from {}", setup.display()))?;
-    crate::io::atomic::write_atomic(&dir.join(super::corrected::CORRECTED), body.as_bytes())
+    crate::io::atomic::write_atomic(&dir.join(crate::calibrate::corrected::CORRECTED), body.as_bytes())
 }
 
 /// A joint fit as the user asks for it: several (data, setup) pairs, one calibration
@@ -271,7 +271,7 @@ fn write_joint_corrected(
     };
     for c in &report.conditions {
         let text = crate::io::bounded::read_text(Path::new(&c.setup), &crate::schema::CONFIG_FILE)?;
-        let body = super::corrected::corrected_toml(&text, &report.params, &c.values, None, &provenance(c))
+        let body = crate::calibrate::corrected::corrected_toml(&text, &report.params, &c.values, None, &provenance(c))
             .with_context(|| format!("the corrected config from {}", c.setup))?;
         crate::io::atomic::write_atomic(&dir.join(format!("corrected-{}.toml", c.name)), body.as_bytes())?;
     }
@@ -280,9 +280,9 @@ fn write_joint_corrected(
         let text = crate::io::bounded::read_text(Path::new(&first.setup), &crate::schema::CONFIG_FILE)?;
         let mut lines = provenance(first);
         lines.push("every parameter shared by all conditions; the design is the first condition's".into());
-        let body = super::corrected::corrected_toml(&text, &report.params, &report.x, None, &lines)
+        let body = crate::calibrate::corrected::corrected_toml(&text, &report.params, &report.x, None, &lines)
             .with_context(|| format!("the corrected config from {}", first.setup))?;
-        crate::io::atomic::write_atomic(&dir.join(super::corrected::CORRECTED), body.as_bytes())?;
+        crate::io::atomic::write_atomic(&dir.join(crate::calibrate::corrected::CORRECTED), body.as_bytes())?;
     }
     Ok(())
 }

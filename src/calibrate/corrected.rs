@@ -1,5 +1,5 @@
-//! The corrected model as an input (issue 43, 3): the setup's config with the fitted
-//! parameters in place of its own, written as a config TOML that every command reads as any
+//! The corrected model as an input (issue 43, 3): the setup's config with the parameters a
+//! `fit` or a `diagnose` fitted in place of its own, written as a config TOML that every command reads as any
 //! config (`simulate`, `optimize`, `gpu-sweep`, `study`, `dem`, the Python package). Its
 //! provenance (the data, the setup, the seed, the fit's quality) and each value's bootstrap
 //! sd ride along as comments, which every reader skips.
@@ -21,25 +21,51 @@ pub fn corrected_toml(
     sd: Option<&[f64]>,
     provenance: &[String],
 ) -> anyhow::Result<String> {
+    let keys: Vec<(&str, &str)> = params.iter().map(|p| p.config_key()).collect();
+    corrected_config(setup_text, &keys, values, sd, "sawtooth fit", provenance)
+}
+
+/// `setup_text` with each `values[i]` at `keys[i]` (a table's path, dotted for a nested one
+/// such as `effects.fill_surface_loss`, and the key), headed by who fitted them (`by`), the
+/// `provenance` lines and each value's sd where known; checked to read back as a config. The
+/// setup's `[measurement]` and its `[dem]` grain diameter and mesh length (one campaign's,
+/// one design's) are left out.
+pub fn corrected_config(
+    setup_text: &str,
+    keys: &[(&str, &str)],
+    values: &[f64],
+    sd: Option<&[f64]>,
+    by: &str,
+    provenance: &[String],
+) -> anyhow::Result<String> {
     let mut table: toml::Table = toml::from_str(setup_text).context("the setup is not a TOML table")?;
-    for (&p, &v) in params.iter().zip(values) {
-        anyhow::ensure!(v.is_finite(), "the fitted {} is {v}, not a number to write", p.name());
-        let (section, name) = p.config_key();
-        let entry = table.entry(section).or_insert_with(|| toml::Value::Table(toml::Table::new()));
-        let toml::Value::Table(t) = entry else {
-            anyhow::bail!("the setup's `{section}` is not a table");
-        };
+    // what belongs to the one campaign only is left out, so the model reads for any design:
+    // its measurement, and the DEM grain size and mesh length of its design
+    table.remove("measurement");
+    if let Some(toml::Value::Table(dem)) = table.get_mut("dem") {
+        dem.remove("grain_diameter_m");
+        dem.remove("teeth");
+    }
+    for (&(section, name), &v) in keys.iter().zip(values) {
+        anyhow::ensure!(v.is_finite(), "the fitted [{section}] {name} is {v}, not a number to write");
+        let mut t = &mut table;
+        for part in section.split('.') {
+            let entry = t.entry(part).or_insert_with(|| toml::Value::Table(toml::Table::new()));
+            let toml::Value::Table(inner) = entry else {
+                anyhow::bail!("the setup's `{part}` is not a table");
+            };
+            t = inner;
+        }
         t.insert(name.to_string(), toml::Value::Float(v));
     }
-    let mut text = String::from(
-        "# The corrected model: the setup's config with the parameters fitted by `sawtooth fit`\n\
-         # (docs/calibrate-and-diagnose.md). Read it as any config: `--config corrected.toml`.\n",
+    let mut text = format!(
+        "# The corrected model: the setup's config with the parameters fitted by `{by}`\n\
+         # (docs/calibrate-and-diagnose.md). Read it as any config: `--config corrected.toml`.\n"
     );
     for line in provenance {
         text.push_str(&format!("# {line}\n"));
     }
-    for (j, (&p, &v)) in params.iter().zip(values).enumerate() {
-        let (section, name) = p.config_key();
+    for (j, (&(section, name), &v)) in keys.iter().zip(values).enumerate() {
         let spread = match sd.and_then(|s| s.get(j)) {
             Some(s) if s.is_finite() => format!(", bootstrap sd {s:.4}"),
             _ => String::new(),
@@ -90,5 +116,36 @@ mod tests {
         assert!(corrected_toml("", &[Param::KElastic], &[f64::NAN], None, &[]).is_err());
         let e = corrected_toml("collision = 3\n", &[Param::KElastic], &[0.5], None, &[]).unwrap_err();
         assert!(format!("{e:#}").contains("`collision` is not a table"), "{e:#}");
+    }
+
+    /// A diagnosis's effect parameters go to their nested `[effects.KEY]` table, and what
+    /// belongs to one campaign (its measurement, its design's DEM grain and mesh) stays out.
+    #[test]
+    fn effect_parameters_nest_and_the_campaigns_own_keys_stay_out() {
+        let setup = "env = \"lunar\"\n[measurement]\nparticle_mass_g = 20.9\n[dem]\nparticles = 150\n\
+                     grain_diameter_m = 0.0045\nteeth = 10\n[effects.impact_scatter]\nsigma_deg = 3.0\n";
+        let text = corrected_config(
+            setup,
+            &[
+                ("collision", "k_elastic"),
+                ("effects.fill_surface_loss", "speed_loss"),
+                ("effects.fill_surface_loss", "decay_depth_m"),
+            ],
+            &[0.57, 0.55, 0.003],
+            None,
+            "sawtooth diagnose",
+            &[],
+        )
+        .unwrap();
+        let t: toml::Table = toml::from_str(&text).unwrap();
+        assert_eq!(t["effects"]["fill_surface_loss"]["speed_loss"].as_float(), Some(0.55));
+        assert_eq!(t["effects"]["fill_surface_loss"]["decay_depth_m"].as_float(), Some(0.003));
+        assert_eq!(t["collision"]["k_elastic"].as_float(), Some(0.57));
+        assert!(t.get("measurement").is_none(), "{text}");
+        assert_eq!(t["dem"]["particles"].as_integer(), Some(150));
+        assert!(t["dem"].get("grain_diameter_m").is_none() && t["dem"].get("teeth").is_none(), "{text}");
+        assert!(text.contains("fitted by `sawtooth diagnose`"), "{text}");
+        let read = crate::io::config::ConfigFile::parse(&text).unwrap();
+        assert!(read.effects.is_some());
     }
 }
