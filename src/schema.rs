@@ -331,6 +331,14 @@ pub const DEM_FRONT: Count = Count {
     max: 100,
     why: "each front design is a DEM campaign of --seeds runs; a hundred cover any front",
 };
+pub const DEM_DESIGNS: Count = Count {
+    flags: &["--designs"],
+    keys: &[],
+    python: None,
+    min: 1,
+    max: 100,
+    why: "each design is a DEM campaign of --seeds runs; a hundred fill the eight-variable space",
+};
 pub const JOBS: Count = Count {
     flags: &["--jobs"],
     keys: &[],
@@ -1170,6 +1178,7 @@ pub const COUNTS: &[&Count] = &[
     &DEM_RUNS,
     &DEM_SEEDS,
     &DEM_FRONT,
+    &DEM_DESIGNS,
     &JOBS,
     &SLURM_CPUS_PER_TASK,
     &SLURM_GPUS_PER_TASK,

@@ -503,3 +503,141 @@ fn a_dem_check_runs_as_a_job_array_of_dem_runs_and_gathers_the_same_report() {
     assert!(!err.contains("started"), "a finished check ran again: {err}");
     assert_eq!(serde_json::from_str::<serde_json::Value>(&local).unwrap(), gathered);
 }
+
+/// A design of experiments (issue 43, 2): `dem doe` draws designs spread over the
+/// optimiser's space under its constraints and the draw's own rules, and runs them as a DEM
+/// check (the same plan, status, gather and report), each design's campaign ending with the
+/// `dem.csv` and `setup.toml` that `fit` reads. The same draw seed draws the same designs.
+#[test]
+fn a_design_of_experiments_draws_spread_designs_and_runs_them_as_a_check() {
+    let d = tempfile::tempdir().unwrap();
+    let doe = d.path().join("doe");
+    let doe_s = doe.to_str().unwrap();
+    let args = [
+        "dem",
+        "doe",
+        "--env",
+        "earth",
+        "--designs",
+        "2",
+        "--seeds",
+        "1",
+        "--particles",
+        "30",
+        "--max-d-avg-mm",
+        "150",
+        "--jobs",
+        "1",
+        "--out",
+        doe_s,
+    ];
+    let mut plan_args = args.to_vec();
+    plan_args.push("--plan");
+    let (code, said, err) = sawtooth(&plan_args);
+    assert_eq!(code, 0, "{err}");
+    assert!(said.contains("2 designs x 1 seeds = 2 members") && said.contains("nothing run yet"), "{said}");
+    assert!(err.contains("designs drawn in the pool") && err.contains("doe-02 --design"), "{err}");
+    // the same draw again is the same plan (a plan of other designs would be refused)
+    let (code, _, err) = sawtooth(&plan_args);
+    assert_eq!(code, 0, "the same draw again: {err}");
+    let mut other = plan_args.clone();
+    other.extend(["--draw-seed", "2"]);
+    let (code, _, err) = sawtooth(&other);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("another plan"), "{err}");
+    let plan: serde_json::Value = serde_json::from_str(&read(&doe.join("plan.json"))).unwrap();
+    let finalists = plan["finalists"].as_array().unwrap();
+    let labels: Vec<&str> = finalists.iter().map(|f| f["label"].as_str().unwrap()).collect();
+    assert_eq!(labels, ["doe-01", "doe-02"]);
+    for f in finalists {
+        assert!(f["model_d_avg_m"].as_f64().unwrap() <= 0.150, "--max-d-avg-mm: {f}");
+        assert_eq!(f["campaign"]["scenario"]["environment"]["alpha_deg"], 35.0, "{f}");
+    }
+    assert_ne!(finalists[0]["campaign"]["design"], finalists[1]["campaign"]["design"]);
+    let (code, status, err) = sawtooth(&["campaign", "status", doe_s]);
+    assert_eq!(code, 0, "{err}");
+    assert!(status.contains("finished 0, not finished 2"), "{status}");
+
+    // bad draws are refused naming the flag and the rule
+    for (flag, value, rule) in
+        [("--designs", "0", "--designs"), ("--min-grain-mm", "-1", "[0, 50]"), ("--max-d-avg-mm", "0", "> 0 mm")]
+    {
+        let out = d.path().join(format!("bad{flag}"));
+        let (code, _, err) =
+            sawtooth(&["dem", "doe", "--env", "earth", flag, value, "--plan", "--out", out.to_str().unwrap()]);
+        assert_eq!(code, 2, "{flag} {value}: {err}");
+        assert!(err.contains(rule), "{flag} {value}: {err}");
+    }
+
+    if !liggghts_present("dem::a_design_of_experiments_draws_spread_designs_and_runs_them_as_a_check") {
+        return;
+    }
+    let mut json_args = args.to_vec();
+    json_args.push("--json");
+    let (code, out, err) = sawtooth(&json_args);
+    assert_eq!(code, 0, "{err}");
+    let report: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(report["designs"].as_array().unwrap().len(), 2, "{report}");
+    assert!(report["run_dir"].as_str().unwrap().contains("design of experiments"), "{report}");
+    for label in labels {
+        for f in ["dem.csv", "setup.toml"] {
+            assert!(doe.join(label).join(f).is_file(), "{label}/{f}");
+        }
+        let (code, cmp, err) = sawtooth(&["dem", "compare", doe.join(label).to_str().unwrap()]);
+        assert_eq!(code, 0, "{label}: {err}");
+        assert!(cmp.contains("d_avg: model"), "{cmp}");
+    }
+}
+
+/// The loop's check (issue 43, 4): a run optimised on the corrected lunar model
+/// (`data/dem/lunar-corrected.toml`: fitted coefficients and an effect the DEM does not take)
+/// is checked in DEM against the physics it was corrected to (`--config`), not against its
+/// own fitted coefficients; without `--config` the effect is refused by name.
+#[test]
+fn a_run_on_the_corrected_model_is_checked_against_the_reference_physics() {
+    let d = tempfile::tempdir().unwrap();
+    let corrected = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/dem/lunar-corrected.toml");
+    let (opt, chk) = (d.path().join("opt"), d.path().join("check"));
+    let (code, _, err) = sawtooth(&[
+        "optimize",
+        "--config",
+        corrected.to_str().unwrap(),
+        "--pop",
+        "20",
+        "--generations",
+        "3",
+        "--algorithm",
+        "nsga2",
+        "--particles",
+        "20",
+        "--final-particles",
+        "40",
+        "--quiet",
+        "--out",
+        opt.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let args = ["dem", "check", opt.to_str().unwrap(), "--front", "0", "--seeds", "1", "--particles", "150", "--plan"];
+    let mut own = args.to_vec();
+    own.extend(["--out", chk.to_str().unwrap()]);
+    let (code, _, err) = sawtooth(&own);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("fill-surface-loss") && err.contains("not carried into a DEM case"), "{err}");
+    let reference = d.path().join("lunar.toml");
+    std::fs::write(&reference, "env = \"lunar\"\n").unwrap();
+    let mut with_ref = args.to_vec();
+    with_ref.extend(["--config", reference.to_str().unwrap(), "--out", chk.to_str().unwrap()]);
+    let (code, _, err) = sawtooth(&with_ref);
+    assert_eq!(code, 0, "{err}");
+    let plan: serde_json::Value = serde_json::from_str(&read(&chk.join("plan.json"))).unwrap();
+    let text = read(&corrected);
+    let fitted: toml::Table = toml::from_str(&text).unwrap();
+    for f in plan["finalists"].as_array().unwrap() {
+        let s = &f["campaign"]["scenario"];
+        // the lunar preset's contact (Table 4.2), not the corrected model's fitted values
+        assert_eq!(s["collision"]["k_elastic"], 0.872, "{s}");
+        assert_ne!(s["collision"]["k_elastic"].as_f64(), fitted["collision"]["k_elastic"].as_float());
+        assert!(s.get("effects").is_none_or(|e| e.as_object().is_none_or(|o| o.values().all(|v| v.is_null()))), "{s}");
+        assert!(plan["command"].as_str().unwrap().contains("--config"), "{plan}");
+    }
+}

@@ -29,6 +29,10 @@ pub enum DemCommand {
     Compare(CompareArgs),
     /// An optimisation's picks and front designs in DEM: d_avg, mass flow, W_spec, verdicts.
     Check(CheckArgs),
+    /// A design of experiments: N designs drawn over the optimiser's space (space-filling,
+    /// under its constraints, optionally the requirements), each run with S seeds, reported
+    /// as a check (model beside DEM) with each design's campaign readable by `fit`.
+    Doe(DoeArgs),
     /// Single grains of a case in LIGGGHTS beside the model's restitution law: normal COR,
     /// tangential ratio and spin per impact speed and angle; --law-out writes the DEM's law.
     Impact(ImpactArgs),
@@ -137,6 +141,12 @@ pub struct CompareArgs {
 pub struct CheckArgs {
     /// An `optimize` run folder (run.toml, pareto.csv).
     pub run_dir: PathBuf,
+    /// The physics the DEM runs: a config TOML (`env`, [material], [collision], [environment],
+    /// [dem]) whose scenario replaces the run's, each design at its front slope. Check a run
+    /// optimised on a corrected model (`optimize --config lunar-corrected.toml`) against the
+    /// physics it was corrected to, e.g. a file holding `env = "lunar"` [default: the run's own].
+    #[arg(long)]
+    pub config: Option<PathBuf>,
     /// Front designs checked besides the picks A, B, C, spread over the front's mass flow.
     #[arg(long, default_value_t = 2, value_parser = super::args::count::<usize>(&crate::schema::DEM_FRONT))]
     pub front: usize,
@@ -161,12 +171,56 @@ pub struct CheckArgs {
     pub plan: bool,
 }
 
+#[derive(Debug, Args)]
+#[command(mut_arg("particles", |a| a.help(dem_particles_help(true)).value_parser(super::args::count::<u32>(&crate::schema::DEM_PARTICLES))))]
+pub struct DoeArgs {
+    /// The scenario the designs are drawn and run in (`--env`, `--config`, `--alpha`, …);
+    /// `--particles` is the DEM's grain count, the model keeps the config's.
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    /// Designs to draw.
+    #[arg(long, default_value_t = 6, value_parser = super::args::count::<usize>(&crate::schema::DEM_DESIGNS))]
+    pub designs: usize,
+    /// DEM seeds per design (seeds 0, 1, …).
+    #[arg(long, default_value_t = 2, value_parser = super::args::count::<u32>(&crate::schema::DEM_SEEDS))]
+    pub seeds: u32,
+    /// The draw's seed: the same seed draws the same designs.
+    #[arg(long, default_value_t = 1)]
+    pub draw_seed: u64,
+    /// Only designs whose DEM grains are at least this wide, mm: the DEM's time step scales
+    /// with the grain, and a fill too small for the grain count costs hours a run.
+    #[arg(long, default_value_t = 3.0, allow_negative_numbers = true)]
+    pub min_grain_mm: f64,
+    /// Only designs whose model d_avg is at most this, mm: a long flight needs a long mesh and
+    /// a long run (the lunar pick B's 2 m take hours a run) [default: any].
+    #[arg(long, allow_negative_numbers = true)]
+    pub max_d_avg_mm: Option<f64>,
+    /// Only designs the model says meet these at the scenario's slope: `table-2.2` or a TOML
+    /// file with a [requirements] table [default: none, the whole feasible space].
+    #[arg(long, value_name = "table-2.2|FILE")]
+    pub requirements: Option<String>,
+    /// LIGGGHTS processes at a time [default: the cores].
+    #[arg(long, value_parser = super::args::count::<usize>(&crate::schema::JOBS))]
+    pub jobs: Option<usize>,
+    /// Where the plan, the designs' campaigns and check.json go.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Only write the plan and stop (run it as a `dem check --plan`'s: `campaign run DIR
+    /// --task I`, `campaign slurm DIR`, `campaign gather DIR`).
+    #[arg(long)]
+    pub plan: bool,
+}
+
 pub fn run(c: DemCommand, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     match c {
         DemCommand::Write(a) => write(a, out),
         DemCommand::Run(a) => run_campaign(a, out),
         DemCommand::Compare(a) => compare_cmd(a, out),
         DemCommand::Check(a) => check(a, out),
+        DemCommand::Doe(a) => doe(a, out),
         DemCommand::Impact(a) => impact_cmd(a, out),
     }
 }
@@ -559,38 +613,136 @@ fn write_table(out: &mut dyn Write, c: &Comparison) -> anyhow::Result<()> {
 
 fn check(a: CheckArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let jobs = jobs(a.jobs)?;
-    let mut settings = DemSettings::default();
+    let (physics, table) = match &a.config {
+        Some(path) => {
+            let file = ConfigFile::load(path).context("--config")?;
+            let scenario = file.scenario().with_context(|| format!("--config {}", path.display()))?;
+            (Some(scenario), file.dem)
+        }
+        None => (None, None),
+    };
+    let mut settings = DemSettings::from_table(table.as_ref());
     if let Some(n) = a.particles {
         settings.particles = n;
     }
     settings.validate().map_err(anyhow::Error::msg)?;
     let command = format!(
-        "sawtooth dem check {} --seeds {} --front {} --particles {} --out {}",
+        "sawtooth dem check {}{} --seeds {} --front {} --particles {} --out {}",
         a.run_dir.display(),
+        a.config.as_ref().map_or(String::new(), |c| format!(" --config {}", c.display())),
         a.seeds,
         a.front,
         settings.particles,
         a.out.display()
     );
-    let plan = crate::dem::check::plan(&a.run_dir, &settings, a.seeds, a.front, &command)?;
+    let plan = crate::dem::check::plan(&a.run_dir, physics.as_ref(), &settings, a.seeds, a.front, &command)?;
     if a.plan {
-        let _owned = crate::dem::check::write_plan(&a.out, &plan)?;
-        let n = plan.members();
-        let dir = a.out.display();
-        writeln!(
+        return plan_only(
+            &plan,
+            &a.out,
+            &format!("sawtooth dem check {} --out {} (the same flags)", a.run_dir.display(), a.out.display()),
             out,
-            "wrote {dir}/{} ({} designs x {} seeds = {n} members, one DEM run each); nothing run yet",
-            crate::dem::check::CHECK_PLAN,
-            plan.finalists.len(),
-            plan.seeds
-        )?;
-        writeln!(out, "  one member:      sawtooth campaign run {dir} --task I   (I in 0..{})", n - 1)?;
-        writeln!(out, "  all, here:       sawtooth dem check {} --out {dir} (the same flags)", a.run_dir.display())?;
-        writeln!(out, "  Slurm job array: sawtooth campaign slurm {dir} [--partition P --time T] --submit")?;
-        writeln!(out, "  then:            sawtooth campaign gather {dir}   (writes {dir}/check.json)")?;
-        return Ok(ExitCode::SUCCESS);
+        );
     }
     let report = crate::dem::check::check(&a.out, &plan, jobs, &|l| eprintln!("dem check: {l}"))?;
+    report_check(&report, &a.out, a.json, out)
+}
+
+/// Write a check's plan (`--plan`) and say how to run its members.
+fn plan_only(
+    plan: &crate::dem::check::CheckPlan,
+    root: &Path,
+    all_here: &str,
+    out: &mut dyn Write,
+) -> anyhow::Result<ExitCode> {
+    let _owned = crate::dem::check::write_plan(root, plan)?;
+    let n = plan.members();
+    let dir = root.display();
+    writeln!(
+        out,
+        "wrote {dir}/{} ({} designs x {} seeds = {n} members, one DEM run each); nothing run yet",
+        crate::dem::check::CHECK_PLAN,
+        plan.finalists.len(),
+        plan.seeds
+    )?;
+    writeln!(out, "  one member:      sawtooth campaign run {dir} --task I   (I in 0..{})", n - 1)?;
+    writeln!(out, "  all, here:       {all_here}")?;
+    writeln!(out, "  Slurm job array: sawtooth campaign slurm {dir} [--partition P --time T] --submit")?;
+    writeln!(out, "  then:            sawtooth campaign gather {dir}   (writes {dir}/check.json)")?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn doe(a: DoeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
+    let jobs = jobs(a.jobs)?;
+    if !(a.min_grain_mm.is_finite() && (0.0..=50.0).contains(&a.min_grain_mm)) {
+        bail!("--min-grain-mm must lie in [0, 50] mm, got {}", a.min_grain_mm);
+    }
+    if let Some(m) = a.max_d_avg_mm.filter(|m| !(m.is_finite() && *m > 0.0)) {
+        bail!("--max-d-avg-mm must be a length > 0 mm, got {m}");
+    }
+    let mut scenario_args = a.scenario.clone();
+    let grains = scenario_args.particles.take();
+    let (scenario, _) = scenario_args.resolve()?;
+    let file = match &a.scenario.config {
+        Some(p) if crate::optim::manifest::manifest_in(p)?.is_none() => Some(ConfigFile::load(p)?),
+        _ => None,
+    };
+    let mut settings = DemSettings::from_table(file.as_ref().and_then(|f| f.dem.as_ref()));
+    if let Some(n) = grains {
+        settings.particles = n;
+    }
+    settings.validate().map_err(anyhow::Error::msg)?;
+    let requirements = match &a.requirements {
+        Some(spec) => Some(crate::io::config::load_requirements(spec).context("--requirements")?),
+        None => None,
+    };
+    let request = crate::dem::doe::DoeRequest {
+        designs: a.designs,
+        seeds: a.seeds,
+        draw_seed: a.draw_seed,
+        min_grain_m: a.min_grain_mm * 1e-3,
+        max_d_avg_m: a.max_d_avg_mm.map(|m| m * 1e-3),
+        requirements,
+    };
+    let command = format!(
+        "sawtooth dem doe {}--designs {} --seeds {} --draw-seed {} --min-grain-mm {}{} --particles {}{} --out {}",
+        a.scenario.config.as_ref().map_or(String::new(), |c| format!("--config {} ", c.display())),
+        a.designs,
+        a.seeds,
+        a.draw_seed,
+        a.min_grain_mm,
+        a.max_d_avg_mm.map_or(String::new(), |m| format!(" --max-d-avg-mm {m}")),
+        settings.particles,
+        a.requirements.as_ref().map_or(String::new(), |r| format!(" --requirements {r}")),
+        a.out.display()
+    );
+    let engine = crate::engine::make_engine_for(crate::engine::EngineKind::Cpu, &scenario)?;
+    let (plan, tally) = crate::dem::doe::plan(engine.as_ref(), &scenario, &settings, &request, &command)?;
+    eprintln!(
+        "dem doe: {} of {} designs drawn in the pool ({} outside the geometric constraints, {} rejected by the model, {} without a mass flow, {} needing grains under {} mm, {} flying too far, {} failing the requirements)",
+        tally.pool,
+        tally.drawn,
+        tally.geometry,
+        tally.rejected_by_model,
+        tally.no_mass_flow,
+        tally.grains_too_small,
+        a.min_grain_mm,
+        tally.flight_too_long,
+        tally.requirements
+    );
+    for f in &plan.finalists {
+        eprintln!(
+            "dem doe: {} --design {} (model d_avg {:.1} mm, {:.1} kg/h)",
+            f.label,
+            crate::model::design::DesignRow::of(&f.campaign.design).cli_argument(),
+            f.model_d_avg_m * 1e3,
+            f.model_m_dot_kg_s * 3600.0
+        );
+    }
+    if a.plan {
+        return plan_only(&plan, &a.out, "the same `sawtooth dem doe` without --plan", out);
+    }
+    let report = crate::dem::check::check(&a.out, &plan, jobs, &|l| eprintln!("dem doe: {l}"))?;
     report_check(&report, &a.out, a.json, out)
 }
 

@@ -23,7 +23,7 @@ use super::compare::Spread;
 use super::gather::RunResult;
 use super::settings::DemSettings;
 use crate::io::atomic::write_atomic;
-use crate::io::run_dir::{kind_of, mark_subfolder, Access, RunDir};
+use crate::io::run_dir::{declare_writes, kind_of, mark_subfolder, Access, RunDir};
 use crate::model::design::DesignRow;
 use crate::model::performance::performance;
 use crate::model::prepare;
@@ -38,7 +38,8 @@ pub const CHECK_KIND: &str = "dem-check";
 pub const CHECK_PLAN: &str = "plan.json";
 /// The report's file in a check's folder.
 pub const CHECK_JSON: &str = "check.json";
-const CHECK_PLAN_FORMAT: u32 = 1;
+/// The plan format this sawtooth writes and reads.
+pub const CHECK_PLAN_FORMAT: u32 = 1;
 /// Most members a plan may hold: beyond this a plan.json is a typo or an edit, not a check
 /// (a Slurm array of a million tasks is refused by every cluster anyway).
 const MAX_MEMBERS: usize = 100_000;
@@ -225,16 +226,26 @@ fn chosen(front: &[FrontPoint], k: usize) -> Vec<(String, FrontPoint)> {
 }
 
 /// The plan of a check of `run_dir`'s picks and `k` front designs, `seeds` DEM runs each
-/// (seeds from the run's own seed on). Every case is built once here, so a design the DEM
-/// cannot represent is refused before anything is written.
-pub fn plan(run_dir: &Path, settings: &DemSettings, seeds: u32, k: usize, command: &str) -> anyhow::Result<CheckPlan> {
+/// (seeds from the run's own seed on). The DEM runs `physics` where given (a reference's
+/// material, contact and environment, each design at its front slope), else the run's own
+/// scenario: a run optimised on a corrected model (fitted coefficients, effects the DEM does
+/// not take) is checked against the physics the correction was fitted to. Every case is built
+/// once here, so a design the DEM cannot represent is refused before anything is written.
+pub fn plan(
+    run_dir: &Path,
+    physics: Option<&crate::model::Scenario>,
+    settings: &DemSettings,
+    seeds: u32,
+    k: usize,
+    command: &str,
+) -> anyhow::Result<CheckPlan> {
     let manifest = read_manifest(run_dir)?;
     let front = read_pareto_csv(&run_dir.join("pareto.csv"))
         .with_context(|| format!("{} has no finished front (pareto.csv)", run_dir.display()))?;
     anyhow::ensure!(!front.is_empty(), "{}: the front is empty", run_dir.display());
     let mut finalists = Vec::new();
     for (label, p) in chosen(&front, k) {
-        let mut scenario = manifest.scenario.clone();
+        let mut scenario = physics.unwrap_or(&manifest.scenario).clone();
         scenario.environment.alpha_deg = p.alpha_deg;
         let campaign = Plan {
             scenario,
@@ -312,6 +323,13 @@ pub fn parse_plan(text: &str, name: &str) -> anyhow::Result<CheckPlan> {
     Ok(plan)
 }
 
+/// A design's folder, marked as the check's and as the owner of the campaign files the check
+/// writes there (so `dem compare`, `fit` and a resumed check read it as a campaign of its own).
+fn own_design_folder(dir: &Path) -> anyhow::Result<()> {
+    mark_subfolder(dir, campaign::KIND)?;
+    declare_writes(dir, &[campaign::PLAN, campaign::CSV, campaign::SETUP, campaign::LAW])
+}
+
 /// Run member `i` alone (the caller holds `root`, shared with the other members' tasks);
 /// `Ok(false)` when it was done already.
 pub fn run_member(root: &Path, plan: &CheckPlan, i: usize, say: &(dyn Fn(String) + Sync)) -> anyhow::Result<bool> {
@@ -325,7 +343,7 @@ pub fn run_member(root: &Path, plan: &CheckPlan, i: usize, say: &(dyn Fn(String)
     }
     let (f, r) = plan.member(i);
     let dir = plan.finalist_dir(root, f);
-    mark_subfolder(&dir, campaign::KIND)?;
+    own_design_folder(&dir)?;
     campaign::run_one(&dir, &plan.finalists[f].campaign, r, say)
 }
 
@@ -394,6 +412,7 @@ pub fn gather(root: &Path, plan: &CheckPlan) -> anyhow::Result<CheckReport> {
     }
     let mut report = empty_report(plan);
     for (i, f) in plan.finalists.iter().enumerate() {
+        own_design_folder(&plan.finalist_dir(root, i))?;
         let results = campaign::gather(&plan.finalist_dir(root, i), &f.campaign)?;
         report.designs.push(design_check(plan, f, &results)?);
     }
@@ -419,7 +438,7 @@ fn check_owned(
     let mut report = empty_report(plan);
     for (i, f) in plan.finalists.iter().enumerate() {
         let dir = plan.finalist_dir(root, i);
-        mark_subfolder(&dir, campaign::KIND)?;
+        own_design_folder(&dir)?;
         say(format!("design {}: {}", f.label, DesignRow::of(&f.campaign.design)));
         let results = campaign::run(&dir, &f.campaign, jobs, say)?;
         report.designs.push(design_check(plan, f, &results)?);

@@ -12,6 +12,7 @@
 //! - [`motion`]: the sled's motion (stroke, optional return) as mesh velocities;
 //! - [`case`]: the LIGGGHTS input script and the case folder;
 //! - [`conveyor`]: steady conveying, K cycles on a periodic conveyor of full teeth;
+//! - [`doe`]: a design of experiments, designs spread over the optimiser's space, as a check's plan;
 //! - [`refine`]: convergence, the campaign again at half the overlap and twice the grains;
 //! - [`run`]: finding and running LIGGGHTS, progress, errors;
 //! - [`gather`]: the dump read back, grains assigned to teeth, the campaign's CSV and setup;
@@ -29,6 +30,7 @@ pub mod check;
 pub mod compare;
 pub mod contact;
 pub mod conveyor;
+pub mod doe;
 pub mod gather;
 pub mod grains;
 pub mod impact;

@@ -337,6 +337,27 @@ pub fn mark_subfolder(dir: &Path, kind: &str) -> anyhow::Result<()> {
     }
 }
 
+/// Record in the marker of `dir` (a run's marked subfolder, [`mark_subfolder`]) the files
+/// that the run writes at its top from outside it: a DEM check writes each design's campaign
+/// files (plan, dem.csv, setup, law) while it holds the check's folder, not the design's, so
+/// without this `dem compare` of a design would find them unaccounted for. Idempotent.
+pub fn declare_writes(dir: &Path, names: &[&str]) -> anyhow::Result<()> {
+    let MarkerFile::Current(mut marker) = read_marker(dir) else {
+        bail!("{} is not a marked folder of sawtooth's (no {MARKER_FILE} of this sawtooth)", dir.display());
+    };
+    let before = marker.wrote.len();
+    for name in names {
+        if !marker.wrote.iter().any(|w| w == name) {
+            marker.wrote.push(name.to_string());
+        }
+    }
+    if marker.wrote.len() == before {
+        return Ok(());
+    }
+    marker.wrote.sort();
+    write_marker(dir, &marker)
+}
+
 /// Remove stale temporary files from `dir` and from its marked subfolders that no process
 /// holds, `depth` levels down. Only while owning `dir` exclusively.
 fn clean_tree(dir: &Path, depth: usize) -> anyhow::Result<()> {

@@ -166,15 +166,8 @@ impl BatchProblem for SawtoothProblem<'_> {
     fn bounds(&self) -> (Vec<f64>, Vec<f64>) {
         (LOWER_BOUND_CLI.to_vec(), UPPER_BOUND_CLI.to_vec())
     }
-    /// Sort the four lengths so the chain l_b <= r <= l_a <= l_c holds where the bounds allow
-    /// (gamultiobj keeps linear constraints satisfied in creation and mutation).
     fn repair(&self, x: &mut [f64]) {
-        let mut v = [x[0], x[1], x[3], x[2]]; // l_c, l_a, r, l_b in chain order
-        v.sort_by(|a, b| b.total_cmp(a));
-        x[0] = v[0].clamp(LOWER_BOUND_CLI[0], UPPER_BOUND_CLI[0]);
-        x[1] = v[1].clamp(LOWER_BOUND_CLI[1], UPPER_BOUND_CLI[1]);
-        x[3] = v[2].clamp(LOWER_BOUND_CLI[3], UPPER_BOUND_CLI[3]);
-        x[2] = v[3].clamp(LOWER_BOUND_CLI[2], UPPER_BOUND_CLI[2]);
+        chain_repair(x);
     }
     fn evaluate_batch(&mut self, xs: &[Vec<f64>], generation: u64) -> Vec<GaEvaluation> {
         let mut base = self.scenario.clone();
@@ -295,6 +288,18 @@ pub fn judge(
     let worst =
         shown_slope(&assessments.iter().zip(&per).map(|(a, o)| (Some(a.worst_constraint()), o[1])).collect::<Vec<_>>());
     Judged { objectives, constraints, worst, assessment: Some(assessments[worst].clone()) }
+}
+
+/// Sort the four lengths so the chain l_b <= r <= l_a <= l_c holds where the bounds allow
+/// (gamultiobj keeps linear constraints satisfied in creation and mutation; the DEM's design
+/// of experiments draws its designs the same way).
+pub fn chain_repair(x: &mut [f64]) {
+    let mut v = [x[0], x[1], x[3], x[2]]; // l_c, l_a, r, l_b in chain order
+    v.sort_by(|a, b| b.total_cmp(a));
+    x[0] = v[0].clamp(LOWER_BOUND_CLI[0], UPPER_BOUND_CLI[0]);
+    x[1] = v[1].clamp(LOWER_BOUND_CLI[1], UPPER_BOUND_CLI[1]);
+    x[3] = v[2].clamp(LOWER_BOUND_CLI[3], UPPER_BOUND_CLI[3]);
+    x[2] = v[3].clamp(LOWER_BOUND_CLI[2], UPPER_BOUND_CLI[2]);
 }
 
 pub fn design_of(x: &[f64]) -> Design {
