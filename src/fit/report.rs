@@ -437,6 +437,16 @@ pub fn joint_json(r: &JointReport, engine: &str, seed: u64) -> Value {
     let named = |values: &[f64]| -> Map<String, Value> {
         r.params.iter().zip(values).map(|(p, v)| (p.name().to_string(), json!(v))).collect()
     };
+    // a condition judged against its own floor, fitted or left out: one set of fields for both
+    let judgement = |values: &[f64], sse: f64, floor: f64| -> Map<String, Value> {
+        let mut m = Map::new();
+        m.insert("params".into(), Value::Object(named(values)));
+        m.insert("sse_percent2".into(), json!(sse));
+        m.insert("floor_percent2".into(), json!(floor));
+        m.insert("ratio".into(), json!(sse / floor));
+        m.insert("well_above_floor".into(), json!(sse > FLOOR_FACTOR * floor));
+        m
+    };
     let varying: Vec<Value> = r
         .varying
         .iter()
@@ -460,26 +470,22 @@ pub fn joint_json(r: &JointReport, engine: &str, seed: u64) -> Value {
         .conditions
         .iter()
         .map(|c| {
-            json!({
-                "name": c.name,
-                "data": c.data,
-                "setup": c.setup,
-                "params": named(&c.values),
-                "sse_percent2": c.sse_percent2,
-                "floor_percent2": c.floor_percent2,
-                "ratio": c.sse_percent2 / c.floor_percent2,
-                "well_above_floor": c.sse_percent2 > FLOOR_FACTOR * c.floor_percent2,
-                "measured": c.measured,
-                "fitted": c.fitted,
-                "left_out": c.left_out.as_ref().map(|l| json!({
-                    "params": named(&l.values),
-                    "sse_percent2": l.sse_percent2,
-                    "floor_percent2": l.floor_percent2,
-                    "ratio": l.sse_percent2 / l.floor_percent2,
-                    "well_above_floor": l.sse_percent2 > FLOOR_FACTOR * l.floor_percent2,
-                })),
-                "left_out_note": c.left_out_note,
-            })
+            let mut fields = judgement(&c.values, c.sse_percent2, c.floor_percent2);
+            for (k, v) in [
+                ("name", json!(c.name)),
+                ("data", json!(c.data)),
+                ("setup", json!(c.setup)),
+                ("measured", json!(c.measured)),
+                ("fitted", json!(c.fitted)),
+                (
+                    "left_out",
+                    json!(c.left_out.as_ref().map(|l| judgement(&l.values, l.sse_percent2, l.floor_percent2))),
+                ),
+                ("left_out_note", json!(c.left_out_note)),
+            ] {
+                fields.insert(k.to_string(), v);
+            }
+            Value::Object(fields)
         })
         .collect();
     json!({
