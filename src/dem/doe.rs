@@ -211,13 +211,16 @@ pub fn maximin_order(xs: &[[f64; 8]]) -> Vec<usize> {
     }
     let mut nearest: Vec<f64> = u.iter().map(|v| d2(v, &u[start])).collect();
     let mut order = vec![start];
+    let mut taken = vec![false; u.len()];
+    taken[start] = true;
     while order.len() < u.len() {
         let mut next = usize::MAX;
         for i in 0..u.len() {
-            if !order.contains(&i) && (next == usize::MAX || nearest[i] > nearest[next]) {
+            if !taken[i] && (next == usize::MAX || nearest[i] > nearest[next]) {
                 next = i;
             }
         }
+        taken[next] = true;
         order.push(next);
         for (i, v) in u.iter().enumerate() {
             nearest[i] = nearest[i].min(d2(v, &u[next]));

@@ -177,24 +177,17 @@ pub fn run(r: &DiagnoseRequest, log: &mut dyn FnMut(String)) -> anyhow::Result<(
 /// so that `simulate`, `optimize` and the rest run the corrected model (issue 43, 3).
 fn write_corrected(r: &DiagnoseRequest, d: &Diagnosis) -> anyhow::Result<()> {
     let model = d.ranking.iter().find(|m| d.best.is_some() && m.single() == d.best).unwrap_or(&d.baseline);
-    let keys: Vec<(String, &str)> = model
-        .names
-        .iter()
-        .map(|&name| match crate::calibrate::Param::ALL.iter().find(|p| p.name() == name) {
-            Some(p) => {
-                let (section, key) = p.config_key();
-                (section.to_string(), key)
-            }
-            None => {
-                let kind = model
-                    .effects
-                    .iter()
-                    .find(|e| e.param_names().contains(&name))
-                    .expect("a model's parameter is shared or an effect's");
-                (format!("effects.{}", kind.key()), name)
-            }
-        })
-        .collect();
+    let mut keys: Vec<(String, &str)> = Vec::with_capacity(model.names.len());
+    for &name in &model.names {
+        if let Some(p) = crate::calibrate::Param::ALL.iter().find(|p| p.name() == name) {
+            let (section, key) = p.config_key();
+            keys.push((section.to_string(), key));
+        } else if let Some(kind) = model.effects.iter().find(|e| e.param_names().contains(&name)) {
+            keys.push((format!("effects.{}", kind.key()), name));
+        } else {
+            bail!("the fitted `{name}` of {} has no config key to write it under", model.name());
+        }
+    }
     let keys: Vec<(&str, &str)> = keys.iter().map(|(s, k)| (s.as_str(), *k)).collect();
     let setup = &r.setup[0];
     let text = crate::io::bounded::read_text(setup, &crate::schema::CONFIG_FILE)?;
