@@ -1141,6 +1141,12 @@ pub const DEM_DUMP_FILE: FileLimit = FileLimit { what: "DEM dump (final.dump)", 
 /// One number: the stroke time at which a DEM run ended.
 pub const DEM_STROKE_TIME_FILE: FileLimit =
     FileLimit { what: "DEM stroke time (stroke_time.txt)", flags: &[], max_bytes: MIB };
+/// One whole number: the LIGGGHTS step at which a DEM run's stroke began.
+pub const DEM_STROKE_START_FILE: FileLimit =
+    FileLimit { what: "DEM stroke start (stroke_start.txt)", flags: &[], max_bytes: MIB };
+/// Every grain's position and velocity at every rest check of one DEM run, read line by line;
+/// a case whose track would be larger writes none (`dem::case::Case::tracked`).
+pub const DEM_TRACK_FILE: FileLimit = FileLimit { what: "DEM track (track.dump)", flags: &[], max_bytes: 256 * MIB };
 /// A folder's marker: a few lines and the names of the files its run wrote.
 pub const MARKER_FILE_LIMIT: FileLimit =
     FileLimit { what: "folder marker (.sawtooth-run)", flags: &[], max_bytes: MIB };
@@ -1260,6 +1266,8 @@ pub const FILES: &[&FileLimit] = &[
     &DEM_RESULT_FILE,
     &DEM_DUMP_FILE,
     &DEM_STROKE_TIME_FILE,
+    &DEM_STROKE_START_FILE,
+    &DEM_TRACK_FILE,
     &MARKER_FILE_LIMIT,
     &SUBMISSION_FILE,
 ];

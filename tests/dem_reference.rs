@@ -171,6 +171,49 @@ fn a_run_whose_every_grain_leaves_the_box_is_a_result_with_every_grain_lost() {
     assert_eq!(f(&r["d_avg_m"]), 0.0, "{r}");
     assert!(r["teeth_g"].as_array().unwrap().iter().all(|m| f(m) == 0.0), "{r}");
     assert!(f(&r["input_mass_g"]) > 0.0, "{r}");
+    // deleted before the track's first snapshot: never seen
+    assert_eq!(r["left_by"]["unplaced"], 4, "{r}");
+}
+
+/// Where the grains LIGGGHTS deletes leave is read from the run's track (`track.dump`): a
+/// wrapper kicks every grain straight up at 5 m/s when the stroke starts, far past the box's
+/// top, and the run places every one of them `over_top`, after the stroke began.
+#[test]
+fn grains_that_leave_the_box_are_placed_by_their_last_sighting() {
+    if !liggghts_present("dem_reference::grains_that_leave_the_box_are_placed_by_their_last_sighting") {
+        return;
+    }
+    let (_d, dir) = tmp("kicked");
+    let liggghts = sawtooth::dem::run::find_liggghts().unwrap();
+    let wrapper = dir.with_extension("liggghts.sh");
+    std::fs::write(
+        &wrapper,
+        format!(
+            "#!/bin/sh
+if grep -q '^# sawtooth dem case' in.sawtooth; then
+  sed -i 's/^# the stroke$/&\\nvelocity all set 0.0 5.0 0.0/' in.sawtooth
+fi
+exec '{}' \"$@\"\n",
+            liggghts.display()
+        ),
+    )
+    .unwrap();
+    std::fs::set_permissions(&wrapper, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let config = coarse_rig(&dir.with_extension("cfg"), "particles = 6\ngrain_diameter_m = 0.001\n");
+    let out = dir.to_str().unwrap();
+    let (code, _, err) = sawtooth_env(
+        &["dem", "run", "--config", &config, "--runs", "1", "--out", out],
+        &[("SAWTOOTH_LIGGGHTS", wrapper.to_str().unwrap())],
+    );
+    assert_eq!(code, 0, "{err}");
+    let run = dir.join("run-001");
+    assert!(read(&run.join("in.sawtooth")).contains("velocity all set 0.0 5.0 0.0"), "the wrapper did not kick");
+    assert!(run.join("track.dump").is_file() && run.join("stroke_start.txt").is_file());
+    let r = json(&read(&run.join("result.json")));
+    assert_eq!(r["left_box"], 6, "{r}");
+    assert_eq!(r["left_by"]["over_top"], 6, "{r}");
+    assert_eq!(r["left_by"]["while_settling"], 0, "{r}");
+    assert!(err.contains("6 over the top"), "{err}");
 }
 
 #[test]

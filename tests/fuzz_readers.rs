@@ -29,6 +29,7 @@ use sawtooth::campaigns::plan::parse_plan;
 use sawtooth::dem::campaign::{parse_plan as parse_dem_plan, Plan as DemPlan};
 use sawtooth::dem::check::parse_plan as parse_check_plan;
 use sawtooth::dem::gather::{check_dump, check_result, parse_dump, reduce, DumpGrain, RunResult};
+use sawtooth::dem::losses::{classify, last_seen};
 use sawtooth::dem::sizes::grain_mass;
 use sawtooth::dem::Case;
 use sawtooth::io::config::ConfigFile;
@@ -574,6 +575,23 @@ fn fuzz_dem_dump() {
     fuzz("dem_dump", mutated_text(docs), |t| {
         let Ok(grains) = parse_dump(t) else { return false };
         check_dump(&case, &grains, Some(0.5)).is_ok()
+    });
+}
+
+/// A run's track (where the grains LIGGGHTS deleted left): a real LIGGGHTS track cut to the
+/// committed case's grains, read line by line, then every grain placed as if deleted.
+#[test]
+fn fuzz_dem_track() {
+    let (_, case) = dem_case();
+    let grains = case.placement.grains.len();
+    let real = &corpus("dem_track")[0];
+    let seen = last_seen(real.as_bytes(), grains).expect("the real track reads");
+    assert!(seen.iter().filter(|s| s.is_some()).count() >= 10, "the corpus sights grains");
+    fuzz("dem_track", mutated_text(corpus("dem_track")), |t| {
+        let Ok(seen) = last_seen(t.as_bytes(), grains) else { return false };
+        let by = classify(&case, 0, &seen, &vec![true; grains]);
+        assert_eq!(by.total(), grains, "every deleted grain is placed once");
+        true
     });
 }
 

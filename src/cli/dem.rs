@@ -293,6 +293,21 @@ fn impact_cmd(a: ImpactArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
 /// A setup's stated sled return: delay (s), speed (m/s).
 type KnownReturn = Option<(f64, f64)>;
 
+/// The config file (not a run folder's manifest, which has no `[dem]`) and the DEM settings:
+/// its `[dem]` table over the defaults, `--particles` over that; not yet validated (the
+/// caller adds its own flags first).
+fn dem_settings(config: Option<&Path>, particles: Option<u32>) -> anyhow::Result<(Option<ConfigFile>, DemSettings)> {
+    let file = match config {
+        Some(p) if crate::optim::manifest::manifest_in(p)?.is_none() => Some(ConfigFile::load(p)?),
+        _ => None,
+    };
+    let mut settings = DemSettings::from_table(file.as_ref().and_then(|f| f.dem.as_ref()));
+    if let Some(n) = particles {
+        settings.particles = n;
+    }
+    Ok((file, settings))
+}
+
 /// Scenario, design, settings and a stated sled return from the flags and the config.
 fn resolve(a: &CaseArgs) -> anyhow::Result<(Scenario, Design, DemSettings, KnownReturn)> {
     // --particles is the DEM's grain count here; the model keeps the config's particle count
@@ -306,14 +321,7 @@ fn resolve(a: &CaseArgs) -> anyhow::Result<(Scenario, Design, DemSettings, Known
             bail!("no design: pass --design l_c,l_a,l_b,r,omega_deg,delta_deg,v0,a or a config file with [design]")
         }
     };
-    let file = match &a.scenario.config {
-        Some(p) if crate::optim::manifest::manifest_in(p)?.is_none() => Some(ConfigFile::load(p)?),
-        _ => None,
-    };
-    let mut settings = DemSettings::from_table(file.as_ref().and_then(|f| f.dem.as_ref()));
-    if let Some(n) = grains {
-        settings.particles = n;
-    }
+    let (file, mut settings) = dem_settings(a.scenario.config.as_deref(), grains)?;
     if let Some(um) = a.grain_diameter_um {
         settings.grain_diameter_m = Some(um * 1e-6);
     }
@@ -683,14 +691,7 @@ fn doe(a: DoeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let mut scenario_args = a.scenario.clone();
     let grains = scenario_args.particles.take();
     let (scenario, _) = scenario_args.resolve()?;
-    let file = match &a.scenario.config {
-        Some(p) if crate::optim::manifest::manifest_in(p)?.is_none() => Some(ConfigFile::load(p)?),
-        _ => None,
-    };
-    let mut settings = DemSettings::from_table(file.as_ref().and_then(|f| f.dem.as_ref()));
-    if let Some(n) = grains {
-        settings.particles = n;
-    }
+    let (_, settings) = dem_settings(a.scenario.config.as_deref(), grains)?;
     settings.validate().map_err(anyhow::Error::msg)?;
     let requirements = match &a.requirements {
         Some(spec) => Some(crate::io::config::load_requirements(spec).context("--requirements")?),

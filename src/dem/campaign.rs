@@ -21,8 +21,9 @@ use serde::{Deserialize, Serialize};
 use super::case::{Case, ALL_LOST, DUMP, SETTLED, STROKE_TIME};
 use super::conveyor::{Conveyor, SteadyRun};
 use super::gather::{
-    check_dump, check_result, measured_csv, parse_dump, parse_positions, reduce, setup_toml, RunResult,
+    check_dump, check_result, measured_csv, parse_dump, parse_positions, reduce, setup_toml, DumpGrain, RunResult,
 };
+use super::losses::LeftBy;
 use super::run::{find_liggghts, run_case};
 use super::settings::DemSettings;
 use crate::io::atomic::{clean_stale_temps, write_atomic};
@@ -316,11 +317,33 @@ pub fn run(dir: &Path, plan: &Plan, jobs: usize, say: &(dyn Fn(String) + Sync)) 
     if lost > 0 {
         let grains: usize = all.iter().map(|r| r.grains).sum();
         say(format!(
-            "warning: {lost} of {grains} grains were lost (left the mesh: behind tooth 1, past tooth {}, or out of the box); they count as not recovered",
-            first.teeth
+            "warning: {lost} of {grains} grains were lost (left the mesh: behind tooth 1, past tooth {}, or out of the box{}); they count as not recovered",
+            first.teeth,
+            left_the_box(&all).map(|b| format!("; out of the box: {}", b.describe())).unwrap_or_default()
         ));
+        if let Some(b) = left_the_box(&all).filter(|b| b.through_mesh > 0) {
+            say(format!(
+                "warning: {} grains passed through the mesh (last seen below its surface): a contact too soft or a step too long for these impacts; halve [dem] max_overlap_fraction (a stiffer contact, a shorter step) and compare before trusting this campaign",
+                b.through_mesh
+            ));
+        }
     }
     Ok(all)
+}
+
+/// Where the campaign's grains left the box, summed over its runs; None when a run wrote no
+/// track.
+pub fn left_the_box(runs: &[RunResult]) -> Option<LeftBy> {
+    runs.iter().try_fold(LeftBy::default(), |acc, r| {
+        r.left_by.map(|b| LeftBy {
+            while_settling: acc.while_settling + b.while_settling,
+            behind_first_tooth: acc.behind_first_tooth + b.behind_first_tooth,
+            past_last_tooth: acc.past_last_tooth + b.past_last_tooth,
+            through_mesh: acc.through_mesh + b.through_mesh,
+            over_top: acc.over_top + b.over_top,
+            unplaced: acc.unplaced + b.unplaced,
+        })
+    })
 }
 
 /// Run `r` of the campaign alone (one task of a job array, `dem check`'s members): the
@@ -436,12 +459,13 @@ fn one_run(
     }
     write_atomic(&rd.join(RESULT), serde_json::to_string_pretty(&result)?.as_bytes())?;
     say(format!(
-        "run {} done in {:.1} s: d_avg {:.2} mm, {} of {} grains lost, {} still moving",
+        "run {} done in {:.1} s: d_avg {:.2} mm, {} of {} grains lost{}, {} still moving",
         r + 1,
         finished.wall_s,
         result.d_avg_m * 1e3,
         result.lost,
         result.grains,
+        result.left_by.map(|b| format!(" ({} left the box: {})", result.left_box, b.describe())).unwrap_or_default(),
         result.moving
     ));
     Ok(())
@@ -454,7 +478,9 @@ fn read_run(case: &Case, rd: &Path, wall_s: f64) -> Result<RunResult, String> {
     // every grain left the box (the deck stopped before a run LIGGGHTS would refuse): a
     // result with everything lost, which the rule credits nothing
     if rd.join(ALL_LOST).is_file() && !rd.join(DUMP).is_file() {
-        return Ok(reduce(case, &[], 0.0, wall_s));
+        let mut result = reduce(case, &[], 0.0, wall_s);
+        result.left_by = left_by(case, rd, &[])?;
+        return Ok(result);
     }
     let dump_path = rd.join(DUMP);
     let dump = read_text(&dump_path, &schema::DEM_DUMP_FILE).map_err(|e| at(&dump_path, e))?;
@@ -470,7 +496,21 @@ fn read_run(case: &Case, rd: &Path, wall_s: f64) -> Result<RunResult, String> {
         None => None,
     };
     check_dump(case, &grains, stroke_time)?;
-    Ok(reduce(case, &grains, stroke_time.unwrap_or(f64::INFINITY), wall_s))
+    let mut result = reduce(case, &grains, stroke_time.unwrap_or(f64::INFINITY), wall_s);
+    result.left_by = left_by(case, rd, &grains)?;
+    Ok(result)
+}
+
+/// Where the grains missing from `grains` (the final dump, checked) left the box, from the
+/// run's track; None when the case wrote none.
+fn left_by(case: &Case, rd: &Path, grains: &[DumpGrain]) -> Result<Option<LeftBy>, String> {
+    let mut present = vec![false; case.placement.grains.len()];
+    for g in grains {
+        if let Some(p) = (g.id as usize).checked_sub(1).and_then(|i| present.get_mut(i)) {
+            *p = true;
+        }
+    }
+    super::losses::read_losses(case, rd, &present).map_err(|e| format!("{e:#}"))
 }
 
 fn remove_if_present(p: &Path) -> anyhow::Result<()> {

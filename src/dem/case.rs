@@ -17,6 +17,7 @@ use serde::Serialize;
 
 use super::contact::{contact, model_normal_cor, property_commands, Contact, CONTACT_MODEL};
 use super::grains::{mass_matching_diameter, place, place_sized, Placement};
+use super::losses::{STROKE_START, TRACK};
 use super::motion::SledMotion;
 use super::settings::{check_representable, DemSettings};
 use super::sizes::{reference_diameter, size_classes};
@@ -129,15 +130,7 @@ impl Case {
             None => model_reach(scenario, design)?,
         };
         let m = &scenario.material;
-        let mono_d = || {
-            mass_matching_diameter(
-                prep.fill.area,
-                settings.particles,
-                settings.depth_grains,
-                m.bulk_density,
-                m.particle.density,
-            )
-        };
+        let mono_d = || fill_grain_diameter(scenario, prep.fill.area, settings);
         let k_drag = scenario.environment.k_drag;
         let placement = match scenario.effects.polydisperse {
             // the size law's classes (`sizes`): the stated diameter is the mass median
@@ -247,6 +240,14 @@ impl Case {
         self.placement.classes.iter().map(|c| c.diameter_m).fold(self.placement.diameter_m, f64::max)
     }
 
+    /// Whether the run dumps its track ([`TRACK`]): only when the track stays within its
+    /// bound (grains × snapshots × a line of at most ~100 bytes).
+    pub fn tracked(&self) -> bool {
+        let snapshots = ((MAX_SETTLE_S + self.settings.max_time_s + self.motion.t_launch()) / CHUNK_S).ceil() + 2.0;
+        let lines = snapshots * (self.placement.grains.len() as f64 + 9.0);
+        lines * 100.0 <= crate::schema::DEM_TRACK_FILE.max_bytes as f64
+    }
+
     /// LIGGGHTS's neighbour skin, m (`neighbor SKIN bin`). A grain past a periodic face is
     /// mapped back into the box only when the neighbour lists are rebuilt, which happens before
     /// any grain has moved half the skin, so a dump may show a grain that far outside.
@@ -313,10 +314,12 @@ impl Case {
              fix integrate all nve/sphere\n\
              compute ke all ke\nvariable m equal mass(all)\nvariable vrms equal sqrt(2*c_ke/(v_m+1e-30))\n\
              thermo_style custom step atoms ke v_vrms v_t\nthermo {chunk}\nthermo_modify lost ignore norm no\n\
+             {track}\
              # settle\nvariable settle loop {settle_chunks}\nlabel settling\nrun {chunk}\n\
              if \"${{vrms}} < {rest:e}\" then \"jump SELF settled\"\nnext settle\njump SELF settling\nlabel settled\n\
              write_dump all custom {SETTLED} id x y z\n\
              variable now equal step\nvariable s0 equal ${{now}}\nprint \"sawtooth: stroke starts at step ${{s0}}\"\n\
+             print \"${{s0}}\" file {STROKE_START} screen no\n\
              # the stroke\nrun {stroke}\n\
              # until the grains rest (and a return is not under way)\nvariable rest loop {rest_chunks}\nlabel resting\nrun {chunk}\n\
              if \"{rested}\" then \"jump SELF rested\"\nnext rest\njump SELF resting\nlabel rested\n\
@@ -325,6 +328,13 @@ impl Case {
              print \"${{t}}\" file {STROKE_TIME} screen no\n\
              write_dump all custom {DUMP} id type diameter mass x y z vx vy vz",
             rest = self.settings.rest_speed_m_s,
+            track = if self.tracked() {
+                format!(
+                    "# every grain at every rest check: where a grain LIGGGHTS deletes left the box (losses.rs)\ndump track all custom {chunk} {TRACK} id x y vx vy\n"
+                )
+            } else {
+                "# no track: it would be larger than schema::DEM_TRACK_FILE allows (losses.rs)\n".to_string()
+            },
         );
         stop_when_every_grain_is_gone(&s)
     }
@@ -372,6 +382,14 @@ pub fn drag_commands(placement: &Placement, k_drag: f64) -> String {
         }
     }
     s
+}
+
+/// The diameter at which `settings.particles` grains of one size hold the model's fill mass
+/// (fill area × the fill's depth × bulk density, in grains of the particle density): the
+/// grain of a case that states none (`[dem] grain_diameter_m`).
+pub fn fill_grain_diameter(scenario: &Scenario, fill_area_m2: f64, settings: &DemSettings) -> f64 {
+    let m = &scenario.material;
+    mass_matching_diameter(fill_area_m2, settings.particles, settings.depth_grains, m.bulk_density, m.particle.density)
 }
 
 /// Teeth the mesh needs: the model's farthest resting grain on a conveyor long enough that

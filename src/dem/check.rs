@@ -628,6 +628,7 @@ mod tests {
             wall_s: 10.0,
             past_end: 0,
             settled_xy_m: Vec::new(),
+            left_by: None,
         };
         let c = design_check(&p, &p.finalists[0], &[run(5, 0.04), run(6, 0.06)]).unwrap();
         let json = serde_json::to_value(&c).unwrap();

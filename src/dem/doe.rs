@@ -24,8 +24,8 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 use super::campaign::Plan;
+use super::case::fill_grain_diameter;
 use super::check::{CheckPlan, Finalist, CHECK_PLAN_FORMAT};
-use super::grains::mass_matching_diameter;
 use super::settings::DemSettings;
 use crate::engine::{BatchEvaluator, Evaluation};
 use crate::model::design::{Design, LOWER_BOUND_CLI, UPPER_BOUND_CLI};
@@ -150,16 +150,7 @@ impl Refused {
 /// the model rejects the design's geometry.
 fn grain_diameter(scenario: &Scenario, settings: &DemSettings, x: &[f64; 8]) -> Option<f64> {
     let prep = prepare(scenario, &Design::from_cli_units(*x)).ok()?;
-    let m = &scenario.material;
-    Some(settings.grain_diameter_m.unwrap_or_else(|| {
-        mass_matching_diameter(
-            prep.fill.area,
-            settings.particles,
-            settings.depth_grains,
-            m.bulk_density,
-            m.particle.density,
-        )
-    }))
+    Some(settings.grain_diameter_m.unwrap_or_else(|| fill_grain_diameter(scenario, prep.fill.area, settings)))
 }
 
 fn judge_candidate(

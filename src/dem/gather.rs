@@ -19,6 +19,7 @@ use anyhow::{bail, Context as _};
 use serde::{Deserialize, Serialize};
 
 use super::case::Case;
+use super::losses::LeftBy;
 use super::sizes::grain_mass;
 
 /// One grain of the dump.
@@ -184,6 +185,11 @@ pub fn check_result(r: &RunResult, case: &Case, first_seed: u64, run: u32) -> Re
     if r.left_box > r.lost {
         return Err(format!("`left_box` {} exceeds `lost` {} (a grain that left the box is lost)", r.left_box, r.lost));
     }
+    if let Some(by) = &r.left_by {
+        if by.total() != r.left_box {
+            return Err(format!("`left_by` places {} grains; {} left the box (`left_box`)", by.total(), r.left_box));
+        }
+    }
     let farthest = case.profile().credited_distance(case.teeth as i64);
     if !(r.d_avg_m.is_finite() && r.d_avg_m >= 0.0 && r.d_avg_m <= farthest * (1.0 + MASS_TOLERANCE)) {
         return Err(format!("`d_avg_m` {:?} m lies outside [0, {farthest}] m (the mesh's last tooth)", r.d_avg_m));
@@ -242,6 +248,10 @@ pub struct RunResult {
     /// frame, m): the bed the model can be launched from (`dem compare`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub settled_xy_m: Vec<[f64; 2]>,
+    /// Where the grains that left the box went (`losses`); None for a case that wrote no
+    /// track.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub left_by: Option<LeftBy>,
 }
 
 /// Reduce the dump of `case`, written `stroke_time_s` after the stroke began (infinity:
@@ -299,6 +309,7 @@ pub fn reduce(case: &Case, grains: &[DumpGrain], stroke_time_s: f64, wall_s: f64
         wall_s,
         past_end,
         settled_xy_m: Vec::new(),
+        left_by: None,
     }
 }
 
@@ -487,6 +498,7 @@ mod tests {
             wall_s: 1.0,
             past_end: 0,
             settled_xy_m: Vec::new(),
+            left_by: None,
         };
         let csv = measured_csv(&["DEM".into()], &[r(1, vec![0.5, 0.3, 0.1]), r(2, vec![0.4, 0.4, 0.1])]).unwrap();
         let m = crate::io::measured::parse(&csv, "dem.csv").unwrap();

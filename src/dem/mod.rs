@@ -34,6 +34,7 @@ pub mod doe;
 pub mod gather;
 pub mod grains;
 pub mod impact;
+pub mod losses;
 pub mod motion;
 pub mod refine;
 pub mod run;

@@ -15,6 +15,7 @@ use std::time::Instant;
 use anyhow::{bail, Context as _};
 
 use super::case::{ALL_LOST, DUMP, SCRIPT, STROKE_TIME};
+use super::losses::{STROKE_START, TRACK};
 
 /// Environment variable naming the LIGGGHTS binary (overrides the PATH lookup).
 pub const BINARY_ENV: &str = "SAWTOOTH_LIGGGHTS";
@@ -88,6 +89,8 @@ pub fn run_case(binary: &Path, dir: &Path, progress: &mut dyn FnMut(&Thermo)) ->
     let _ = std::fs::remove_file(dir.join(DUMP));
     let _ = std::fs::remove_file(dir.join(STROKE_TIME));
     let _ = std::fs::remove_file(dir.join(ALL_LOST));
+    let _ = std::fs::remove_file(dir.join(TRACK));
+    let _ = std::fs::remove_file(dir.join(STROKE_START));
     let started = Instant::now();
     let mut cmd = match on_path("stdbuf") {
         Some(stdbuf) => {
