@@ -1040,6 +1040,18 @@ pub const SCALE_RESOLUTION_G: Real = Real {
     max_open: false,
     why: "from the femtogram of one micrometre grain (the DEM's smallest, whose setup states one grain as the resolution) to a kilogram, which weighs no tooth",
 };
+pub const HANDLING_LOSS_MAX: Real = Real {
+    lib: "",
+    flags: &[],
+    keys: &["[measurement] handling_loss_max"],
+    python: None,
+    unit: "",
+    min: 0.0,
+    min_open: false,
+    max: 1.0,
+    max_open: false,
+    why: "a share of the loaded mass: none (a DEM campaign, whose every lost grain is physics) to all of it",
+};
 pub const PARTICLE_MASS_G: Real = Real {
     lib: "",
     flags: &[],
@@ -1205,6 +1217,7 @@ pub const REALS: &[&Real] = &[
     &DESIGN[7],
     &SCALE_RESOLUTION_G,
     &PARTICLE_MASS_G,
+    &HANDLING_LOSS_MAX,
     &TARGET_MASS_FLOW,
     &REQ_FEED_RATE,
     &REQ_POWER,

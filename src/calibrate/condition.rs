@@ -49,6 +49,10 @@ pub struct Condition {
     pub motion_profile: Option<String>,
     /// How tooth masses become the compared fractions.
     pub normalise: Normalise,
+    /// The largest share of the loaded mass the runs may have lost in handling
+    /// (`[measurement] handling_loss_max`; 1 where the setup states none: all they did not
+    /// recover).
+    pub handling_loss_max: f64,
 }
 
 /// The measurement model: what the compared fractions are fractions of.
@@ -80,8 +84,12 @@ impl Condition {
     }
     fn target_of(&self, runs: &MeasuredRuns) -> Target {
         match self.normalise {
-            Normalise::Loaded => Target::of_loaded_mass(runs, self.teeth(), self.resolution_g)
-                .expect("Normalise::Loaded is chosen only when every run records input_mass"),
+            Normalise::Loaded => {
+                let mut t = Target::of_loaded_mass(runs, self.teeth(), self.resolution_g)
+                    .expect("Normalise::Loaded is chosen only when every run records input_mass");
+                t.max_handling_loss = t.max_handling_loss.min(self.handling_loss_max);
+                t
+            }
             Normalise::Recovered => Target::new(runs, self.teeth(), self.resolution_g),
         }
     }
@@ -222,6 +230,25 @@ mod tests {
         let mut c = test3();
         c.runs = crate::io::measured::parse(csv, "runs").unwrap();
         c
+    }
+
+    /// A rig's runs may have spilled all they did not recover (the judged bins may move it to
+    /// "not recovered"); a setup that states `handling_loss_max` caps that share, and a DEM
+    /// campaign's 0 judges every lost grain as the model's to predict.
+    #[test]
+    fn the_handling_loss_allowed_is_what_the_runs_did_not_recover_at_most_the_stated_cap() {
+        let csv = "run,tooth_1,tooth_2,tooth_3,tooth_4,input_mass\n1,1.00,0.50,0.30,0.10,2.00\n";
+        let mut c = test3_with(csv);
+        assert!((c.target_all().max_handling_loss - 0.05).abs() < 1e-12);
+        c.handling_loss_max = 0.02;
+        assert!((c.target_all().max_handling_loss - 0.02).abs() < 1e-12);
+        c.handling_loss_max = 0.0;
+        let t = c.target_all();
+        assert_eq!(t.max_handling_loss, 0.0);
+        // nothing is moved to the lost bin: the simulated bins are judged as they are
+        let mut sim = vec![0.0; t.bins.len()];
+        sim[..3].copy_from_slice(&[0.5, 0.3, 0.2]);
+        assert_eq!(t.after_handling(&sim).0, 0.0);
     }
 
     /// Two runs that put the same shares of what they recovered in the same teeth but spill

@@ -102,6 +102,7 @@ pub fn load(
         },
         motion_profile: measurement.and_then(|m| m.motion_profile.clone()),
         normalise,
+        handling_loss_max: measurement.and_then(|m| m.handling_loss_max).unwrap_or(1.0),
     })
 }
 

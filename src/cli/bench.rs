@@ -139,6 +139,7 @@ fn calibration_groups(
             motion: KnownMotion::default(),
             motion_profile: None,
             normalise: Normalise::Recovered,
+            handling_loss_max: 1.0,
         });
     }
     let shared = shared_params(&conditions);

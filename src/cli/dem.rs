@@ -571,6 +571,9 @@ fn write_table(out: &mut dyn Write, c: &Comparison) -> anyhow::Result<()> {
         writeln!(out, "{:>5} {:>9.2} {:>9.2} ± {:.2}", j + 1, c.model_pct[j], c.dem_pct[j].mean, c.dem_pct[j].sd)?;
     }
     writeln!(out, " lost {:>9.2} {:>9.2} ± {:.2}", c.model_lost_pct, c.dem_lost_pct.mean, c.dem_lost_pct.sd)?;
+    if let Some(b) = &c.dem_left_by {
+        writeln!(out, "DEM grains out of the box, over the runs: {}", b.describe())?;
+    }
     writeln!(
         out,
         "per-tooth |model - DEM|: mean {:.2} pp, max {:.2} pp",

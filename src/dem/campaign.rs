@@ -319,9 +319,9 @@ pub fn run(dir: &Path, plan: &Plan, jobs: usize, say: &(dyn Fn(String) + Sync)) 
         say(format!(
             "warning: {lost} of {grains} grains were lost (left the mesh: behind tooth 1, past tooth {}, or out of the box{}); they count as not recovered",
             first.teeth,
-            left_the_box(&all).map(|b| format!("; out of the box: {}", b.describe())).unwrap_or_default()
+            LeftBy::summed(all.iter().map(|r| r.left_by)).map(|b| format!("; out of the box: {}", b.describe())).unwrap_or_default()
         ));
-        if let Some(b) = left_the_box(&all).filter(|b| b.through_mesh > 0) {
+        if let Some(b) = LeftBy::summed(all.iter().map(|r| r.left_by)).filter(|b| b.through_mesh > 0) {
             say(format!(
                 "warning: {} grains passed through the mesh (last seen below its surface): a contact too soft or a step too long for these impacts; halve [dem] max_overlap_fraction (a stiffer contact, a shorter step) and compare before trusting this campaign",
                 b.through_mesh
@@ -329,21 +329,6 @@ pub fn run(dir: &Path, plan: &Plan, jobs: usize, say: &(dyn Fn(String) + Sync)) 
         }
     }
     Ok(all)
-}
-
-/// Where the campaign's grains left the box, summed over its runs; None when a run wrote no
-/// track.
-pub fn left_the_box(runs: &[RunResult]) -> Option<LeftBy> {
-    runs.iter().try_fold(LeftBy::default(), |acc, r| {
-        r.left_by.map(|b| LeftBy {
-            while_settling: acc.while_settling + b.while_settling,
-            behind_first_tooth: acc.behind_first_tooth + b.behind_first_tooth,
-            past_last_tooth: acc.past_last_tooth + b.past_last_tooth,
-            through_mesh: acc.through_mesh + b.through_mesh,
-            over_top: acc.over_top + b.over_top,
-            unplaced: acc.unplaced + b.unplaced,
-        })
-    })
 }
 
 /// Run `r` of the campaign alone (one task of a job array, `dem check`'s members): the

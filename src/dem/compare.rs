@@ -19,6 +19,7 @@ use plotters::prelude::*;
 use serde::Serialize;
 
 use super::gather::RunResult;
+use super::losses::LeftBy;
 use crate::engine::{evaluate_detailed, evaluate_detailed_from, make_engine_for, EngineKind};
 use crate::model::design::DesignRow;
 use crate::model::outcome::centre_and_dispersion;
@@ -82,6 +83,10 @@ pub struct Comparison {
     pub model_dem_law_d_avg_mm: Option<f64>,
     /// Its share of the mass per tooth, %, tooth 1 first (the mesh's teeth).
     pub model_dem_law_pct: Option<Vec<f64>>,
+    /// Where the DEM's grains that left the box went, over every run (`losses`); None when a
+    /// run wrote no track.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dem_left_by: Option<LeftBy>,
     /// Why this comparison may not be like for like (a mesh too short, ...).
     pub warnings: Vec<String>,
 }
@@ -178,6 +183,12 @@ pub fn compare(
             ));
         }
     }
+    let dem_left_by = LeftBy::summed(runs.iter().map(|r| r.left_by));
+    if let Some(n) = dem_left_by.map(|b| b.through_mesh).filter(|n| *n > 0) {
+        warnings.push(format!(
+            "{n} DEM grains passed through the mesh (last seen below its surface): a numerical failure of the contact, not physics; halve [dem] max_overlap_fraction and compare"
+        ));
+    }
     Ok(Comparison {
         teeth,
         runs: runs.len(),
@@ -208,6 +219,7 @@ pub fn compare(
         model_from_bed_d_avg_mm,
         model_dem_law_d_avg_mm,
         model_dem_law_pct,
+        dem_left_by,
         warnings,
     })
 }

@@ -52,6 +52,20 @@ impl LeftBy {
             + self.unplaced
     }
 
+    /// The counts of several runs added up; None when any run has none (it wrote no track).
+    pub fn summed(runs: impl IntoIterator<Item = Option<LeftBy>>) -> Option<LeftBy> {
+        runs.into_iter().try_fold(LeftBy::default(), |a, b| {
+            b.map(|b| LeftBy {
+                while_settling: a.while_settling + b.while_settling,
+                behind_first_tooth: a.behind_first_tooth + b.behind_first_tooth,
+                past_last_tooth: a.past_last_tooth + b.past_last_tooth,
+                through_mesh: a.through_mesh + b.through_mesh,
+                over_top: a.over_top + b.over_top,
+                unplaced: a.unplaced + b.unplaced,
+            })
+        })
+    }
+
     /// The non-zero counts, `name n` joined by commas ("none" when nothing left).
     pub fn describe(&self) -> String {
         let parts: Vec<String> = [
@@ -303,6 +317,9 @@ mod tests {
             "1 while settling, 1 behind tooth 1, 1 past the last tooth, 1 through the mesh, 1 over the top, 2 unplaced"
         );
         assert_eq!(LeftBy::default().describe(), "none");
+        let twice = LeftBy::summed([Some(by), Some(by)]).unwrap();
+        assert_eq!((twice.total(), twice.unplaced), (14, 4));
+        assert_eq!(LeftBy::summed([Some(by), None]), None);
     }
 
     #[test]

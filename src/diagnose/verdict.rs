@@ -246,10 +246,11 @@ fn bin_variance(cond: &Condition, sim: &[f64], particles: u32, streams: usize) -
 }
 
 /// The most a condition's runs can have lost in handling, as a share of the loaded mass:
-/// the measured "not recovered" bin where the fractions are of the loaded mass, else none.
+/// the measured "not recovered" bin where the fractions are of the loaded mass (at most what
+/// the setup allows, `[measurement] handling_loss_max`), else none.
 fn max_handling_loss(cond: &Condition, measured: &[f64]) -> f64 {
     match cond.normalise {
-        Normalise::Loaded => measured[measured.len() - 1],
+        Normalise::Loaded => measured[measured.len() - 1].min(cond.handling_loss_max),
         Normalise::Recovered => 0.0,
     }
 }

@@ -222,6 +222,11 @@ pub struct MeasurementTable {
     /// ... along this direction: `slope` (down the slope, the rig's guide; the default) or
     /// `launch` (back along the launch direction).
     pub motion_direction: Option<crate::model::effects::MotionDirection>,
+    /// The largest share of the loaded mass the runs may have lost in handling (spilled
+    /// between the conveyor and the scale), 0-1; unset: all they did not recover (a rig's
+    /// spill). A DEM campaign states 0: every grain it did not recover left the box or the
+    /// mesh in the simulation, physics the model must predict, not handling.
+    pub handling_loss_max: Option<f64>,
     pub description: Option<String>,
 }
 
@@ -232,6 +237,7 @@ impl MeasurementTable {
         for (bound, key, v) in [
             (&crate::schema::SCALE_RESOLUTION_G, "scale_resolution_g", self.scale_resolution_g),
             (&crate::schema::PARTICLE_MASS_G, "particle_mass_g", self.particle_mass_g),
+            (&crate::schema::HANDLING_LOSS_MAX, "handling_loss_max", self.handling_loss_max),
         ] {
             if let Some(v) = v {
                 bound.check(&format!("measurement.{key}"), v).map_err(anyhow::Error::msg)?;
