@@ -28,7 +28,7 @@ use super::run::{find_liggghts, run_case};
 use super::settings::DemSettings;
 use crate::io::atomic::{clean_stale_temps, write_atomic};
 use crate::io::bounded::{read_text, read_text_if_present};
-use crate::io::run_dir::mark_subfolder;
+use crate::io::run_dir::{hold_subfolder, mark_subfolder};
 use crate::model::{Design, Scenario};
 use crate::schema;
 
@@ -207,6 +207,7 @@ fn one_steady_run(dir: &Path, plan: &Plan, r: u32, binary: &Path, say: &(dyn Fn(
     // campaign's folder held folders it did not write, and both resuming the campaign and
     // `dem compare` refused it
     mark_subfolder(&rd, RUN_KIND)?;
+    let _only_writer = hold_subfolder(&rd)?;
     clean_stale_temps(&rd)?;
     conveyor.write(&rd)?;
     say(format!("run {} (seed {}) started", r + 1, conveyor.tooth.seed));
@@ -405,7 +406,13 @@ fn one_run(
     let case = plan.case(r).map_err(anyhow::Error::msg)?;
     let rd = run_dir(dir, r);
     mark_subfolder(&rd, RUN_KIND)?;
-    // this run is the folder's only writer: what a killed attempt left half-written is stale
+    // this run is the folder's only writer (another process on the same run is refused):
+    // what a killed attempt left half-written is stale
+    let _only_writer = hold_subfolder(&rd)?;
+    // a process that held it before this one may have finished the run meanwhile
+    if read_result(dir, plan, first, r)?.is_some() {
+        return Ok(());
+    }
     clean_stale_temps(&rd)?;
     remove_if_present(&rd.join(FAILURE))?;
     case.write(&rd)?;

@@ -337,6 +337,22 @@ pub fn mark_subfolder(dir: &Path, kind: &str) -> anyhow::Result<()> {
     }
 }
 
+/// The only writer of `dir`, a marked subfolder of a folder held shared by several
+/// processes (a DEM campaign's run folder, written by one task of a job array): the lock is
+/// held until the returned file is dropped, and a second process that would write the same
+/// subfolder (a requeued task while the first still runs, two task loops meeting) is refused
+/// by name instead of overwriting the first's files as they are written.
+pub fn hold_subfolder(dir: &Path) -> anyhow::Result<File> {
+    match try_lock(dir, Access::Exclusive)? {
+        Some(lock) => Ok(lock),
+        None => bail!(
+            "{} is being written by another sawtooth process (it holds {}); this one leaves it to that process",
+            dir.display(),
+            dir.join(LOCK_FILE).display()
+        ),
+    }
+}
+
 /// Record in the marker of `dir` (a run's marked subfolder, [`mark_subfolder`]) the files
 /// that the run writes at its top from outside it: a DEM check writes each design's campaign
 /// files (plan, dem.csv, setup, law) while it holds the check's folder, not the design's, so
@@ -437,6 +453,31 @@ mod tests {
         let _a = RunDir::acquire(&dir, "optimize", Access::Shared).unwrap();
         let _b = RunDir::acquire(&dir, "optimize", Access::Shared).unwrap();
         assert!(RunDir::acquire(&dir, "optimize", Access::Exclusive).is_err());
+    }
+
+    /// A DEM campaign's run folder under a root that several tasks hold shared: the second
+    /// task on the same run is refused while the first writes it (two task loops met on one
+    /// member and overwrote each other's LIGGGHTS files before this).
+    #[test]
+    fn a_subfolder_has_one_writer_at_a_time() {
+        let d = tempfile::tempdir().unwrap();
+        let root = d.path().join("campaign");
+        drop(RunDir::acquire(&root, "dem", Access::Exclusive).unwrap());
+        let _tasks = (
+            RunDir::acquire(&root, "dem", Access::Shared).unwrap(),
+            RunDir::acquire(&root, "dem", Access::Shared).unwrap(),
+        );
+        let run = root.join("run-001");
+        mark_subfolder(&run, "dem-run").unwrap();
+        let first = hold_subfolder(&run).unwrap();
+        let e = hold_subfolder(&run).unwrap_err().to_string();
+        assert!(e.contains("being written by another sawtooth process"), "{e}");
+        drop(first);
+        drop(hold_subfolder(&run).unwrap());
+        // the lock file is bookkeeping: the folder stays the campaign's own
+        assert!(kind_of(&run).is_some());
+        drop(_tasks);
+        drop(RunDir::acquire(&root, "dem", Access::Exclusive).unwrap());
     }
 
     #[test]
