@@ -563,6 +563,18 @@ pub const COLLISION_MU_FRICTION: Real = Real {
     max_open: false,
     why: "a friction coefficient beyond 10 is a typo (Eq. 4.32)",
 };
+pub const COLLISION_V_LIMIT: Real = Real {
+    lib: "collision.v_limit_m_s",
+    flags: &[],
+    keys: &["[collision] v_limit_m_s"],
+    python: None,
+    unit: "m/s",
+    min: 1e-6,
+    min_open: false,
+    max: 100.0,
+    max_open: false,
+    why: "from a micrometre a second (a law plastic at every impact) to beyond any impact on the conveyor (one constant COR); Eq. 4.7 gives 0.0135 m/s for lunar regolith",
+};
 pub const SIM_RANDOM_BAND: Real = Real {
     lib: "sim.random_band",
     flags: &[],
@@ -1254,6 +1266,7 @@ pub const REALS: &[&Real] = &[
     &SOLID_DENSITY,
     &COLLISION_K_ELASTIC,
     &COLLISION_MU_FRICTION,
+    &COLLISION_V_LIMIT,
     &SIM_RANDOM_BAND,
     &SIM_REST_THRESHOLD,
     &SIM_LAUNCH_OFFSET,

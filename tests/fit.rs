@@ -339,6 +339,14 @@ fn bad_input_exits_2_naming_the_field() {
     // flags (each rejected before anything is simulated)
     run(&["--params", "k_elastic,gravity"], &["--params", "`gravity`", "k_elastic, mu_fric, k_drag"]);
     run(&["--params", "k_drag,k_drag"], &["--params", "twice"]);
+    // the plastic limit speed is a parameter of the thesis's law in the physical mode only
+    let listing = dir.join("listing.toml");
+    let text = std::fs::read_to_string(&toml3).unwrap();
+    std::fs::write(&listing, format!("mode = \"listing\"\n{}", text.replace("mode = \"physical\"\n", ""))).unwrap();
+    assert_bad_input(
+        &["fit", "--data", &csv3, "--setup", listing.to_str().unwrap(), "--params", "k_elastic,v_limit"],
+        &["v_limit does not apply", "listing"],
+    );
     run(&["--pop", "4"], &["--pop", "[5, 10000]"]);
     run(&["--max-particles", "10"], &["--max-particles", "[1000, 10000000]"]);
     run(&["--pop", "1000000000"], &["--pop", "[5, 10000]"]);

@@ -17,10 +17,13 @@ pub enum Param {
     MuFric,
     /// Stokes drag parameter, 1/s, `environment.k_drag`.
     KDrag,
+    /// The thesis law's plastic limit speed, m/s, `collision.v_limit_m_s` (Eq. 4.9; Eq. 4.7
+    /// gives it from the material where it is not fitted): how fast k_n falls with speed.
+    VLimit,
 }
 
 impl Param {
-    pub const ALL: [Param; 3] = [Param::KElastic, Param::MuFric, Param::KDrag];
+    pub const ALL: [Param; 4] = [Param::KElastic, Param::MuFric, Param::KDrag, Param::VLimit];
 
     /// The name on the command line and in the outputs.
     pub fn name(self) -> &'static str {
@@ -28,14 +31,18 @@ impl Param {
             Param::KElastic => "k_elastic",
             Param::MuFric => "mu_fric",
             Param::KDrag => "k_drag",
+            Param::VLimit => "v_limit",
         }
     }
 
-    /// Listing D.4's bounds (`lb = [0.01, 0.01, 0.1]`, `ub = [1, 1, 15]`).
+    /// Listing D.4's bounds (`lb = [0.01, 0.01, 0.1]`, `ub = [1, 1, 15]`); v_limit from a
+    /// little below the lunar material's Eq. 4.7 value (0.0135 m/s) to 2 m/s, above the
+    /// conveyor's impacts (k_n then k_elastic at every speed, the DEM's constant COR).
     pub fn bounds(self) -> (f64, f64) {
         match self {
             Param::KElastic | Param::MuFric => (0.01, 1.0),
             Param::KDrag => (0.1, 15.0),
+            Param::VLimit => (0.001, 2.0),
         }
     }
 
@@ -44,6 +51,7 @@ impl Param {
             Param::KElastic => s.collision.k_elastic = v,
             Param::MuFric => s.collision.mu_friction = v,
             Param::KDrag => s.environment.k_drag = Some(v),
+            Param::VLimit => s.collision.v_limit_m_s = Some(v),
         }
     }
 
@@ -53,6 +61,7 @@ impl Param {
             Param::KElastic => ("collision", "k_elastic"),
             Param::MuFric => ("collision", "mu_friction"),
             Param::KDrag => ("environment", "k_drag_per_s"),
+            Param::VLimit => ("collision", "v_limit_m_s"),
         }
     }
 
@@ -62,6 +71,7 @@ impl Param {
             Param::KElastic => s.collision.k_elastic,
             Param::MuFric => s.collision.mu_friction,
             Param::KDrag => s.environment.k_drag.unwrap_or(0.0),
+            Param::VLimit => s.collision.limit_speed(&s.material),
         }
     }
 }
@@ -116,10 +126,10 @@ mod tests {
 
     #[test]
     fn params_parse_and_unknown_names_are_named() {
-        assert_eq!(parse_params("k_elastic,mu_fric,k_drag").unwrap(), Param::ALL.to_vec());
+        assert_eq!(parse_params("k_elastic,mu_fric,k_drag,v_limit").unwrap(), Param::ALL.to_vec());
         assert_eq!(parse_params(" k_drag ").unwrap(), vec![Param::KDrag]);
         let e = parse_params("k_drag,gravity").unwrap_err().to_string();
-        assert!(e.contains("`gravity`") && e.contains("k_elastic, mu_fric, k_drag"), "{e}");
+        assert!(e.contains("`gravity`") && e.contains("k_elastic, mu_fric, k_drag, v_limit"), "{e}");
         assert!(parse_params("k_drag,k_drag").unwrap_err().to_string().contains("twice"));
         assert!(parse_params("").unwrap_err().to_string().contains("empty"));
     }
@@ -132,14 +142,25 @@ mod tests {
         Param::KElastic.apply(&mut s, 0.5);
         assert_eq!(s.environment.k_drag, Some(3.0));
         assert_eq!((s.collision.k_elastic, s.collision.mu_friction), (0.5, 0.2));
-        assert_eq!(Param::ALL.map(|p| p.get(&s)), [0.5, 0.2, 3.0]);
+        // v_limit unstated is Eq. 4.7's (0.0135 m/s for lunar regolith); stated, the law uses it
+        assert!((Param::VLimit.get(&s) - 0.0135).abs() < 5e-5);
+        Param::VLimit.apply(&mut s, 0.3);
+        assert_eq!(s.collision.v_limit_m_s, Some(0.3));
+        assert_eq!(Param::ALL.map(|p| p.get(&s)), [0.5, 0.2, 3.0, 0.3]);
+        let law = crate::model::collision::Restitution::new(s.mode, &s.collision, &s.material);
+        // an impact at 0.2 m/s is below the stated limit: it keeps k_elastic of its normal speed
+        let out = law.bounce([0.0, -0.2], [0.0, 1.0]);
+        assert!((out[1] - 0.5 * 0.2).abs() < 1e-12, "{out:?}");
+        // at 1.2 m/s: k_elastic (0.3 / 1.2)^¼ (Eq. 4.9)
+        let out = law.bounce([0.0, -1.2], [0.0, 1.0]);
+        assert!((out[1] / 1.2 - 0.5 * 0.25f64.powf(0.25)).abs() < 1e-12, "{out:?}");
     }
 
     #[test]
     fn assignments_parse() {
-        let (p, v) = parse_assignments("k_elastic=0.854, mu_fric=0.133,k_drag=5.347").unwrap();
+        let (p, v) = parse_assignments("k_elastic=0.854, mu_fric=0.133,k_drag=5.347,v_limit=0.2").unwrap();
         assert_eq!(p, Param::ALL.to_vec());
-        assert_eq!(v, vec![0.854, 0.133, 5.347]);
+        assert_eq!(v, vec![0.854, 0.133, 5.347, 0.2]);
         for (bad, needle) in
             [("k_drag", "NAME=VALUE"), ("k_drag=x", "not a number"), ("g=1", "`g`"), ("k_drag=inf", "finite")]
         {

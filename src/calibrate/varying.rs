@@ -94,6 +94,9 @@ impl Varying {
             (KDrag, V0) => "k_drag_slope_v0_m_s",
             (KDrag, A) => "k_drag_slope_a_m_s2",
             (KDrag, Alpha) => "k_drag_slope_alpha_deg",
+            (VLimit, V0) => "v_limit_slope_v0_m_s",
+            (VLimit, A) => "v_limit_slope_a_m_s2",
+            (VLimit, Alpha) => "v_limit_slope_alpha_deg",
         }
     }
 

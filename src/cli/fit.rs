@@ -36,8 +36,9 @@ pub struct FitArgs {
     /// condition).
     #[arg(long)]
     pub no_leave_out: bool,
-    /// Parameters to fit, a comma list of k_elastic, mu_fric, k_drag; the others keep the
-    /// setup's values. Default: k_elastic,mu_fric, and k_drag where the setup has drag.
+    /// Parameters to fit, a comma list of k_elastic, mu_fric, k_drag, v_limit (the plastic
+    /// limit speed of Eq. 4.9, m/s); the others keep the setup's values. Default:
+    /// k_elastic,mu_fric, and k_drag where the setup has drag.
     #[arg(long)]
     pub params: Option<String>,
     /// What the solver minimises.

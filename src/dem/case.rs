@@ -487,7 +487,7 @@ mod tests {
         let model = DemSettings { restitution: DemRestitution::Model, ..settings(60) };
         let case = Case::build(&s, &d, &model, 0, None).unwrap();
         // Eq. 4.9 at |v_n| = v0, above the limit velocity: k_el (v_limit / v0)^(1/4)
-        let v_limit = crate::model::collision::limit_velocity(&s.material);
+        let v_limit = s.collision.limit_speed(&s.material);
         let expect = s.collision.k_elastic * (v_limit / d.v0).powf(0.25);
         assert!((case.contact.restitution - expect).abs() < 1e-12, "{} vs {expect}", case.contact.restitution);
         assert!(case

@@ -244,7 +244,7 @@ pub fn measure_law(case: &Case, binary: &Path, dir: &Path, jobs: usize) -> anyho
         // no friction: the tangential speed is kept
         vec![1.0; TANGENTIAL_NODES]
     };
-    Ok(Collision { k_elastic: c.restitution, mu_friction: c.sliding_friction, law: ContactLaw::Dem, tangential_ratio })
+    Ok(Collision { law: ContactLaw::Dem, tangential_ratio, ..Collision::thesis(c.restitution, c.sliding_friction) })
 }
 
 /// The measured law as a config fragment (`[collision]`), with where it came from.

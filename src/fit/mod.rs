@@ -88,6 +88,18 @@ fn check(condition: &Condition, params: &[Param]) -> anyhow::Result<()> {
     if params.contains(&Param::KDrag) && !condition.has_drag() {
         bail!("k_drag does not apply: the setup {} is in vacuum (no environment.k_drag)", condition.setup);
     }
+    if params.contains(&Param::VLimit) && condition.base.mode != crate::model::PhysicsMode::Physical {
+        bail!(
+            "v_limit does not apply: the setup {} runs the listing's mode, which never uses the plastic law (errata 6, 19)",
+            condition.setup
+        );
+    }
+    if params.contains(&Param::VLimit) && condition.base.collision.law != crate::model::ContactLaw::Thesis {
+        bail!(
+            "v_limit does not apply: the setup {} runs the DEM's contact law (one constant COR, no plastic branch)",
+            condition.setup
+        );
+    }
     if runs.teeth > teeth {
         bail!(
             "the measured data has {} teeth but the setup simulates only {teeth} (sim.teeth): raise sim.teeth",

@@ -106,6 +106,8 @@ pub struct CollisionTable {
     pub law: Option<crate::model::ContactLaw>,
     /// The DEM law's measured k_t at each ψ of `model::collision::TANGENTIAL_PSI`.
     pub tangential_ratio: Option<Vec<f64>>,
+    /// The thesis law's plastic limit speed, m/s (`model::Collision::v_limit_m_s`).
+    pub v_limit_m_s: Option<f64>,
 }
 
 #[derive(Clone, Debug, Default, Deserialize)]
@@ -312,6 +314,9 @@ impl ConfigFile {
             set(&mut s.collision.law, c.law);
             if let Some(t) = &c.tangential_ratio {
                 s.collision.tangential_ratio = t.clone();
+            }
+            if c.v_limit_m_s.is_some() {
+                s.collision.v_limit_m_s = c.v_limit_m_s;
             }
         }
         if let Some(t) = &self.sim {

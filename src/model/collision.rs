@@ -51,7 +51,7 @@ impl Restitution<f64> {
             mu_friction: collision.mu_friction,
             tangential_factor: if physical { 3.5 } else { 1.0 / 3.5 },
             plastic: physical && !dem,
-            v_limit: limit_velocity(material),
+            v_limit: collision.limit_speed(material),
             clamp_tangential: physical,
             dem,
             tangential_table,
@@ -199,7 +199,7 @@ mod tests {
     }
 
     fn dem_law(e: f64, mu: f64, table: [f64; TANGENTIAL_NODES]) -> Restitution<f64> {
-        let c = Collision { k_elastic: e, mu_friction: mu, law: ContactLaw::Dem, tangential_ratio: table.to_vec() };
+        let c = Collision { law: ContactLaw::Dem, tangential_ratio: table.to_vec(), ..Collision::thesis(e, mu) };
         Restitution::new(PhysicsMode::Physical, &c, &Material::lunar_regolith())
     }
 

@@ -104,12 +104,24 @@ pub struct Collision {
     /// (measured by `sawtooth dem impact`); empty with the thesis's law.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub tangential_ratio: Vec<f64>,
+    /// The plastic limit speed of the thesis's law, m/s (Eq. 4.9: k_n = k_elastic below it,
+    /// k_elastic (v_limit/|v_n|)^¼ above); None: Eq. 4.7 from the material's strength and
+    /// moduli (0.0135 m/s for lunar regolith). Stated, it is a calibration parameter: how fast
+    /// the normal COR falls with impact speed, from the thesis's plastic law (small) towards
+    /// one constant COR (above every impact's speed, as the DEM's contact).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub v_limit_m_s: Option<f64>,
 }
 
 impl Collision {
     /// The thesis's law with these coefficients.
     pub fn thesis(k_elastic: f64, mu_friction: f64) -> Self {
-        Collision { k_elastic, mu_friction, law: ContactLaw::Thesis, tangential_ratio: Vec::new() }
+        Collision { k_elastic, mu_friction, law: ContactLaw::Thesis, tangential_ratio: Vec::new(), v_limit_m_s: None }
+    }
+
+    /// The plastic limit speed the law uses, m/s: the stated one, else Eq. 4.7's.
+    pub fn limit_speed(&self, material: &Material) -> f64 {
+        self.v_limit_m_s.unwrap_or_else(|| crate::model::collision::limit_velocity(material))
     }
 }
 
@@ -364,6 +376,9 @@ impl Scenario {
         }
         named(&b::COLLISION_K_ELASTIC, "collision.k_elastic", self.collision.k_elastic)?;
         named(&b::COLLISION_MU_FRICTION, "collision.mu_friction", self.collision.mu_friction)?;
+        if let Some(v) = self.collision.v_limit_m_s {
+            named(&b::COLLISION_V_LIMIT, "collision.v_limit_m_s", v)?;
+        }
         self.validate_law()?;
         let s = &self.sim;
         b::SIM_TEETH.check_u32("`sim.teeth`", s.teeth)?;
