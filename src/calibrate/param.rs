@@ -71,7 +71,7 @@ impl Param {
             Param::KElastic => s.collision.k_elastic,
             Param::MuFric => s.collision.mu_friction,
             Param::KDrag => s.environment.k_drag.unwrap_or(0.0),
-            Param::VLimit => s.collision.limit_speed(&s.material),
+            Param::VLimit => crate::model::collision::limit_speed(&s.collision, &s.material),
         }
     }
 }

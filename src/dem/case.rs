@@ -17,7 +17,6 @@ use serde::Serialize;
 
 use super::contact::{contact, model_normal_cor, property_commands, Contact, CONTACT_MODEL};
 use super::grains::{mass_matching_diameter, place, place_sized, Placement};
-use super::losses::{STROKE_START, TRACK};
 use super::motion::SledMotion;
 use super::settings::{check_representable, DemSettings};
 use super::sizes::{reference_diameter, size_classes};
@@ -35,6 +34,11 @@ pub const MANIFEST: &str = "case.json";
 pub const DUMP: &str = "final.dump";
 /// The grains' positions after settling, before the stroke (the bed the model can be told).
 pub const SETTLED: &str = "settled.dump";
+/// Every grain's `id x y vx vy` at every rest check, settling included: where a grain
+/// LIGGGHTS deletes left the box (`losses`).
+pub const TRACK: &str = "track.dump";
+/// The LIGGGHTS step at which the stroke began (stroke time 0; `losses`).
+pub const STROKE_START: &str = "stroke_start.txt";
 /// The stroke time at which the run ended, s (the mesh's position then is the binning frame).
 pub const STROKE_TIME: &str = "stroke_time.txt";
 /// Written instead of [`DUMP`] when every grain has left the box: LIGGGHTS refuses to `run`
@@ -487,7 +491,7 @@ mod tests {
         let model = DemSettings { restitution: DemRestitution::Model, ..settings(60) };
         let case = Case::build(&s, &d, &model, 0, None).unwrap();
         // Eq. 4.9 at |v_n| = v0, above the limit velocity: k_el (v_limit / v0)^(1/4)
-        let v_limit = s.collision.limit_speed(&s.material);
+        let v_limit = crate::model::collision::limit_speed(&s.collision, &s.material);
         let expect = s.collision.k_elastic * (v_limit / d.v0).powf(0.25);
         assert!((case.contact.restitution - expect).abs() < 1e-12, "{} vs {expect}", case.contact.restitution);
         assert!(case

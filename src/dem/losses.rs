@@ -21,15 +21,11 @@ use anyhow::{bail, Context as _};
 use serde::{Deserialize, Serialize};
 
 use super::case::Case;
+pub use super::case::{STROKE_START, TRACK};
 use super::stl::profile_polyline;
 use crate::io::bounded::{open_bounded, read_text_if_present};
 use crate::model::geometry::V2;
 use crate::schema;
-
-/// Every grain's `id x y vx vy` at every rest check.
-pub const TRACK: &str = "track.dump";
-/// The LIGGGHTS step at which the stroke began (stroke time 0).
-pub const STROKE_START: &str = "stroke_start.txt";
 
 /// Counts of the deleted grains by where they left; they add up to the run's `left_box`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]

@@ -14,8 +14,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context as _};
 
-use super::case::{ALL_LOST, DUMP, SCRIPT, STROKE_TIME};
-use super::losses::{STROKE_START, TRACK};
+use super::case::{ALL_LOST, DUMP, SCRIPT, STROKE_START, STROKE_TIME, TRACK};
 
 /// Environment variable naming the LIGGGHTS binary (overrides the PATH lookup).
 pub const BINARY_ENV: &str = "SAWTOOTH_LIGGGHTS";

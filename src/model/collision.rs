@@ -18,6 +18,12 @@ pub fn limit_velocity(m: &Material) -> f64 {
     std::f64::consts::PI.powi(2) * p_limit.powf(2.5) / ((40.0 * p.density).sqrt() * e_star * e_star)
 }
 
+/// The plastic limit speed `collision` uses, m/s: the stated one (`[collision] v_limit_m_s`,
+/// a calibration parameter), else Eq. 4.7's from the material.
+pub fn limit_speed(collision: &Collision, material: &Material) -> f64 {
+    collision.v_limit_m_s.unwrap_or_else(|| limit_velocity(material))
+}
+
 /// The restitution law, as flat numbers a kernel can carry.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Restitution<T> {
@@ -51,7 +57,7 @@ impl Restitution<f64> {
             mu_friction: collision.mu_friction,
             tangential_factor: if physical { 3.5 } else { 1.0 / 3.5 },
             plastic: physical && !dem,
-            v_limit: collision.limit_speed(material),
+            v_limit: limit_speed(collision, material),
             clamp_tangential: physical,
             dem,
             tangential_table,

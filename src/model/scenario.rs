@@ -118,11 +118,6 @@ impl Collision {
     pub fn thesis(k_elastic: f64, mu_friction: f64) -> Self {
         Collision { k_elastic, mu_friction, law: ContactLaw::Thesis, tangential_ratio: Vec::new(), v_limit_m_s: None }
     }
-
-    /// The plastic limit speed the law uses, m/s: the stated one, else Eq. 4.7's.
-    pub fn limit_speed(&self, material: &Material) -> f64 {
-        self.v_limit_m_s.unwrap_or_else(|| crate::model::collision::limit_velocity(material))
-    }
 }
 
 /// Simulation settings (4.2.1).
