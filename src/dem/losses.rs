@@ -1,5 +1,5 @@
 //! Where the grains the DEM deleted went. LIGGGHTS deletes a grain that leaves the box
-//! (`thermo_modify lost ignore`) and says only how many; the held-out lunar designs lost 9–24 %
+//! (`thermo_modify lost ignore`) and says only how many; the held-out lunar designs lost 9–36 %
 //! of their grains that way, credited nothing, and whether that is physics (grains going back
 //! down the conveyor, past its end) or numerics (grains passing through the mesh) decides
 //! whether the DEM's d_avg can be trusted. So the deck dumps every grain's position and
