@@ -124,21 +124,16 @@ fn a_lone_grain_lands_on_the_same_tooth_in_the_dem_and_in_the_model_with_the_dem
     settled_beds_are_finite(&dir);
 }
 
-/// A run whose every grain leaves the box is a result with every grain lost (credited
-/// nothing), not a failure: LIGGGHTS refuses to run a granular case with no grains left, so
-/// the deck checks the count before every run and dump and stops with `all_lost.txt`. The
-/// grains are made to leave by a LIGGGHTS wrapper that deletes them all right after they are
-/// read (a lone grain rolling out of the box while it settles did this on a lunar design).
-/// A LIGGGHTS wrapper beside `dir` that deletes every grain of a conveyor's (or a single
-/// stroke's) case right after reading it; the campaign's impact cases, which measure its law,
-/// run as they are.
-fn emptying_liggghts(dir: &std::path::Path) -> std::path::PathBuf {
+/// A LIGGGHTS wrapper beside `dir` that edits the deck of the cases whose first line matches
+/// `decks` (a `grep` pattern) with the `sed` expression `edit` before running it; the other
+/// cases (a campaign's impact cases, which measure its law) run as they are.
+fn deck_editing_liggghts(dir: &std::path::Path, decks: &str, edit: &str) -> std::path::PathBuf {
     let liggghts = sawtooth::dem::run::find_liggghts().unwrap();
     let wrapper = dir.with_extension("liggghts.sh");
     std::fs::write(
         &wrapper,
         format!(
-            "#!/bin/sh\nif grep -q '^# sawtooth dem \\(case\\|conveyor\\)' in.sawtooth; then\n  sed -i 's/^read_data .*$/&\\ndelete_atoms group all/' in.sawtooth\nfi\nexec '{}' \"$@\"\n",
+            "#!/bin/sh\nif grep -q '{decks}' in.sawtooth; then\n  sed -i '{edit}' in.sawtooth\nfi\nexec '{}' \"$@\"\n",
             liggghts.display()
         ),
     )
@@ -147,6 +142,17 @@ fn emptying_liggghts(dir: &std::path::Path) -> std::path::PathBuf {
     wrapper
 }
 
+/// A LIGGGHTS wrapper beside `dir` that deletes every grain of a conveyor's (or a single
+/// stroke's) case right after reading it.
+fn emptying_liggghts(dir: &std::path::Path) -> std::path::PathBuf {
+    deck_editing_liggghts(dir, "^# sawtooth dem \\(case\\|conveyor\\)", "s/^read_data .*$/&\\ndelete_atoms group all/")
+}
+
+/// A run whose every grain leaves the box is a result with every grain lost (credited
+/// nothing), not a failure: LIGGGHTS refuses to run a granular case with no grains left, so
+/// the deck checks the count before every run and dump and stops with `all_lost.txt`. The
+/// grains are made to leave by a LIGGGHTS wrapper that deletes them all right after they are
+/// read (a lone grain rolling out of the box while it settles did this on a lunar design).
 #[test]
 fn a_run_whose_every_grain_leaves_the_box_is_a_result_with_every_grain_lost() {
     if !liggghts_present("dem_reference::a_run_whose_every_grain_leaves_the_box_is_a_result_with_every_grain_lost") {
@@ -184,21 +190,8 @@ fn grains_that_leave_the_box_are_placed_by_their_last_sighting() {
         return;
     }
     let (_d, dir) = tmp("kicked");
-    let liggghts = sawtooth::dem::run::find_liggghts().unwrap();
-    let wrapper = dir.with_extension("liggghts.sh");
-    std::fs::write(
-        &wrapper,
-        format!(
-            "#!/bin/sh
-if grep -q '^# sawtooth dem case' in.sawtooth; then
-  sed -i 's/^# the stroke$/&\\nvelocity all set 0.0 5.0 0.0/' in.sawtooth
-fi
-exec '{}' \"$@\"\n",
-            liggghts.display()
-        ),
-    )
-    .unwrap();
-    std::fs::set_permissions(&wrapper, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let wrapper =
+        deck_editing_liggghts(&dir, "^# sawtooth dem case", "s/^# the stroke$/&\\nvelocity all set 0.0 5.0 0.0/");
     let config = coarse_rig(&dir.with_extension("cfg"), "particles = 6\ngrain_diameter_m = 0.001\n");
     let out = dir.to_str().unwrap();
     let (code, _, err) = sawtooth_env(

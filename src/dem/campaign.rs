@@ -315,14 +315,15 @@ pub fn run(dir: &Path, plan: &Plan, jobs: usize, say: &(dyn Fn(String) + Sync)) 
         write_atomic(&dir.join(LAW), super::impact::law_toml(&law, &first).as_bytes())?;
     }
     let lost: usize = all.iter().map(|r| r.lost).sum();
+    let left_by = LeftBy::summed(all.iter().map(|r| r.left_by));
     if lost > 0 {
         let grains: usize = all.iter().map(|r| r.grains).sum();
         say(format!(
             "warning: {lost} of {grains} grains were lost (left the mesh: behind tooth 1, past tooth {}, or out of the box{}); they count as not recovered",
             first.teeth,
-            LeftBy::summed(all.iter().map(|r| r.left_by)).map(|b| format!("; out of the box: {}", b.describe())).unwrap_or_default()
+            left_by.map(|b| format!("; out of the box: {}", b.describe())).unwrap_or_default()
         ));
-        if let Some(b) = LeftBy::summed(all.iter().map(|r| r.left_by)).filter(|b| b.through_mesh > 0) {
+        if let Some(b) = left_by.filter(|b| b.through_mesh > 0) {
             say(format!(
                 "warning: {} grains passed through the mesh (last seen below its surface): a contact too soft or a step too long for these impacts; halve [dem] max_overlap_fraction (a stiffer contact, a shorter step) and compare before trusting this campaign",
                 b.through_mesh
@@ -496,13 +497,13 @@ fn read_run(case: &Case, rd: &Path, wall_s: f64) -> Result<RunResult, String> {
 /// Where the grains missing from `grains` (the final dump, checked) left the box, from the
 /// run's track; None when the case wrote none.
 fn left_by(case: &Case, rd: &Path, grains: &[DumpGrain]) -> Result<Option<LeftBy>, String> {
-    let mut present = vec![false; case.placement.grains.len()];
+    let mut deleted = vec![true; case.placement.grains.len()];
     for g in grains {
-        if let Some(p) = (g.id as usize).checked_sub(1).and_then(|i| present.get_mut(i)) {
-            *p = true;
+        if let Some(d) = (g.id as usize).checked_sub(1).and_then(|i| deleted.get_mut(i)) {
+            *d = false;
         }
     }
-    super::losses::read_losses(case, rd, &present).map_err(|e| format!("{e:#}"))
+    super::losses::read_losses(case, rd, &deleted).map_err(|e| format!("{e:#}"))
 }
 
 fn remove_if_present(p: &Path) -> anyhow::Result<()> {

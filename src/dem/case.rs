@@ -396,6 +396,16 @@ pub fn fill_grain_diameter(scenario: &Scenario, fill_area_m2: f64, settings: &De
     mass_matching_diameter(fill_area_m2, settings.particles, settings.depth_grains, m.bulk_density, m.particle.density)
 }
 
+/// The Earth rig (the validation design, 20 teeth) as a case of `particles` grains on a mesh
+/// of `teeth`: the DEM modules' unit tests' fixture.
+#[cfg(test)]
+pub(crate) fn rig_case(particles: u32, teeth: u32, seed: u64) -> Case {
+    let mut s = Scenario::earth();
+    s.sim.teeth = 20;
+    let settings = DemSettings { particles, teeth: Some(teeth), ..Default::default() };
+    Case::build(&s, &Design::validation_rig(), &settings, seed, None).unwrap()
+}
+
 /// Teeth the mesh needs: the model's farthest resting grain on a conveyor long enough that
 /// none of its grains leaves past the end ([`REACH_CONVEYOR_TEETH`]), plus a margin, so that
 /// neither side truncates (issue 42: a 20-tooth mesh cut the lunar rig's flights short, and

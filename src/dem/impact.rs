@@ -366,14 +366,9 @@ impl crate::plot::Figure for ImpactPlot<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dem::DemSettings;
-    use crate::model::{Design, Scenario};
 
     fn rig_case() -> Case {
-        let mut s = Scenario::earth();
-        s.sim.teeth = 20;
-        let settings = DemSettings { particles: 60, teeth: Some(6), ..Default::default() };
-        Case::build(&s, &Design::validation_rig(), &settings, 0, None).unwrap()
+        crate::dem::case::rig_case(60, 6, 0)
     }
 
     #[test]

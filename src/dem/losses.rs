@@ -39,13 +39,20 @@ pub struct LeftBy {
 }
 
 impl LeftBy {
+    /// Each count with the words a report gives it, in the order above.
+    fn parts(&self) -> [(&'static str, usize); 6] {
+        [
+            ("while settling", self.while_settling),
+            ("behind tooth 1", self.behind_first_tooth),
+            ("past the last tooth", self.past_last_tooth),
+            ("through the mesh", self.through_mesh),
+            ("over the top", self.over_top),
+            ("unplaced", self.unplaced),
+        ]
+    }
+
     pub fn total(&self) -> usize {
-        self.while_settling
-            + self.behind_first_tooth
-            + self.past_last_tooth
-            + self.through_mesh
-            + self.over_top
-            + self.unplaced
+        self.parts().iter().map(|(_, n)| n).sum()
     }
 
     /// The counts of several runs added up; None when any run has none (it wrote no track).
@@ -64,18 +71,8 @@ impl LeftBy {
 
     /// The non-zero counts, `name n` joined by commas ("none" when nothing left).
     pub fn describe(&self) -> String {
-        let parts: Vec<String> = [
-            ("while settling", self.while_settling),
-            ("behind tooth 1", self.behind_first_tooth),
-            ("past the last tooth", self.past_last_tooth),
-            ("through the mesh", self.through_mesh),
-            ("over the top", self.over_top),
-            ("unplaced", self.unplaced),
-        ]
-        .iter()
-        .filter(|(_, n)| *n > 0)
-        .map(|(name, n)| format!("{n} {name}"))
-        .collect();
+        let parts: Vec<String> =
+            self.parts().iter().filter(|(_, n)| *n > 0).map(|(name, n)| format!("{n} {name}")).collect();
         if parts.is_empty() {
             "none".into()
         } else {
@@ -212,14 +209,13 @@ fn leaves_through_top(case: &Case, s: &Seen, g: f64) -> bool {
 
 /// The deleted grains of a finished run placed from its track (a tracked case whose every
 /// grain left before the track's first snapshot has none: all unplaced), or None when the case
-/// writes no track ([`Case::tracked`]). `present[i]`:
-/// grain i + 1 is in the final dump.
-pub fn read_losses(case: &Case, dir: &Path, present: &[bool]) -> anyhow::Result<Option<LeftBy>> {
+/// writes no track ([`Case::tracked`]). `deleted[i]`: grain i + 1 is not in the final dump.
+pub fn read_losses(case: &Case, dir: &Path, deleted: &[bool]) -> anyhow::Result<Option<LeftBy>> {
     let track_path = dir.join(TRACK);
     if !track_path.is_file() {
         // a tracked case whose every grain left before the first snapshot wrote none
-        let deleted = present.iter().filter(|p| !**p).count();
-        return Ok(case.tracked().then_some(LeftBy { unplaced: deleted, ..LeftBy::default() }));
+        let unplaced = deleted.iter().filter(|d| **d).count();
+        return Ok(case.tracked().then_some(LeftBy { unplaced, ..LeftBy::default() }));
     }
     // no stroke start: every grain left while settling (the deck stopped before the stroke)
     let start_path = dir.join(STROKE_START);
@@ -231,22 +227,16 @@ pub fn read_losses(case: &Case, dir: &Path, present: &[bool]) -> anyhow::Result<
         None => u64::MAX,
     };
     let reader = std::io::BufReader::new(open_bounded(&track_path, &schema::DEM_TRACK_FILE)?);
-    let seen = last_seen(reader, present.len()).with_context(|| format!("reading {}", track_path.display()))?;
-    let deleted: Vec<bool> = present.iter().map(|p| !p).collect();
-    Ok(Some(classify(case, start, &seen, &deleted)))
+    let seen = last_seen(reader, deleted.len()).with_context(|| format!("reading {}", track_path.display()))?;
+    Ok(Some(classify(case, start, &seen, deleted)))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dem::settings::DemSettings;
-    use crate::model::{Design, Scenario};
 
     fn case() -> Case {
-        let mut s = Scenario::earth();
-        s.sim.teeth = 20;
-        let settings = DemSettings { particles: 40, teeth: Some(8), ..Default::default() };
-        Case::build(&s, &Design::validation_rig(), &settings, 1, None).unwrap()
+        crate::dem::case::rig_case(40, 8, 1)
     }
 
     const TRACK_TEXT: &str =
