@@ -70,7 +70,8 @@ pub struct Comparison {
     pub model_particles: u32,
     /// The model's mass past the mesh's last tooth, % (counted in `model_lost_pct`).
     pub model_past_end_pct: f64,
-    /// The DEM's mass past the mesh's last tooth, % (counted in `dem_lost_pct`).
+    /// The DEM's grains past the mesh's last tooth, %: resting beyond it or gone from the box
+    /// past it (counted in `dem_lost_pct`).
     pub dem_past_end_pct: Spread,
     /// The model's d_avg on a conveyor of `case::REACH_CONVEYOR_TEETH` teeth (nothing lost
     /// past its end), mm.
@@ -173,16 +174,8 @@ pub fn compare(
     let model_d_avg_mm = sim.d_avg_m * 1e3;
     // the model's particles past the end: those lost on the mesh but not on a long conveyor
     let model_past_end_pct = 100.0 * (sim.lost_fraction - untruncated.lost_fraction).max(0.0);
-    let dem_past_end_pct =
-        spread(&runs.iter().map(|r| 100.0 * r.past_end as f64 / r.grains.max(1) as f64).collect::<Vec<_>>());
-    let mut warnings = Vec::new();
-    for (who, pct) in [("the model", model_past_end_pct), ("the DEM", dem_past_end_pct.mean)] {
-        if pct > 100.0 * PAST_END_WARN {
-            warnings.push(format!(
-                "{who} loses {pct:.1} % of its mass past the mesh's last tooth ({teeth}): both sides credit it nothing, so d_avg compares two truncations; lengthen the mesh ([dem] teeth, or leave it unset: the model's reach on a long conveyor)"
-            ));
-        }
-    }
+    let dem_past_end_pct = spread(&runs.iter().map(past_end_pct).collect::<Vec<_>>());
+    let mut warnings = truncation_warnings(teeth, model_past_end_pct, dem_past_end_pct.mean);
     let dem_left_by = LeftBy::summed(runs.iter().map(|r| r.left_by));
     if let Some(n) = dem_left_by.map(|b| b.through_mesh).filter(|n| *n > 0) {
         warnings.push(format!(
@@ -222,6 +215,26 @@ pub fn compare(
         dem_left_by,
         warnings,
     })
+}
+
+/// The share of a DEM run's grains lost past the mesh's last tooth, %: those resting beyond
+/// it and those that left the box past it (`left_by`; a grain that flew off the far end is
+/// as truncated as one that came to rest there).
+fn past_end_pct(r: &RunResult) -> f64 {
+    let deleted = r.left_by.map_or(0, |b| b.past_last_tooth);
+    100.0 * (r.past_end + deleted) as f64 / r.grains.max(1) as f64
+}
+
+/// A warning for each side that loses more than [`PAST_END_WARN`] of its mass past the
+/// mesh's last tooth (`teeth`), given each side's share in %.
+fn truncation_warnings(teeth: usize, model_pct: f64, dem_pct: f64) -> Vec<String> {
+    [("the model", model_pct), ("the DEM", dem_pct)]
+        .into_iter()
+        .filter(|(_, pct)| *pct > 100.0 * PAST_END_WARN)
+        .map(|(who, pct)| format!(
+            "{who} loses {pct:.1} % of its mass past the mesh's last tooth ({teeth}): both sides credit it nothing, so d_avg compares two truncations; lengthen the mesh ([dem] teeth, or leave it unset: the model's reach on a long conveyor)"
+        ))
+        .collect()
 }
 
 /// Steady conveying beside the model (`dem run --strokes K`): the DEM's advance per stroke
@@ -384,5 +397,34 @@ mod tests {
         assert!((c.sd - 0.5f64.sqrt()).abs() < 1e-12, "{c:?}");
         let (c, d) = centre_spreads(&[vec![0.0; 3], vec![0.0; 3]]);
         assert!(c.mean.is_nan() && c.sd.is_nan() && d.mean.is_nan(), "{c:?} {d:?}");
+    }
+
+    #[test]
+    fn grains_that_flew_off_the_far_end_count_as_truncated_like_those_resting_there() {
+        let run = |past_end, past_last_tooth| RunResult {
+            teeth_g: vec![1.0; 4],
+            input_mass_g: 10.0,
+            grains: 200,
+            lost: past_end + past_last_tooth,
+            left_box: past_last_tooth,
+            past_end,
+            left_by: Some(LeftBy { past_last_tooth, ..LeftBy::default() }),
+            seed: 0,
+            moving: 0,
+            d_avg_m: 0.1,
+            wall_s: 1.0,
+            settled_xy_m: Vec::new(),
+        };
+        assert_eq!(past_end_pct(&run(0, 0)), 0.0);
+        assert_eq!(past_end_pct(&run(2, 0)), 1.0);
+        // 2 % gone from the box past the end and none resting there: still a truncation
+        assert_eq!(past_end_pct(&run(0, 4)), 2.0);
+        assert_eq!(past_end_pct(&run(1, 3)), 2.0);
+        // a run without a track counts what rests past the end
+        assert_eq!(past_end_pct(&RunResult { left_by: None, ..run(2, 0) }), 1.0);
+        let warned = truncation_warnings(18, 0.5, past_end_pct(&run(0, 4)));
+        assert_eq!(warned.len(), 1, "{warned:?}");
+        assert!(warned[0].starts_with("the DEM loses 2.0 % of its mass past the mesh's last tooth (18)"), "{warned:?}");
+        assert!(truncation_warnings(18, 1.0, 1.0).is_empty(), "at the threshold: no warning");
     }
 }
