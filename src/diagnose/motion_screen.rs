@@ -62,7 +62,7 @@ use crate::model::effects::{EffectKind, MotionDirection};
 /// 0.8 m/s) a 0.05 s, 0.5 m/s motion fell between two points that each screened worse than
 /// no motion at all (docs/diagnosis-report.md). The fit moves the motion from the chosen
 /// point onward.
-pub const MOTION_GRID: ([f64; 2], [f64; 6]) = ([0.0, 0.05], [0.03, 0.06, 0.12, 0.25, 0.5, 1.0]);
+pub const MOTION_GRID: ([f64; 3], [f64; 6]) = ([0.0, 0.05, 0.1], [0.03, 0.06, 0.12, 0.25, 0.5, 1.0]);
 /// The differential evolution over the shared parameters at each grid point: population
 /// (about three per parameter, the baseline's point among them) and the generations every
 /// grid point gets.
