@@ -297,6 +297,16 @@ fn strokes_convey_grains_steadily_and_report_the_advance_beside_the_models() {
     for k in 0..=3 {
         assert!(dir.join(format!("run-001/cycle-{k:03}.dump")).is_file());
     }
+    // every grain the conveyor lost is placed by its track (a periodic conveyor has no
+    // ends: through the mesh or over the top), and none passed through the mesh
+    assert!(dir.join("run-001/track.dump").is_file());
+    let left = &run["left_by"];
+    let count = |k: &str| left[k].as_u64().unwrap_or_else(|| panic!("left_by.{k}: {run}"));
+    let lost_in_cycles: u64 = run["cycles"].as_array().unwrap().iter().map(|c| c["lost"].as_u64().unwrap()).sum();
+    let placed = ["through_mesh", "over_top", "unplaced"].iter().map(|k| count(k)).sum::<u64>();
+    assert_eq!(placed, lost_in_cycles, "{run}");
+    assert_eq!((count("behind_first_tooth"), count("past_last_tooth")), (0, 0), "{run}");
+    assert_eq!(count("through_mesh"), 0, "{run}");
     // the campaign is its own: the same command again resumes it (nothing left to run, the
     // same steady.json), and `dem compare` reads it
     let before = read(&dir.join("steady.json"));
@@ -331,4 +341,8 @@ fn a_conveyor_whose_every_grain_leaves_the_box_advances_nothing() {
     let advance: Vec<f64> = r["cycles"].as_array().unwrap().iter().map(|c| f(&c["advance_m"])).collect();
     assert_eq!(advance, vec![0.0; 3], "{r}");
     assert_eq!(f(&r["mass_per_tooth_kg"]), 0.0, "{r}");
+    // every grain is counted as gone, the way the track allows
+    let left = &r["left_by"];
+    let total: u64 = left.as_object().unwrap_or_else(|| panic!("{r}")).values().map(|v| v.as_u64().unwrap()).sum();
+    assert_eq!(total, r["grains"].as_u64().unwrap(), "{r}");
 }

@@ -562,6 +562,12 @@ fn write_steady(out: &mut dyn Write, c: &SteadyComparison) -> anyhow::Result<()>
         c.dem_s.mean,
         c.dem_s.sd
     )?;
+    if let Some(b) = &c.dem_left_by {
+        writeln!(out, "DEM grains out of the box, over the runs: {}", b.describe())?;
+    }
+    for w in &c.warnings {
+        writeln!(out, "warning: {w}")?;
+    }
     Ok(())
 }
 

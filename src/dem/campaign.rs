@@ -220,7 +220,8 @@ fn one_steady_run(dir: &Path, plan: &Plan, r: u32, binary: &Path, say: &(dyn Fn(
     let result = super::conveyor::reduce(&rd, &conveyor, finished.wall_s)?;
     write_atomic(&rd.join(STEADY_RESULT), serde_json::to_string_pretty(&result)?.as_bytes())?;
     let advances: Vec<String> = result.cycles.iter().map(|c| format!("{:.1}", c.advance_m * 1e3)).collect();
-    say(format!("run {} done in {:.1} s: advance per stroke {} mm", r + 1, finished.wall_s, advances.join(", ")));
+    let left = result.left_by.map_or(String::new(), |b| format!("; out of the box: {}", b.describe()));
+    say(format!("run {} done in {:.1} s: advance per stroke {} mm{left}", r + 1, finished.wall_s, advances.join(", ")));
     Ok(())
 }
 

@@ -177,11 +177,7 @@ pub fn compare(
     let dem_past_end_pct = spread(&runs.iter().map(past_end_pct).collect::<Vec<_>>());
     let mut warnings = truncation_warnings(teeth, model_past_end_pct, dem_past_end_pct.mean);
     let dem_left_by = LeftBy::summed(runs.iter().map(|r| r.left_by));
-    if let Some(n) = dem_left_by.map(|b| b.through_mesh).filter(|n| *n > 0) {
-        warnings.push(format!(
-            "{n} DEM grains passed through the mesh (last seen below its surface): a numerical failure of the contact, not physics; halve [dem] max_overlap_fraction and compare"
-        ));
-    }
+    warnings.extend(through_mesh_warning(dem_left_by));
     Ok(Comparison {
         teeth,
         runs: runs.len(),
@@ -237,6 +233,13 @@ fn truncation_warnings(teeth: usize, model_pct: f64, dem_pct: f64) -> Vec<String
         .collect()
 }
 
+/// The warning for DEM grains that passed through the mesh, if any did.
+fn through_mesh_warning(left_by: Option<LeftBy>) -> Option<String> {
+    left_by.map(|b| b.through_mesh).filter(|n| *n > 0).map(|n| format!(
+        "{n} DEM grains passed through the mesh (last seen below its surface or heading into it): a numerical failure of the contact, not physics; halve [dem] max_overlap_fraction and compare"
+    ))
+}
+
 /// Steady conveying beside the model (`dem run --strokes K`): the DEM's advance per stroke
 /// once steady, the model's single-stroke advance (teeth advanced × pitch, along the conveyor,
 /// the same measure) and d_avg (D.7's horizontal, p4-credited distance, erratum 16), and the
@@ -262,6 +265,12 @@ pub struct SteadyComparison {
     /// (DEM steady advance − model advance) / model advance, %.
     pub advance_error_pct: Option<f64>,
     pub dem_s: Spread,
+    /// Where the DEM's grains that left the box went, over every run; None when a run wrote
+    /// no track.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dem_left_by: Option<LeftBy>,
+    /// Why this comparison may not be trusted (grains through the mesh, ...).
+    pub warnings: Vec<String>,
 }
 
 /// The steady runs of a `dem run --strokes` campaign beside the model on `scenario`.
@@ -278,6 +287,7 @@ pub fn compare_steady(
     let prep = crate::model::prepare(&s, design).map_err(|e| anyhow::anyhow!("invalid design ({}): {e}", e.rule()))?;
     let perf = crate::model::performance::performance(&s, design, sim.d_avg_m, prep.fill.area);
     let feed = |x: f64| perf.regolith_mass_kg * (x / s.performance.conveyor_length) * perf.f_stroke_hz * 3600.0;
+    let dem_left_by = LeftBy::summed(runs.iter().map(|r| r.left_by));
     let per_run: Vec<f64> = runs
         .iter()
         .map(|r| r.cycles[1..].iter().map(|c| c.advance_m).sum::<f64>() / (r.cycles.len() - 1) as f64)
@@ -297,6 +307,8 @@ pub fn compare_steady(
         advance_error_pct: (sim.advance_m > 0.0).then(|| 100.0 * (st.advance_m - sim.advance_m) / sim.advance_m),
         dem: st,
         dem_s: spread(&runs.iter().map(|r| r.wall_s).collect::<Vec<_>>()),
+        dem_left_by,
+        warnings: through_mesh_warning(dem_left_by).into_iter().collect(),
     })
 }
 

@@ -35,6 +35,7 @@ use serde::{Deserialize, Serialize};
 use super::case::{drag_commands, stop_when_every_grain_is_gone, Case, ALL_LOST, DUMP, GRAINS, MESH, SCRIPT};
 use super::contact::{property_commands, CONTACT_MODEL};
 use super::grains::{Grain, Placement};
+use super::losses::{classify_on_conveyor, last_seen, LeftBy, TRACK};
 use super::stl::{extrude, profile_polyline, stl_text, subdivide, MAX_FACET_M};
 use crate::io::atomic::write_atomic;
 use crate::model::geometry::Profile;
@@ -173,6 +174,19 @@ impl Conveyor {
         s
     }
 
+    /// Whether the run dumps its track ([`TRACK`], every grain at every rest check, as the
+    /// single stroke's): only when the track stays within its bound (grains × the most
+    /// snapshots the deck can take × a line of at most ~100 bytes).
+    pub fn tracked(&self) -> bool {
+        let t = &self.tooth;
+        let (v0, a) = (t.design.v0, t.design.a);
+        let per_cycle = 2.0 * t.settings.max_time_s + v0 / a + v0 * v0 / (2.0 * a) / self.return_speed_m_s;
+        let snapshots =
+            ((MAX_SETTLE_S + self.strokes as f64 * per_cycle) / CHUNK_S).ceil() + 2.0 * self.strokes as f64 + 2.0;
+        let lines = snapshots * (self.grains.len() as f64 + 9.0);
+        lines * 100.0 <= crate::schema::DEM_TRACK_FILE.max_bytes as f64
+    }
+
     fn steps(&self, seconds: f64) -> u64 {
         (seconds / self.tooth.contact.timestep_s).ceil().max(1.0) as u64
     }
@@ -257,10 +271,16 @@ impl Conveyor {
              compute ke all ke\nvariable m equal mass(all)\nvariable vrms equal sqrt(2*c_ke/(v_m+1e-30))\n\
              variable t equal step*{dt:e}\n\
              thermo_style custom step atoms ke v_vrms v_t\nthermo {chunk}\nthermo_modify lost ignore norm no\n\
+             {track}\
              # settle\nvariable settle loop {settle_chunks}\nlabel settling\nrun {chunk}\n\
              if \"${{vrms}} < {rest:e}\" then \"jump SELF settled\"\nnext settle\njump SELF settling\nlabel settled\n\
              write_dump all custom {} id mass xu yu zu",
-            cycle_dump(0)
+            cycle_dump(0),
+            track = if self.tracked() {
+                format!("# every grain at every rest check: where a grain LIGGGHTS deletes left the box (losses.rs)\ndump track all custom {chunk} {TRACK} id x y vx vy\n")
+            } else {
+                "# no track: it would be larger than schema::DEM_TRACK_FILE allows (losses.rs)\n".to_string()
+            },
         );
         for k in 1..=self.strokes {
             // the stroke: -m a l on every grain while the sled accelerates; the sled's own
@@ -379,6 +399,10 @@ pub struct SteadyRun {
     pub mass_per_tooth_kg: f64,
     pub cycles: Vec<Cycle>,
     pub wall_s: f64,
+    /// Where the grains that left the box went (`losses`: through the mesh or over the top,
+    /// a periodic conveyor having no ends); None for a run that wrote no track.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub left_by: Option<LeftBy>,
 }
 
 /// Read the cycle dumps of a finished conveyor run in `dir`.
@@ -424,6 +448,7 @@ pub fn reduce(dir: &Path, conveyor: &Conveyor, wall_s: f64) -> anyhow::Result<St
         before = after;
     }
     let total: f64 = first.iter().map(|g| g.mass_kg).sum();
+    let left_by = conveyor_losses(dir, conveyor, &first, &before)?;
     Ok(SteadyRun {
         seed: conveyor.tooth.seed,
         period_teeth: conveyor.period_teeth,
@@ -431,7 +456,46 @@ pub fn reduce(dir: &Path, conveyor: &Conveyor, wall_s: f64) -> anyhow::Result<St
         mass_per_tooth_kg: total / conveyor.period_teeth as f64,
         cycles,
         wall_s,
+        left_by,
     })
+}
+
+/// The grains a finished conveyor run lost, placed from its track ([`classify_on_conveyor`]):
+/// `settled` the grains after settling, `last` those after the last cycle the run reached.
+/// None when the conveyor writes no track ([`Conveyor::tracked`]).
+fn conveyor_losses(
+    dir: &Path,
+    conveyor: &Conveyor,
+    settled: &[Unwrapped],
+    last: &[Unwrapped],
+) -> anyhow::Result<Option<LeftBy>> {
+    if !conveyor.tracked() {
+        return Ok(None);
+    }
+    let placed = conveyor.grains.len();
+    let mark = |gs: &[Unwrapped]| -> anyhow::Result<Vec<bool>> {
+        let mut m = vec![false; placed];
+        for g in gs {
+            match m.get_mut((g.id as usize).wrapping_sub(1)) {
+                Some(slot) => *slot = true,
+                None => bail!("{}: a cycle's dump holds grain {}, which was not placed", dir.display(), g.id),
+            }
+        }
+        Ok(m)
+    };
+    let (on_conveyor, kept) = (mark(settled)?, mark(last)?);
+    let deleted: Vec<bool> = kept.iter().map(|k| !k).collect();
+    let track = dir.join(TRACK);
+    let seen = if track.is_file() {
+        let reader = std::io::BufReader::new(crate::io::bounded::open_bounded(&track, &crate::schema::DEM_TRACK_FILE)?);
+        last_seen(reader, placed).with_context(|| format!("reading {}", track.display()))?
+    } else {
+        // every grain left before the track's first snapshot
+        vec![None; placed]
+    };
+    let line = periodic_line(&local_profile(&conveyor.tooth, conveyor.period_teeth), conveyor.period_teeth);
+    let radius = 0.5 * conveyor.tooth.largest_diameter_m();
+    Ok(Some(classify_on_conveyor(&line, radius, conveyor.bounds[1], &seen, &on_conveyor, &deleted)))
 }
 
 /// The steady state of several runs: the cycles after the first, split into halves.
@@ -556,6 +620,23 @@ mod tests {
         assert_eq!(super::super::case::runs_and_dumps_checked(&script), 2 + 5 * c.strokes as usize + 1);
     }
 
+    /// The conveyor tracks every grain from before settling, as the single stroke does, so
+    /// that a grain it loses is placed; one whose track would outgrow its bound writes none.
+    #[test]
+    fn the_conveyor_tracks_every_grain_while_its_track_stays_within_bound() {
+        let (_, c) = lunar_conveyor(3);
+        assert!(c.tracked());
+        let script = c.script();
+        let dump = script.lines().position(|l| l.starts_with("dump track all custom ")).expect("a track");
+        assert!(script.lines().nth(dump).unwrap().ends_with(&format!("{TRACK} id x y vx vy")));
+        assert!(dump < script.lines().position(|l| l == "label settling").unwrap());
+        let mut long = c.clone();
+        long.strokes = 200;
+        long.grains = vec![c.grains[0]; 20_000];
+        assert!(!long.tracked());
+        assert!(!long.script().contains("dump track"));
+    }
+
     /// A cycle's dump of grains (id, mass, unwrapped x), at y 0.01 and z 0.001.
     fn dump(rows: &[(u64, f64, f64)]) -> String {
         let mut t = String::from("ITEM: TIMESTEP\n0\nITEM: ATOMS id mass xu yu zu\n");
@@ -583,12 +664,28 @@ mod tests {
         assert_eq!(r.cycles.len(), 3);
         assert!((advances[0] - 0.2).abs() < 1e-12 && advances[1] == 0.0 && advances[2] == 0.0, "{advances:?}");
         assert_eq!(r.cycles[1].lost, 2);
+        assert_eq!(r.left_by, Some(LeftBy { unplaced: 2, ..LeftBy::default() }), "no track: never seen");
         assert_eq!(steady(&[r]).unwrap().advance_m, 0.0);
+        // the track places them: one last seen near the box's bottom heading down (through
+        // the mesh), one near its top rising (over the top)
+        let [lo, hi] = c.bounds[1];
+        std::fs::write(
+            dir.join(TRACK),
+            format!(
+                "ITEM: TIMESTEP\n100\nITEM: ATOMS id x y vx vy\n1 0.01 {} 0 -1\n2 0.01 {} 0 1\n",
+                lo + 1e-3,
+                hi - 1e-3
+            ),
+        )
+        .unwrap();
+        let r = reduce(&dir, &c, 1.0).unwrap();
+        assert_eq!(r.left_by, Some(LeftBy { through_mesh: 1, over_top: 1, ..LeftBy::default() }));
         // lost while settling: nothing on the conveyor
         std::fs::remove_file(dir.join(cycle_dump(0))).unwrap();
         std::fs::remove_file(dir.join(cycle_dump(1))).unwrap();
         let r = reduce(&dir, &c, 1.0).unwrap();
         assert!(r.cycles.iter().all(|c| c.advance_m == 0.0) && r.mass_per_tooth_kg == 0.0);
+        assert_eq!(r.left_by, Some(LeftBy { while_settling: 2, ..LeftBy::default() }));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -177,6 +177,45 @@ pub fn classify(case: &Case, stroke_start_step: u64, seen: &[Option<Seen>], dele
     out
 }
 
+/// Where each of the `deleted` grains of a steady (periodic) conveyor left, from its last
+/// sighting in the conveyor's frame (x along it, wrapped into the period; y normal to it).
+/// The conveyor is periodic along x and the slab along z, so a grain leaves only through the
+/// box's bottom, under the mesh (`through_mesh`), or its top (`over_top`): below the mesh's
+/// surface, or heading down in the box's lower half, is the first; heading up in its upper
+/// half the second; anything else (a grain the stroke's push turned between sightings) stays
+/// `unplaced`. `settled[i]`: grain i + 1 was on the conveyor after settling (the others left
+/// `while_settling`).
+pub fn classify_on_conveyor(
+    line: &[V2],
+    radius: f64,
+    box_y: [f64; 2],
+    seen: &[Option<Seen>],
+    settled: &[bool],
+    deleted: &[bool],
+) -> LeftBy {
+    let mut out = LeftBy::default();
+    let middle = 0.5 * (box_y[0] + box_y[1]);
+    for ((s, settled), _) in seen.iter().zip(settled).zip(deleted).filter(|(_, d)| **d) {
+        if !settled {
+            out.while_settling += 1;
+            continue;
+        }
+        let Some(s) = s else {
+            out.unplaced += 1;
+            continue;
+        };
+        let (y, vy) = (s.pos[1], s.vel[1]);
+        if lowest_surface(line, s.pos[0]).is_some_and(|y_s| y < y_s - radius) || (vy < 0.0 && y < middle) {
+            out.through_mesh += 1;
+        } else if vy > 0.0 && y >= middle {
+            out.over_top += 1;
+        } else {
+            out.unplaced += 1;
+        }
+    }
+    out
+}
+
 /// The lowest height at which the mesh's profile crosses the vertical through `x` (an
 /// overhanging tooth crosses it more than once), if it does.
 fn lowest_surface(line: &[V2], x: f64) -> Option<f64> {
@@ -306,6 +345,34 @@ mod tests {
         let twice = LeftBy::summed([Some(by), Some(by)]).unwrap();
         assert_eq!((twice.total(), twice.unplaced), (14, 4));
         assert_eq!(LeftBy::summed([Some(by), None]), None);
+    }
+
+    /// A periodic conveyor's grains leave through the box's bottom (under the mesh) or its
+    /// top, nowhere else: placed by where they were last seen and which way they moved.
+    #[test]
+    fn a_conveyors_lost_grains_left_through_the_bottom_or_the_top() {
+        // one flat tooth at y = 0 over x in [0, 0.1], the box from -0.05 to 0.45
+        let line = [[0.0, 0.0], [0.1, 0.0]];
+        let at = |x: f64, y: f64, vy: f64| Some(Seen { step: 10, pos: [x, y], vel: [0.0, vy] });
+        let seen = [
+            at(0.05, -0.01, 0.5), // below the surface, whatever its heading: through the mesh
+            at(0.05, 0.01, -2.0), // just above it, heading down: through the mesh
+            at(0.05, 0.40, 1.0),  // high and rising: over the top
+            at(0.05, 0.40, -1.0), // high and falling: it cannot have left: unplaced
+            None,                 // never seen
+            at(0.05, 0.30, 0.5),  // lost while settling (not in the settled dump)
+            at(0.05, 0.10, 0.0),  // still there
+        ];
+        let settled = [true, true, true, true, true, false, true];
+        let deleted = [true, true, true, true, true, true, false];
+        let by = classify_on_conveyor(&line, 0.002, [-0.05, 0.45], &seen, &settled, &deleted);
+        assert_eq!(
+            by,
+            LeftBy { while_settling: 1, through_mesh: 2, over_top: 1, unplaced: 2, ..LeftBy::default() },
+            "{}",
+            by.describe()
+        );
+        assert_eq!((by.behind_first_tooth, by.past_last_tooth), (0, 0), "a periodic conveyor has no ends");
     }
 
     #[test]

@@ -262,7 +262,7 @@ fn max_handling_loss(cond: &Condition, measured: &[f64]) -> f64 {
 /// interval [−0.9, 8.8] %² raw, docs/diagnosis-report.md).
 pub fn loss_adjusted_sse(cond: &Condition, measured: &[f64], sim: &[f64]) -> f64 {
     let (_, adjusted) = handling_loss(sim, measured, max_handling_loss(cond, measured));
-    adjusted.iter().zip(measured).map(|(p, q)| (100.0 * (p - q)).powi(2)).sum()
+    crate::calibrate::objective::sse_percent2(&adjusted, measured)
 }
 
 /// A model's loss-adjusted bins per condition.
