@@ -43,7 +43,7 @@ fn diagnose(pairs: &[(&Path, &str)], out: &Path) -> Value {
     assert!(svg_texts(&ranking).iter().any(|t| t.starts_with("1. ")), "ranked rows");
     assert!(svg_texts(&ranking).iter().any(|t| t.contains("best = ")), "footer");
     let keys: Vec<&String> = v.as_object().unwrap().keys().collect();
-    assert_eq!(keys.len(), 11, "{keys:?}");
+    assert_eq!(keys.len(), 12, "{keys:?}");
     for k in [
         "gap",
         "ranking",
@@ -56,10 +56,42 @@ fn diagnose(pairs: &[(&Path, &str)], out: &Path) -> Value {
         "where",
         "detection_limits",
         "suggestions",
+        "motion_screen",
     ] {
         assert!(v.get(k).is_some(), "missing {k}");
     }
+    check_motion_screen(&v, &read("report.md"));
     v
+}
+
+/// The motion screen's grid (where it ran: some setup leaves the motion out): best first, the
+/// best among those that fit about as well as it, and the report's ridge section listing
+/// exactly those.
+fn check_motion_screen(v: &Value, report: &str) {
+    let m = &v["motion_screen"];
+    if m.is_null() {
+        assert!(!report.contains("## The unstated motion"), "a ridge without a screen");
+        return;
+    }
+    let points = m["points"].as_array().unwrap();
+    assert!(!points.is_empty(), "{m}");
+    let sse: Vec<f64> = points.iter().map(|p| p["sse"].as_f64().unwrap()).collect();
+    assert!(sse.windows(2).all(|w| w[0] <= w[1]), "best first: {sse:?}");
+    assert_eq!(points[0]["about_as_well"], true, "{m}");
+    let within = m["within"].as_f64().unwrap();
+    for (p, e) in points.iter().zip(&sse) {
+        assert_eq!(p["about_as_well"].as_bool().unwrap(), *e <= sse[0] + within, "{p}");
+    }
+    let near = points.iter().filter(|p| p["about_as_well"] == true).count();
+    let section = report.split("## The unstated motion").nth(1).expect("the report's ridge section");
+    let rows = section
+        .split("\n## ")
+        .next()
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| return"))
+        .count();
+    assert_eq!(rows, near, "{section}");
 }
 
 /// The two best candidates fitted together: present exactly when two beat the baseline, led

@@ -94,6 +94,7 @@ use super::locate::locate;
 pub use super::locate::{GapCondition, Residual, WhereCondition};
 pub use super::model_result::{DepthLayer, ModelResult, Z_FLAG};
 use super::motion_screen::screen_motion;
+pub use super::motion_screen::{about_as_well, ScreenedMotion};
 use super::pair::fit_pair;
 pub use super::pair::Combined;
 pub use super::run::{applicable_effects, parse_effects, shared_params, Run, Settings, NO_EFFECT_APPLIES};
@@ -127,6 +128,9 @@ pub struct Diagnosis {
     pub limits: Option<DetectionLimits>,
     /// The next measurement, when asked for (`--suggest`) and something is left to separate.
     pub suggestions: Option<Suggestions>,
+    /// The motion screen's grid points, best first; empty where it did not run (every setup
+    /// states the motion, or sled-motion is not a candidate).
+    pub motion_screen: Vec<ScreenedMotion>,
     pub notes: Vec<String>,
     pub particles: u32,
     pub engine: String,
@@ -159,6 +163,7 @@ pub fn diagnose(
     // what the campaign could not have seen, from the baseline alone
     let limits = settings.detection_limits.then(|| detection_limits(&run, &baseline, log));
     let screened = screen_motion(&run, &baseline, log)?;
+    let motion_screen = screened.as_ref().map_or_else(Vec::new, |s| s.points.clone());
     let baseline_space = baseline.space.clone();
     let ranked = rank_candidates(&run, baseline, screened, log)?;
     notes.extend(ranked.notes.iter().cloned());
@@ -197,6 +202,7 @@ pub fn diagnose(
         verdict,
         limits,
         suggestions,
+        motion_screen,
         notes,
         particles,
         engine,

@@ -8,7 +8,7 @@ use serde::Serialize;
 use serde_json::Value;
 
 use super::candidates::RANKING_RULE;
-use super::diagnose::Diagnosis;
+use super::diagnose::{about_as_well, Diagnosis, ScreenedMotion};
 use super::limits::{DetectionLimits, PROBABILITY};
 use super::locate::Residual;
 use super::model_result::{ModelResult, Z_FLAG};
@@ -61,6 +61,7 @@ struct DiagnosisJson<'a> {
     where_: WhereJson<'a>,
     detection_limits: Option<LimitsJson<'a>>,
     suggestions: Option<SuggestionsJson<'a>>,
+    motion_screen: Option<MotionScreenJson>,
 }
 
 impl<'a> DiagnosisJson<'a> {
@@ -114,7 +115,47 @@ impl<'a> DiagnosisJson<'a> {
             },
             detection_limits: d.limits.as_ref().map(LimitsJson::new),
             suggestions: d.suggestions.as_ref().map(SuggestionsJson::new),
+            motion_screen: MotionScreenJson::new(d),
         }
+    }
+}
+
+/// `motion_screen`: every unstated motion the screen tried, best first, and whether it fits
+/// about as well as the best (its SSE within `within`, the noise floor, of the best's): more
+/// than one such point is a ridge the data do not resolve. Null where the screen did not run.
+#[derive(Serialize)]
+struct MotionScreenJson {
+    within: f64,
+    points: Vec<MotionPointJson>,
+}
+
+#[derive(Serialize)]
+struct MotionPointJson {
+    /// The return direction assumed (absent where every setup states it).
+    direction: Option<&'static str>,
+    /// The grid's values of the unstated motion parameters (`delay_s`, `return_speed_m_s`).
+    motion: BTreeMap<&'static str, f64>,
+    /// Loss-adjusted SSE at the full budget on the fit's streams, %².
+    sse: f64,
+    polished: bool,
+    about_as_well: bool,
+}
+
+impl MotionScreenJson {
+    fn new(d: &Diagnosis) -> Option<Self> {
+        if d.motion_screen.is_empty() {
+            return None;
+        }
+        let within = d.verdict.remaining.floor;
+        let near = about_as_well(&d.motion_screen, within);
+        let point = |p: &ScreenedMotion| MotionPointJson {
+            direction: p.direction.map(|r| r.name()),
+            motion: p.motion.iter().copied().collect(),
+            sse: p.sse,
+            polished: p.polished,
+            about_as_well: near.iter().any(|q| std::ptr::eq(*q, p)),
+        };
+        Some(MotionScreenJson { within, points: d.motion_screen.iter().map(point).collect() })
     }
 }
 

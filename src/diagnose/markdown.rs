@@ -4,7 +4,7 @@
 
 use std::fmt::Write as _;
 
-use super::diagnose::{Diagnosis, ModelResult, Residual, INTERVAL, Z_FLAG};
+use super::diagnose::{about_as_well, Diagnosis, ModelResult, Residual, INTERVAL, Z_FLAG};
 use super::limits::{sig3, PROBABILITY};
 
 pub(super) fn f(v: f64, d: usize) -> String {
@@ -56,7 +56,7 @@ fn residual_row(label: &str, r: &Residual, d: usize) -> String {
 /// report.md.
 pub fn to_markdown(d: &Diagnosis) -> String {
     let mut s = String::new();
-    for section in [conditions, verdict, limits, where_, which, how_far, pair, next_measurement, plots] {
+    for section in [conditions, verdict, limits, where_, which, motion_ridge, how_far, pair, next_measurement, plots] {
         section(&mut s, d);
     }
     s
@@ -314,6 +314,51 @@ fn which(s: &mut String, d: &Diagnosis) {
             d.indistinguishable.iter().map(|e| format!("`{}`", e.name())).collect::<Vec<_>>().join(", ")
         );
     }
+}
+
+/// The motion screen's ridge: the unstated motions that fit about as well as the best.
+fn motion_ridge(s: &mut String, d: &Diagnosis) {
+    if d.motion_screen.is_empty() {
+        return;
+    }
+    let floor = d.verdict.remaining.floor;
+    let near = about_as_well(&d.motion_screen, floor);
+    let _ = writeln!(
+        s,
+        "## The unstated motion: what the screen could tell apart
+"
+    );
+    let _ = writeln!(
+        s,
+        "The motion screen tried {} sled motions (the fitted shared parameters at each, loss-adjusted SSE at the full \
+         budget on the fit's streams; diagnosis.json's `motion_screen`). Those within the noise floor ({} %²) of the \
+         best fit about as well:\n",
+        d.motion_screen.len(),
+        f(floor, 1)
+    );
+    let _ = writeln!(s, "| return direction | motion held | SSE (%²) |");
+    let _ = writeln!(s, "|---|---|---|");
+    for p in &near {
+        let motion: Vec<String> = p.motion.iter().map(|(n, v)| format!("{n} {v}")).collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {}{} |",
+            p.direction.map_or("as stated", |r| r.name()),
+            motion.join(", "),
+            f(p.sse, 1),
+            if p.polished { " (polished)" } else { "" }
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\n{}\n",
+        if near.len() > 1 {
+            "These data do not tell these motions apart (a later return against a faster one moves the sled about as \
+             far during the flights): the fitted motion is one of this ridge, not the motion itself."
+        } else {
+            "Only the best grid point fits that well: the data place the motion near it (the fit moves it from there)."
+        }
+    );
 }
 
 /// How far: baseline against the top-ranked effect per condition and tooth.

@@ -54,8 +54,11 @@ use super::run::Run;
 use crate::calibrate::{Fit, Model, Search, Simulator, Solver, Space, Target};
 use crate::model::effects::{EffectKind, MotionDirection};
 
-/// The grid of unstated sled motions: delays (s) "at once" and well into the flights (a
-/// longer delay outlasts them: the baseline's own start), and return speeds (m/s) doubling
+/// The grid of unstated sled motions: delays (s) "at once", 0.05 and 0.1 s into the flights
+/// (a longer delay outlasts them: the baseline's own start; with 0 and 0.05 only, a 0.1 s,
+/// 0.3 m/s return down the slope screened best at (0.05 s, 0.03 m/s), 95 %² where the
+/// 0.1 s point gives 2.7, and its fit ran to the delay box's top: the motion sweep's one
+/// miss, docs/diagnosis-report.md), and return speeds (m/s) doubling
 /// over the search box (the POC profile's 0.05 m/s to a fast return). At a few tenths of a
 /// m/s the sled returns its stroke (10 mm on the practice rig) in tens of milliseconds,
 /// while grains fly, and the outcome is steep in the speed: at a step of 2.7 (0.3 to
@@ -84,6 +87,29 @@ pub struct MotionStart {
     /// every setup states it).
     pub direction: Option<MotionDirection>,
     pub evaluations: u64,
+    /// Every grid point as the screen left it, best first: what the report's ridge reads.
+    pub points: Vec<ScreenedMotion>,
+}
+
+/// One grid point of the screen as it ended: the held motion and its loss-adjusted SSE at
+/// the full budget on the fit's streams (%²), polished for the best [`POLISHED`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScreenedMotion {
+    pub direction: Option<MotionDirection>,
+    /// The grid's values of the motion's unstated parameters (`delay_s`, `return_speed_m_s`).
+    pub motion: Vec<(&'static str, f64)>,
+    pub sse: f64,
+    pub polished: bool,
+}
+
+/// The grid points that fit about as well as the best: an SSE within `floor` (%², the
+/// data's noise floor) of the best one's. More than one is a ridge: motions that move the
+/// sled about as far during the flights (a later return against a faster one) and that these
+/// data do not tell apart, so the fitted motion is one of them, not *the* motion
+/// (docs/diagnosis-report.md). `points` best first, as [`MotionStart::points`].
+pub fn about_as_well(points: &[ScreenedMotion], floor: f64) -> Vec<&ScreenedMotion> {
+    let Some(best) = points.iter().map(|p| p.sse).min_by(f64::total_cmp) else { return Vec::new() };
+    points.iter().filter(|p| p.sse <= best + floor.max(0.0)).collect()
 }
 
 /// Every combination of the grid's values for the free parameters `names` (the motion's,
@@ -277,7 +303,22 @@ pub fn motion_start(
         describe(*g, &f.x),
         started.elapsed().as_secs_f64()
     ));
-    Ok(Some(MotionStart { x, direction: grid[*g].0, evaluations }))
+    let mut points: Vec<ScreenedMotion> = grid
+        .iter()
+        .zip(&ranked)
+        .map(|((direction, motion), r)| ScreenedMotion {
+            direction: *direction,
+            motion: motion.clone(),
+            sse: r.value,
+            polished: false,
+        })
+        .collect();
+    for (g, value, _) in &scored {
+        points[*g].sse = *value;
+        points[*g].polished = true;
+    }
+    points.sort_by(|a, b| a.sse.total_cmp(&b.sse));
+    Ok(Some(MotionStart { x, direction: grid[*g].0, evaluations, points }))
 }
 
 /// The i-th point of the van der Corput sequence in `base`.
@@ -305,6 +346,23 @@ mod tests {
         let speeds = grid(&["return_speed_m_s"]);
         assert_eq!(speeds.iter().map(|p| p[0].1).collect::<Vec<_>>(), MOTION_GRID.1);
         assert_eq!(grid(&[]), [Vec::<(&str, f64)>::new()]);
+    }
+
+    #[test]
+    fn the_ridge_is_every_grid_point_within_the_noise_floor_of_the_best() {
+        let point = |delay: f64, speed: f64, sse: f64| ScreenedMotion {
+            direction: Some(MotionDirection::Slope),
+            motion: vec![("delay_s", delay), ("return_speed_m_s", speed)],
+            sse,
+            polished: false,
+        };
+        let points = [point(0.0, 0.12, 4.0), point(0.05, 0.25, 5.5), point(0.1, 0.5, 6.1), point(0.0, 1.0, 90.0)];
+        let near = |floor| about_as_well(&points, floor).iter().map(|p| p.sse).collect::<Vec<_>>();
+        assert_eq!(near(2.0), [4.0, 5.5], "within 2 %² of the best's 4.0");
+        assert_eq!(near(0.0), [4.0], "a zero floor keeps the best alone");
+        assert_eq!(near(-1.0), [4.0], "a floor is never negative");
+        assert_eq!(near(100.0).len(), 4);
+        assert!(about_as_well(&[], 1.0).is_empty());
     }
 
     #[test]
