@@ -359,6 +359,35 @@ fn no_effect_no_best() {
     std::fs::remove_dir_all(&d).ok();
 }
 
+/// `--params` sets what every model fits: with v_limit among them the baseline and each
+/// candidate fit the plastic limit speed too, and corrected.toml carries it.
+#[test]
+fn the_shared_parameters_can_include_the_contact_laws_limit_speed() {
+    let d = scratch("params");
+    let data = d.join("synth.csv");
+    synth(&validation_setup("test3"), Some("impact-scatter=8"), 4, &data);
+    let o = sawtooth()
+        .args(["diagnose", "--data", data.to_str().unwrap(), "--setup", &validation_setup("test3")])
+        .args(["--effects", "impact-scatter", "--max-particles", "2000", "--pop", "8", "--generations", "3"])
+        .args(["--polish", "2", "--bootstrap", "40", "--no-detection-limits", "--json"])
+        .args(["--params", "k_elastic,mu_fric,k_drag,v_limit", "--out"])
+        .arg(d.join("out"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let shared: Vec<&str> =
+        v["baseline"]["shared_params"].as_array().unwrap().iter().map(|p| p.as_str().unwrap()).collect();
+    assert_eq!(shared, ["k_elastic", "mu_fric", "k_drag", "v_limit"]);
+    for m in std::iter::once(&v["baseline"]).chain(v["ranking"].as_array().unwrap()) {
+        let limit = m["params"]["v_limit"].as_f64().unwrap_or_else(|| panic!("v_limit fitted: {m}"));
+        assert!((0.001..=2.0).contains(&limit), "inside its box: {m}");
+    }
+    let corrected = std::fs::read_to_string(d.join("out/corrected.toml")).unwrap();
+    assert!(corrected.contains("v_limit_m_s = "), "{corrected}");
+    std::fs::remove_dir_all(&d).ok();
+}
+
 /// Without `--json` the summary says what the ranking is ordered by and shows each
 /// effect's score beside its gap (a larger reduction can rank lower: it pays for its
 /// parameters and its uncertainty).
@@ -479,7 +508,7 @@ fn bad_input_is_named_with_exit_2() {
         .replace("k_drag_per_s = 5.347", "k_drag_per_s = 0.0");
     std::fs::write(&vacuum, text).unwrap();
     let vacuum = vacuum.to_str().unwrap().to_string();
-    let cases: [(Vec<&str>, &str); 8] = [
+    let cases: [(Vec<&str>, &str); 10] = [
         (vec!["--data", &data, "--setup", &bad_motion], "measurement.motion_delay_s must lie in [0, 100]"),
         (
             vec!["--data", &data, "--setup", s3, "--rescore-streams", "5000"],
@@ -497,6 +526,8 @@ fn bad_input_is_named_with_exit_2() {
             vec!["--data", &data, "--setup", &vacuum, "--effects", "quadratic-drag"],
             "--effects: no candidate effect applies",
         ),
+        (vec!["--data", &data, "--setup", s3, "--params", "k_elastic,spin"], "--params: unknown parameter `spin`"),
+        (vec!["--data", &data, "--setup", &vacuum, "--params", "k_elastic,k_drag"], "--params: k_drag does not apply"),
     ];
     for (args, needle) in cases {
         let o = sawtooth().arg("diagnose").args(&args).args(["--out", o_str]).output().unwrap();

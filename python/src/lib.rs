@@ -758,7 +758,7 @@ fn _fit<'py>(
 #[pyfunction]
 #[pyo3(signature = (data, setup, out, *, effects="all", seed=None, engine="cpu", particles=None, max_particles=None,
     pop=None, generations=None, polish=None, normalise=None, rescore_streams=None, bootstrap=None,
-    detection_limits=true, suggest=false))]
+    detection_limits=true, suggest=false, params=None))]
 #[allow(clippy::too_many_arguments)]
 fn _diagnose<'py>(
     py: Python<'py>,
@@ -778,6 +778,7 @@ fn _diagnose<'py>(
     bootstrap: Option<usize>,
     detection_limits: bool,
     suggest: bool,
+    params: Option<String>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let mut r = DiagnoseRequest::new(data, setup, out, Spelling::Keywords);
     r.effects = parse_effects(effects).context("effects").map_err(value_error)?;
@@ -789,6 +790,7 @@ fn _diagnose<'py>(
     r.bootstrap = bootstrap.unwrap_or(r.bootstrap);
     r.detection_limits = detection_limits;
     r.suggest = suggest;
+    r.params = params.map(|p| parse_params(&p).context("params")).transpose().map_err(value_error)?;
     let (_, json) = py.detach(|| diagnose_request::run(&r, &mut |line| eprintln!("{line}"))).map_err(value_error)?;
     json_to_py(py, &json)
 }

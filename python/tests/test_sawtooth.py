@@ -265,6 +265,16 @@ def test_diagnose_small_budget_returns_the_report():
     assert d["suggestions"] is None or d["suggestions"]["proposals"]
     with pytest.raises(ValueError, match="must come in pairs"):
         sawtooth.diagnose([ROOT / "data/validation/test3.csv"] * 2, ROOT / "data/validation/test3.toml")
+    # what every model fits, as the CLI's --params: the contact law's limit speed too
+    d = sawtooth.diagnose(
+        ROOT / "data/validation/test3.csv", ROOT / "data/validation/test3.toml",
+        effects=["impact-scatter"], particles=1000, max_particles=1000, pop=5, generations=2, polish=1,
+        rescore_streams=1, bootstrap=20, detection_limits=False, params=["k_elastic", "mu_fric", "k_drag", "v_limit"],
+    )
+    assert d["baseline"]["shared_params"] == ["k_elastic", "mu_fric", "k_drag", "v_limit"]
+    assert 0.001 <= d["baseline"]["params"]["v_limit"] <= 2.0
+    with pytest.raises(ValueError, match="unknown parameter `spin`"):
+        sawtooth.diagnose(ROOT / "data/validation/test3.csv", ROOT / "data/validation/test3.toml", params=["spin"])
 
 
 # --- pymoo --------------------------------------------------------------------------------

@@ -65,6 +65,25 @@ impl Param {
         }
     }
 
+    /// Why the parameter cannot be fitted on a condition of `scenario` (its setup `setup`),
+    /// or None: k_drag needs air; v_limit the text's physics with the thesis's contact law
+    /// (the listing's mode never uses the plastic law, errata 6 and 19; the DEM's law has one
+    /// constant COR).
+    pub fn refusal(self, s: &Scenario, setup: &str) -> Option<String> {
+        match self {
+            Param::KDrag if s.environment.k_drag.is_none() => {
+                Some(format!("k_drag does not apply: the setup {setup} is in vacuum (no environment.k_drag)"))
+            }
+            Param::VLimit if s.mode != crate::model::PhysicsMode::Physical => Some(format!(
+                "v_limit does not apply: the setup {setup} runs the listing's mode, which never uses the plastic law (errata 6, 19)"
+            )),
+            Param::VLimit if s.collision.law != crate::model::ContactLaw::Thesis => Some(format!(
+                "v_limit does not apply: the setup {setup} runs the DEM's contact law (one constant COR, no plastic branch)"
+            )),
+            _ => None,
+        }
+    }
+
     /// The scenario's value (k_drag 0 in vacuum).
     pub fn get(self, s: &Scenario) -> f64 {
         match self {

@@ -11,7 +11,7 @@ use anyhow::Context as _;
 use clap::Args;
 
 use super::args::EffortArgs;
-use crate::calibrate::{Normalise, Spelling};
+use crate::calibrate::{parse_params, Normalise, Spelling};
 use crate::diagnose::diagnose::parse_effects;
 use crate::diagnose::request::{self, DiagnoseRequest};
 use crate::engine::EngineKind;
@@ -58,6 +58,11 @@ pub struct DiagnoseArgs {
     /// `suggestions`, report.md's "Next measurement").
     #[arg(long)]
     pub suggest: bool,
+    /// The parameters every model fits, shared by the conditions, as a comma list (default:
+    /// k_elastic,mu_fric, plus k_drag where any setup has air); add v_limit to fit the contact
+    /// law's plastic limit speed (Eq. 4.9) in the baseline and every candidate.
+    #[arg(long)]
+    pub params: Option<String>,
     /// Write report.md, diagnosis.json and the figures residuals, ranking, distributions (.svg and .png) here.
     #[arg(long)]
     pub out: PathBuf,
@@ -77,6 +82,7 @@ pub fn run(a: DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     r.bootstrap = a.bootstrap;
     r.detection_limits = !a.no_detection_limits;
     r.suggest = a.suggest;
+    r.params = a.params.as_deref().map(parse_params).transpose().context("--params")?;
     let (d, json) = request::run(&r, &mut |line| eprintln!("{line}"))?;
     if a.json {
         writeln!(out, "{}", serde_json::to_string_pretty(&json)?).context("writing output")?;

@@ -15,7 +15,7 @@ use super::diagnose::{applicable_effects, diagnose, Condition, Diagnosis, Effect
 use super::json::to_json;
 use super::render;
 use crate::calibrate::measured::{self, condition_names};
-use crate::calibrate::{EffortSettings, Normalise, Spelling};
+use crate::calibrate::{EffortSettings, Normalise, Param, Spelling};
 use crate::engine::{make_engine, EngineKind};
 use crate::io::run_dir::{Access, RunDir};
 
@@ -47,6 +47,9 @@ pub struct DiagnoseRequest {
     pub detection_limits: bool,
     /// Which additional condition would separate the candidates the diagnosis leaves.
     pub suggest: bool,
+    /// The shared parameters every model fits (None: k_elastic, mu_fric, and k_drag where
+    /// any setup has air).
+    pub params: Option<Vec<Param>>,
     /// report.md, diagnosis.json and the figures go here.
     pub out: PathBuf,
     /// How the user spelled the fields, for the errors.
@@ -85,6 +88,7 @@ impl DiagnoseRequest {
             bootstrap: Self::DEFAULT_BOOTSTRAP,
             detection_limits: true,
             suggest: false,
+            params: None,
             out,
             spelling,
         }
@@ -147,6 +151,14 @@ pub fn run(r: &DiagnoseRequest, log: &mut dyn FnMut(String)) -> anyhow::Result<(
         }
         conditions.push(c);
     }
+    if let Some(params) = &r.params {
+        if params.is_empty() {
+            bail!("{}: no parameter to fit (known: {})", name("params"), crate::calibrate::param::known_names());
+        }
+        if let Some(why) = params.iter().find_map(|p| conditions.iter().find_map(|c| p.refusal(&c.base, &c.setup))) {
+            bail!("{}: {why}", name("params"));
+        }
+    }
     let (applicable, left_out) = applicable_effects(&r.effects, &conditions);
     if applicable.is_empty() {
         bail!("{}: {NO_EFFECT_APPLIES} ({})", name("effects"), left_out.join("; "));
@@ -162,6 +174,7 @@ pub fn run(r: &DiagnoseRequest, log: &mut dyn FnMut(String)) -> anyhow::Result<(
         bootstrap: r.bootstrap,
         detection_limits: r.detection_limits,
         suggest: r.suggest,
+        shared: r.params.clone(),
     };
     let started = std::time::Instant::now();
     let d = diagnose(engine.as_ref(), conditions, settings, log)?;

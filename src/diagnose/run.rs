@@ -44,6 +44,10 @@ pub struct Settings {
     /// The additional conditions that would separate what the diagnosis leaves
     /// ([`super::suggest`]).
     pub suggest: bool,
+    /// The parameters every model fits, shared by the conditions (None: k_elastic, mu_fric,
+    /// and k_drag where any setup has air, [`shared_params`]). `v_limit` among them fits the
+    /// contact law's plastic limit speed too, in the baseline and every candidate.
+    pub shared: Option<Vec<Param>>,
 }
 
 /// What is said when none of the candidate effects can act on the setups.
@@ -204,7 +208,7 @@ impl<'a> Run<'a> {
             sim: Simulator { engine, conditions },
             solver,
             targets: conditions.iter().map(Condition::target_all).collect(),
-            shared: shared_params(conditions),
+            shared: settings.shared.clone().unwrap_or_else(|| shared_params(conditions)),
             effects,
             rescore_streams: settings.rescore_streams,
             bootstrap: settings.bootstrap,

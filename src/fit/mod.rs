@@ -85,20 +85,8 @@ fn check(condition: &Condition, params: &[Param]) -> anyhow::Result<()> {
     if params.is_empty() {
         bail!("no parameter to fit (known: {})", known_names());
     }
-    if params.contains(&Param::KDrag) && !condition.has_drag() {
-        bail!("k_drag does not apply: the setup {} is in vacuum (no environment.k_drag)", condition.setup);
-    }
-    if params.contains(&Param::VLimit) && condition.base.mode != crate::model::PhysicsMode::Physical {
-        bail!(
-            "v_limit does not apply: the setup {} runs the listing's mode, which never uses the plastic law (errata 6, 19)",
-            condition.setup
-        );
-    }
-    if params.contains(&Param::VLimit) && condition.base.collision.law != crate::model::ContactLaw::Thesis {
-        bail!(
-            "v_limit does not apply: the setup {} runs the DEM's contact law (one constant COR, no plastic branch)",
-            condition.setup
-        );
+    if let Some(why) = params.iter().find_map(|p| p.refusal(&condition.base, &condition.setup)) {
+        bail!(why);
     }
     if runs.teeth > teeth {
         bail!(

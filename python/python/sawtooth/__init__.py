@@ -98,13 +98,15 @@ def diagnose(
     and the SVG plots; without it they go to a temporary directory that is removed.
     Keyword options are the command's flags with underscores (``effects``, ``seed``,
     ``engine``, ``particles``, ``max_particles``, ``pop``, ``generations``, ``polish``,
-    ``normalise``, ``rescore_streams``, ``bootstrap``); ``detection_limits=False`` leaves out
-    each candidate's detection limit, ``suggest=True`` ranks the next measurement.
+    ``normalise``, ``rescore_streams``, ``bootstrap``, ``params=["k_elastic", "mu_fric",
+    "v_limit"]``: what every model fits); ``detection_limits=False`` leaves out each
+    candidate's detection limit, ``suggest=True`` ranks the next measurement.
     """
     datas = [data] if isinstance(data, (str, os.PathLike)) else list(data)
     setups = [setup] if isinstance(setup, (str, os.PathLike)) else list(setup)
-    if "effects" in options:
-        options["effects"] = _list(options["effects"])
+    for key in ("effects", "params"):
+        if key in options:
+            options[key] = _list(options[key])
     tmp = None
     if out is None:
         tmp = tempfile.mkdtemp(prefix="sawtooth-diagnose-")
