@@ -323,11 +323,7 @@ fn motion_ridge(s: &mut String, d: &Diagnosis) {
     }
     let floor = d.verdict.remaining.floor;
     let near = about_as_well(&d.motion_screen, floor);
-    let _ = writeln!(
-        s,
-        "## The unstated motion: what the screen could tell apart
-"
-    );
+    let _ = writeln!(s, "## The unstated motion: what the screen could tell apart\n");
     let _ = writeln!(
         s,
         "The motion screen tried {} sled motions (the fitted shared parameters at each, loss-adjusted SSE at the full \
@@ -340,11 +336,13 @@ fn motion_ridge(s: &mut String, d: &Diagnosis) {
     let _ = writeln!(s, "|---|---|---|");
     for p in &near {
         let motion: Vec<String> = p.motion.iter().map(|(n, v)| format!("{n} {v}")).collect();
+        // a campaign that states the delay and speed but not the direction screens directions only
+        let motion = if motion.is_empty() { "delay and speed as stated".to_string() } else { motion.join(", ") };
         let _ = writeln!(
             s,
             "| {} | {} | {}{} |",
             p.direction.map_or("as stated", |r| r.name()),
-            motion.join(", "),
+            motion,
             f(p.sse, 1),
             if p.polished { " (polished)" } else { "" }
         );
