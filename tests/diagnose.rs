@@ -359,22 +359,66 @@ fn no_effect_no_best() {
     std::fs::remove_dir_all(&d).ok();
 }
 
+/// Two candidates at a tiny budget: a diagnosis whose outputs' form is checked, not its numbers.
+const SMALL_BUDGET: [&str; 12] = [
+    "--effects",
+    "impact-scatter,launch-spread",
+    "--max-particles",
+    "2000",
+    "--pop",
+    "8",
+    "--generations",
+    "4",
+    "--polish",
+    "3",
+    "--bootstrap",
+    "50",
+];
+
+/// Test 3's rig with `effect` synthesised (seed `seed`) into `d/synth.csv`, diagnosed with
+/// `args` (the candidates, the budget, the output flags) into `d/out`; it must succeed.
+fn diagnose_synthetic_test3(d: &Path, effect: Option<&str>, seed: u64, args: &[&str]) -> std::process::Output {
+    let data = d.join("synth.csv");
+    synth(&validation_setup("test3"), effect, seed, &data);
+    let o = sawtooth()
+        .args(["diagnose", "--data", data.to_str().unwrap(), "--setup", &validation_setup("test3")])
+        .args(args)
+        .arg("--out")
+        .arg(d.join("out"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
 /// `--params` sets what every model fits: with v_limit among them the baseline and each
 /// candidate fit the plastic limit speed too, and corrected.toml carries it.
 #[test]
 fn the_shared_parameters_can_include_the_contact_laws_limit_speed() {
     let d = scratch("params");
-    let data = d.join("synth.csv");
-    synth(&validation_setup("test3"), Some("impact-scatter=8"), 4, &data);
-    let o = sawtooth()
-        .args(["diagnose", "--data", data.to_str().unwrap(), "--setup", &validation_setup("test3")])
-        .args(["--effects", "impact-scatter", "--max-particles", "2000", "--pop", "8", "--generations", "3"])
-        .args(["--polish", "2", "--bootstrap", "40", "--no-detection-limits", "--json"])
-        .args(["--params", "k_elastic,mu_fric,k_drag,v_limit", "--out"])
-        .arg(d.join("out"))
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = diagnose_synthetic_test3(
+        &d,
+        Some("impact-scatter=8"),
+        4,
+        &[
+            "--effects",
+            "impact-scatter",
+            "--max-particles",
+            "2000",
+            "--pop",
+            "8",
+            "--generations",
+            "3",
+            "--polish",
+            "2",
+            "--bootstrap",
+            "40",
+            "--no-detection-limits",
+            "--json",
+            "--params",
+            "k_elastic,mu_fric,k_drag,v_limit",
+        ],
+    );
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     let shared: Vec<&str> =
         v["baseline"]["shared_params"].as_array().unwrap().iter().map(|p| p.as_str().unwrap()).collect();
@@ -394,16 +438,7 @@ fn the_shared_parameters_can_include_the_contact_laws_limit_speed() {
 #[test]
 fn the_text_summary_shows_the_score_it_ranks_by() {
     let d = scratch("text");
-    let data = d.join("synth.csv");
-    synth(&validation_setup("test3"), Some("impact-scatter=8"), 3, &data);
-    let o = sawtooth()
-        .args(["diagnose", "--data", data.to_str().unwrap(), "--setup", &validation_setup("test3")])
-        .args(["--effects", "impact-scatter,launch-spread", "--max-particles", "2000", "--pop", "8"])
-        .args(["--generations", "4", "--polish", "3", "--bootstrap", "50", "--out"])
-        .arg(d.join("out"))
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = diagnose_synthetic_test3(&d, Some("impact-scatter=8"), 3, &SMALL_BUDGET);
     let text = String::from_utf8(o.stdout).unwrap();
     assert!(text.contains("ranked by score = gap + 2 x (extra parameters) x bootstrap SE of the gap"), "{text}");
     let scores: Vec<f64> = text
@@ -426,16 +461,8 @@ fn the_text_summary_shows_the_score_it_ranks_by() {
 #[test]
 fn detection_limits_and_suggestions_come_with_the_diagnosis() {
     let d = scratch("limits");
-    let data = d.join("synth.csv");
-    synth(&validation_setup("test3"), None, 5, &data);
-    let o = sawtooth()
-        .args(["diagnose", "--data", data.to_str().unwrap(), "--setup", &validation_setup("test3")])
-        .args(["--effects", "impact-scatter,launch-spread", "--max-particles", "2000", "--pop", "8"])
-        .args(["--generations", "4", "--polish", "3", "--bootstrap", "50", "--suggest", "--json", "--out"])
-        .arg(d.join("out"))
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let args: Vec<&str> = SMALL_BUDGET.into_iter().chain(["--suggest", "--json"]).collect();
+    let o = diagnose_synthetic_test3(&d, None, 5, &args);
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     let l = &v["detection_limits"];
     assert_eq!(l["probability"], 0.9);

@@ -35,7 +35,7 @@ use serde::{Deserialize, Serialize};
 use super::case::{drag_commands, stop_when_every_grain_is_gone, Case, ALL_LOST, DUMP, GRAINS, MESH, SCRIPT};
 use super::contact::{property_commands, CONTACT_MODEL};
 use super::grains::{Grain, Placement};
-use super::losses::{classify_on_conveyor, last_seen, LeftBy, TRACK};
+use super::losses::{classify_on_conveyor, read_sightings, LeftBy, TRACK};
 use super::stl::{extrude, profile_polyline, stl_text, subdivide, MAX_FACET_M};
 use crate::io::atomic::write_atomic;
 use crate::model::geometry::Profile;
@@ -485,14 +485,7 @@ fn conveyor_losses(
     };
     let (on_conveyor, kept) = (mark(settled)?, mark(last)?);
     let deleted: Vec<bool> = kept.iter().map(|k| !k).collect();
-    let track = dir.join(TRACK);
-    let seen = if track.is_file() {
-        let reader = std::io::BufReader::new(crate::io::bounded::open_bounded(&track, &crate::schema::DEM_TRACK_FILE)?);
-        last_seen(reader, placed).with_context(|| format!("reading {}", track.display()))?
-    } else {
-        // every grain left before the track's first snapshot
-        vec![None; placed]
-    };
+    let seen = read_sightings(dir, placed)?;
     let line = periodic_line(&local_profile(&conveyor.tooth, conveyor.period_teeth), conveyor.period_teeth);
     let radius = 0.5 * conveyor.tooth.largest_diameter_m();
     Ok(Some(classify_on_conveyor(&line, radius, conveyor.bounds[1], &seen, &on_conveyor, &deleted)))

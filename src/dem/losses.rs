@@ -265,9 +265,20 @@ pub fn read_losses(case: &Case, dir: &Path, deleted: &[bool]) -> anyhow::Result<
             .map_err(|_| anyhow::anyhow!("{}: `{}` is not a step", start_path.display(), t.trim()))?,
         None => u64::MAX,
     };
-    let reader = std::io::BufReader::new(open_bounded(&track_path, &schema::DEM_TRACK_FILE)?);
-    let seen = last_seen(reader, deleted.len()).with_context(|| format!("reading {}", track_path.display()))?;
+    let seen = read_sightings(dir, deleted.len())?;
     Ok(Some(classify(case, start, &seen, deleted)))
+}
+
+/// The last sighting of each of `grains` grains in the run folder `dir`'s track ([`TRACK`],
+/// read under its bound), or none of them where the run wrote no track file (every grain left
+/// before its first snapshot).
+pub fn read_sightings(dir: &Path, grains: usize) -> anyhow::Result<Vec<Option<Seen>>> {
+    let path = dir.join(TRACK);
+    if !path.is_file() {
+        return Ok(vec![None; grains]);
+    }
+    let reader = std::io::BufReader::new(open_bounded(&path, &schema::DEM_TRACK_FILE)?);
+    last_seen(reader, grains).with_context(|| format!("reading {}", path.display()))
 }
 
 #[cfg(test)]
