@@ -78,8 +78,12 @@ pub(super) fn stop_when_every_grain_is_gone(deck: &str) -> String {
 const CHUNK_S: f64 = 0.02;
 /// Longest settling before the stroke, s (the grains start a fraction of a diameter apart).
 const MAX_SETTLE_S: f64 = 1.0;
-/// Teeth the mesh keeps beyond the model's farthest resting grain (and at least this many).
+/// Teeth the mesh keeps beyond the model's farthest resting grain: at least this many ...
 const REACH_MARGIN_TEETH: u32 = 3;
+/// ... and at least this share of the reach. A fixed 3 was short on a held-out lunar design
+/// (draw 2's doe-04, reach 15: 2.0 % of the DEM's grains at 150, 2.5 % at 300 left past tooth
+/// 18, docs/dem.md): the DEM's grains fly further than the model's as they get finer.
+const REACH_MARGIN_SHARE: f64 = 0.5;
 /// The conveyor the model's reach is measured on, teeth: longer than any flight of the
 /// optimiser's range (lunar pick B, v0 1.93 m/s, rests within 40 teeth).
 pub const REACH_CONVEYOR_TEETH: u32 = 400;
@@ -425,7 +429,14 @@ fn model_reach(s: &Scenario, d: &Design) -> Result<u32, String> {
         .map(|p| crate::model::outcome::end_tooth(&det.prepared.profile, p.end))
         .max()
         .unwrap_or(1);
-    Ok((far + REACH_MARGIN_TEETH).max(2 + REACH_MARGIN_TEETH).min(crate::schema::DEM_TEETH.max as u32))
+    Ok(mesh_teeth_for_reach(far))
+}
+
+/// The mesh for a model whose farthest resting grain is in tooth `far`: the reach plus a
+/// margin of [`REACH_MARGIN_TEETH`] or [`REACH_MARGIN_SHARE`] of it, whichever is more.
+fn mesh_teeth_for_reach(far: u32) -> u32 {
+    let margin = REACH_MARGIN_TEETH.max((f64::from(far) * REACH_MARGIN_SHARE).ceil() as u32);
+    far.saturating_add(margin).max(2 + REACH_MARGIN_TEETH).min(crate::schema::DEM_TEETH.max as u32)
 }
 
 /// The box: the mesh over its whole motion, room behind tooth 0 and below the profile for
@@ -490,6 +501,23 @@ mod tests {
 
     fn settings(particles: u32) -> DemSettings {
         DemSettings { particles, teeth: Some(8), ..Default::default() }
+    }
+
+    #[test]
+    fn the_mesh_reaches_half_again_past_the_models_farthest_grain_and_at_least_three_teeth() {
+        // draw 2's doe-04: the model rests within tooth 15; 18 teeth lost 2-2.5 % in the DEM
+        assert_eq!(mesh_teeth_for_reach(15), 23);
+        for far in [1, 2, 4, 6, 10, 15, 40] {
+            let teeth = mesh_teeth_for_reach(far);
+            assert!(teeth >= far + 3 && f64::from(teeth) >= 1.5 * f64::from(far), "reach {far}: {teeth}");
+        }
+        assert_eq!(mesh_teeth_for_reach(1), 5, "a short reach keeps room for a bounce");
+        assert!(mesh_teeth_for_reach(u32::MAX / 4) <= crate::schema::DEM_TEETH.max as u32);
+        // and the case takes it when `[dem] teeth` is unset
+        let (s, d) = rig();
+        let unset = DemSettings { particles: 60, teeth: None, ..Default::default() };
+        let case = Case::build(&s, &d, &unset, 0, None).unwrap();
+        assert_eq!(case.teeth, model_reach(&s, &d).unwrap(), "the reach's mesh, not `sim.teeth`");
     }
 
     #[test]

@@ -60,7 +60,7 @@ pub struct DemTable {
     pub max_time_s: Option<f64>,
     /// RMS grain speed below which the grains count as at rest.
     pub rest_speed_m_s: Option<f64>,
-    /// Teeth of the mesh; absent: the model's reach plus a margin (at most `sim.teeth`).
+    /// Teeth of the mesh; absent: the model's reach plus half of it (at least 3 more).
     pub teeth: Option<u32>,
     /// Where the DEM's constant normal COR comes from: `"k_elastic"` (the default) or
     /// `"model"` (the thesis law's k_n at the design's launch speed).
