@@ -251,6 +251,11 @@ fn refine_runs_the_campaign_at_half_the_overlap_and_twice_the_grains_and_judges_
         assert!(dir.join(sub).join("dem.csv").is_file(), "{sub}");
         settled_beds_are_finite(&dir.join(sub));
     }
+    // a level is a campaign of its own: compared with the model as the base one is
+    let level2 = dir.join("refine-02-ov0.1-n48");
+    let (code, _, err) = sawtooth(&["dem", "compare", level2.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(level2.join("compare.json").is_file());
     // again: everything is read back, nothing runs, the same ladder
     let before = read(&dir.join("refine.json"));
     let (code, again, err) = sawtooth(&args);

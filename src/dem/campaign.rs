@@ -28,7 +28,7 @@ use super::run::{find_liggghts, run_case};
 use super::settings::DemSettings;
 use crate::io::atomic::{clean_stale_temps, write_atomic};
 use crate::io::bounded::{read_text, read_text_if_present};
-use crate::io::run_dir::{hold_subfolder, mark_subfolder};
+use crate::io::run_dir::{declare_writes, hold_subfolder, mark_subfolder};
 use crate::model::{Design, Scenario};
 use crate::schema;
 
@@ -45,6 +45,15 @@ pub const RUN_KIND: &str = "dem-run";
 /// The DEM's restitution law measured on single grains of the campaign's case
 /// (`super::impact::measure_law`), as a `[collision]` table; `dem compare` runs the model with it.
 pub const LAW: &str = "law.toml";
+
+/// A campaign's folder inside a run that writes its files from outside it (a DEM check's
+/// design, a refinement's level): marked as a DEM campaign and as the owner of the campaign
+/// files the run writes there, so that `dem compare`, `fit` and a resumed run read it as a
+/// campaign of its own.
+pub fn own_subcampaign_folder(dir: &Path) -> anyhow::Result<()> {
+    mark_subfolder(dir, KIND)?;
+    declare_writes(dir, &[PLAN, CSV, SETUP, LAW])
+}
 
 /// What determines a campaign; a folder holds one plan.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -23,7 +23,7 @@ use super::compare::Spread;
 use super::gather::RunResult;
 use super::settings::DemSettings;
 use crate::io::atomic::write_atomic;
-use crate::io::run_dir::{declare_writes, kind_of, mark_subfolder, Access, RunDir};
+use crate::io::run_dir::{kind_of, Access, RunDir};
 use crate::model::design::DesignRow;
 use crate::model::performance::performance;
 use crate::model::prepare;
@@ -323,13 +323,6 @@ pub fn parse_plan(text: &str, name: &str) -> anyhow::Result<CheckPlan> {
     Ok(plan)
 }
 
-/// A design's folder, marked as the check's and as the owner of the campaign files the check
-/// writes there (so `dem compare`, `fit` and a resumed check read it as a campaign of its own).
-fn own_design_folder(dir: &Path) -> anyhow::Result<()> {
-    mark_subfolder(dir, campaign::KIND)?;
-    declare_writes(dir, &[campaign::PLAN, campaign::CSV, campaign::SETUP, campaign::LAW])
-}
-
 /// Run member `i` alone (the caller holds `root`, shared with the other members' tasks);
 /// `Ok(false)` when it was done already.
 pub fn run_member(root: &Path, plan: &CheckPlan, i: usize, say: &(dyn Fn(String) + Sync)) -> anyhow::Result<bool> {
@@ -343,7 +336,7 @@ pub fn run_member(root: &Path, plan: &CheckPlan, i: usize, say: &(dyn Fn(String)
     }
     let (f, r) = plan.member(i);
     let dir = plan.finalist_dir(root, f);
-    own_design_folder(&dir)?;
+    campaign::own_subcampaign_folder(&dir)?;
     campaign::run_one(&dir, &plan.finalists[f].campaign, r, say)
 }
 
@@ -412,7 +405,7 @@ pub fn gather(root: &Path, plan: &CheckPlan) -> anyhow::Result<CheckReport> {
     }
     let mut report = empty_report(plan);
     for (i, f) in plan.finalists.iter().enumerate() {
-        own_design_folder(&plan.finalist_dir(root, i))?;
+        campaign::own_subcampaign_folder(&plan.finalist_dir(root, i))?;
         let results = campaign::gather(&plan.finalist_dir(root, i), &f.campaign)?;
         report.designs.push(design_check(plan, f, &results)?);
     }
@@ -438,7 +431,7 @@ fn check_owned(
     let mut report = empty_report(plan);
     for (i, f) in plan.finalists.iter().enumerate() {
         let dir = plan.finalist_dir(root, i);
-        own_design_folder(&dir)?;
+        campaign::own_subcampaign_folder(&dir)?;
         say(format!("design {}: {}", f.label, DesignRow::of(&f.campaign.design)));
         let results = campaign::run(&dir, &f.campaign, jobs, say)?;
         report.designs.push(design_check(plan, f, &results)?);

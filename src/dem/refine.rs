@@ -121,8 +121,10 @@ pub fn refine(
             p.settings.validate().map_err(anyhow::Error::msg)?;
             let rel = sub_dir(index, overlap, particles);
             let sub = dir.join(&rel);
-            // a campaign of the refinement, the base campaign's own folder (marked as such)
-            crate::io::run_dir::mark_subfolder(&sub, "dem-refine")?;
+            // a campaign of the refinement in the base campaign's folder, marked as a DEM
+            // campaign like any other so that `dem compare` reads it (folders marked
+            // "dem-refine" by a version before this resume here too)
+            campaign::own_subcampaign_folder(&sub)?;
             say(format!("refine level {}: overlap {overlap}, {particles} grains in {}", level + 1, sub.display()));
             let runs = campaign::run(&sub, &p, jobs, say)?;
             let r = rung(&p, rel, &runs);
