@@ -348,7 +348,7 @@ pub const JOBS: Count = Count {
     why: "LIGGGHTS processes at a time; more than any machine has cores",
 };
 pub const DEM_PARTICLES: Count = Count {
-    flags: &["--particles"],
+    flags: &["--particles", "--draw-particles"],
     keys: &["[dem] particles"],
     python: None,
     min: 1,

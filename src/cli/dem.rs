@@ -191,6 +191,11 @@ pub struct DoeArgs {
     /// with the grain, and a fill too small for the grain count costs hours a run.
     #[arg(long, default_value_t = 3.0, allow_negative_numbers = true)]
     pub min_grain_mm: f64,
+    /// The grain count --min-grain-mm is judged at [default: --particles]: a draw remade at
+    /// more grains (a convergence check) keeps the designs it was drawn with at fewer, e.g.
+    /// `--particles 300 --draw-particles 150`.
+    #[arg(long, value_parser = super::args::count::<u32>(&crate::schema::DEM_PARTICLES))]
+    pub draw_particles: Option<u32>,
     /// Only designs whose model d_avg is at most this, mm: a long flight needs a long mesh and
     /// a long run (the lunar pick B's 2 m take hours a run) [default: any].
     #[arg(long, allow_negative_numbers = true)]
@@ -711,16 +716,18 @@ fn doe(a: DoeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         seeds: a.seeds,
         draw_seed: a.draw_seed,
         min_grain_m: a.min_grain_mm * 1e-3,
+        draw_particles: a.draw_particles,
         max_d_avg_m: a.max_d_avg_mm.map(|m| m * 1e-3),
         requirements,
     };
     let command = format!(
-        "sawtooth dem doe {}--designs {} --seeds {} --draw-seed {} --min-grain-mm {}{} --particles {}{} --out {}",
+        "sawtooth dem doe {}--designs {} --seeds {} --draw-seed {} --min-grain-mm {}{}{} --particles {}{} --out {}",
         a.scenario.config.as_ref().map_or(String::new(), |c| format!("--config {} ", c.display())),
         a.designs,
         a.seeds,
         a.draw_seed,
         a.min_grain_mm,
+        a.draw_particles.map_or(String::new(), |n| format!(" --draw-particles {n}")),
         a.max_d_avg_mm.map_or(String::new(), |m| format!(" --max-d-avg-mm {m}")),
         settings.particles,
         a.requirements.as_ref().map_or(String::new(), |r| format!(" --requirements {r}")),

@@ -51,6 +51,9 @@ pub struct DoeRequest {
     pub draw_seed: u64,
     /// Smallest DEM grain diameter a design may need, m.
     pub min_grain_m: f64,
+    /// The grain count that rule is judged at (None: the runs' own): a draw remade at more
+    /// grains, to check its convergence, keeps the designs it was drawn with at fewer.
+    pub draw_particles: Option<u32>,
     /// Longest model d_avg a design may have, m (None: any): a long flight needs a long mesh
     /// and a long run (pick B's 2 m take hours a run at the converged default).
     pub max_d_avg_m: Option<f64>,
@@ -89,6 +92,7 @@ pub fn pool(
     r: &DoeRequest,
 ) -> (Vec<Candidate>, Tally) {
     let want = (POOL_PER_DESIGN * r.designs).max(200);
+    let judged_at = DemSettings { particles: r.draw_particles.unwrap_or(settings.particles), ..settings.clone() };
     let mut rng = ChaCha8Rng::seed_from_u64(r.draw_seed);
     let mut tally = Tally::default();
     let mut pool = Vec::new();
@@ -106,7 +110,7 @@ pub fn pool(
                 continue;
             }
             // the grain size first: it needs the geometry only, not a simulation
-            match grain_diameter(scenario, settings, &x) {
+            match grain_diameter(scenario, &judged_at, &x) {
                 None => tally.rejected_by_model += 1,
                 Some(d) if d < r.min_grain_m => tally.grains_too_small += 1,
                 Some(d) => feasible.push((x, d)),
@@ -324,7 +328,15 @@ mod tests {
     }
 
     fn request(designs: usize) -> DoeRequest {
-        DoeRequest { designs, seeds: 2, draw_seed: 7, min_grain_m: 0.003, max_d_avg_m: None, requirements: None }
+        DoeRequest {
+            designs,
+            seeds: 2,
+            draw_seed: 7,
+            min_grain_m: 0.003,
+            draw_particles: None,
+            max_d_avg_m: None,
+            requirements: None,
+        }
     }
 
     /// Every drawn design keeps the optimiser's rules and the draw's own, the plan is a valid
@@ -365,6 +377,21 @@ mod tests {
         }
         let (again, _) = super::plan(engine.as_ref(), &scenario, &settings, &request(4), "test").unwrap();
         assert_eq!(again, plan);
+        // remade at twice the grains, judged at the count it was drawn at: the same designs,
+        // run with the new count (its grains smaller than the rule's 3 mm)
+        let finer = DemSettings { particles: 300, ..settings.clone() };
+        let remade_request = DoeRequest { draw_particles: Some(150), ..request(4) };
+        let (remade, _) = super::plan(engine.as_ref(), &scenario, &finer, &remade_request, "test").unwrap();
+        for (a, b) in plan.finalists.iter().zip(&remade.finalists) {
+            assert_eq!(a.campaign.design, b.campaign.design);
+            assert_eq!(b.campaign.settings.particles, 300);
+        }
+        let (judged_at_300, _) = super::plan(engine.as_ref(), &scenario, &finer, &request(4), "test").unwrap();
+        assert_ne!(
+            judged_at_300.finalists.iter().map(|f| &f.campaign.design).collect::<Vec<_>>(),
+            plan.finalists.iter().map(|f| &f.campaign.design).collect::<Vec<_>>(),
+            "judged at its own count, the rule keeps another pool"
+        );
     }
 
     #[test]
