@@ -1171,6 +1171,8 @@ pub const DEM_STROKE_START_FILE: FileLimit =
 /// Every grain's position and velocity at every rest check of one DEM run, read line by line;
 /// a case whose track would be larger writes none (`dem::case::Case::tracked`).
 pub const DEM_TRACK_FILE: FileLimit = FileLimit { what: "DEM track (track.dump)", flags: &[], max_bytes: 256 * MIB };
+/// A DEM campaign's convergence ladder: at most three levels of a few numbers each.
+pub const DEM_REFINE_FILE: FileLimit = FileLimit { what: "DEM refinement (refine.json)", flags: &[], max_bytes: MIB };
 /// A folder's marker: a few lines and the names of the files its run wrote.
 pub const MARKER_FILE_LIMIT: FileLimit =
     FileLimit { what: "folder marker (.sawtooth-run)", flags: &[], max_bytes: MIB };
@@ -1294,6 +1296,7 @@ pub const FILES: &[&FileLimit] = &[
     &DEM_STROKE_TIME_FILE,
     &DEM_STROKE_START_FILE,
     &DEM_TRACK_FILE,
+    &DEM_REFINE_FILE,
     &MARKER_FILE_LIMIT,
     &SUBMISSION_FILE,
 ];

@@ -256,6 +256,12 @@ fn refine_runs_the_campaign_at_half_the_overlap_and_twice_the_grains_and_judges_
     let (code, _, err) = sawtooth(&["dem", "compare", level2.to_str().unwrap(), "--json"]);
     assert_eq!(code, 0, "{err}");
     assert!(level2.join("compare.json").is_file());
+    // and the base campaign's comparison carries the ladder's numerics
+    let (code, compared, err) = sawtooth(&["dem", "compare", out, "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let c = json(&compared);
+    let moved = f(&c["numerics"]["overlap_move_mm"]).abs().max(f(&c["numerics"]["grains_move_mm"]).abs());
+    assert_eq!(f(&c["numerics_error_mm"]), moved, "{c}");
     // again: everything is read back, nothing runs, the same ladder
     let before = read(&dir.join("refine.json"));
     let (code, again, err) = sawtooth(&args);

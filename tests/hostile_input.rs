@@ -615,6 +615,52 @@ fn edited_dem_results_and_plans_are_refused_by_field() {
         assert_eq!(o.code, 2, "{want}: {}", o.stderr);
         assert!(o.stderr.contains(want) && o.stderr.contains("plan.json"), "{want}: {}", o.stderr);
     }
+    std::fs::write(&plan_path, serde_json::to_string(&plan).unwrap()).unwrap();
+    // a refinement's ladder (refine.json, as `dem run --refine` writes it) is read within its
+    // rules: its numerics join the comparison; an edited one is refused by field
+    let compared: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("compare.json")).unwrap()).unwrap();
+    let d_avg = compared["dem_d_avg_mm"]["mean"].as_f64().unwrap();
+    let rung = |d: f64, overlap: f64, particles: u32| {
+        serde_json::json!({"max_overlap_fraction": overlap, "particles": particles, "dir": ".",
+                           "d_avg_mm": d, "d_avg_sd_mm": 0.5, "wall_s": 1.0})
+    };
+    let ladder = serde_json::json!({"levels": [{
+        "base": rung(d_avg, 0.1, 20), "half_overlap": rung(d_avg + 0.2, 0.05, 20),
+        "double_grains": rung(d_avg - 0.3, 0.1, 40),
+        "overlap_move_mm": 0.2, "grains_move_mm": -0.3, "allowed_mm": 1.0, "converged": true}],
+        "converged": true});
+    let marker = out.join(".sawtooth-run");
+    let m = std::fs::read_to_string(&marker).unwrap();
+    std::fs::write(&marker, m.replacen("wrote = [", "wrote = [\"refine.json\", ", 1)).unwrap();
+    let refine = out.join("refine.json");
+    std::fs::write(&refine, serde_json::to_string(&ladder).unwrap()).unwrap();
+    let ok = sawtooth_in(repo(), &["dem", "compare", out.to_str().unwrap(), "--json"]);
+    assert_eq!(ok.code, 0, "{}", ok.stderr);
+    let c: serde_json::Value = serde_json::from_str(&ok.stdout).unwrap();
+    assert_eq!(c["numerics_error_mm"].as_f64(), Some(0.3), "{c}");
+    assert_eq!(c["numerics"]["double_grains"]["particles"], 40, "{c}");
+    let edits: Vec<(&str, JsonEdit)> = vec![
+        ("`levels` must hold 1 to 3 levels, got 0", Box::new(|v| v["levels"] = serde_json::json!([]))),
+        (
+            "levels[0].half_overlap.max_overlap_fraction must lie in (0, 1)",
+            Box::new(|v| v["levels"][0]["half_overlap"]["max_overlap_fraction"] = 5.0.into()),
+        ),
+        ("levels[0]: the moves must be finite", Box::new(|v| v["levels"][0]["allowed_mm"] = (-1.0).into())),
+        (
+            "levels[0].double_grains.particles must be at least 1",
+            Box::new(|v| v["levels"][0]["double_grains"]["particles"] = 0.into()),
+        ),
+    ];
+    for (want, edit) in edits {
+        let mut v = ladder.clone();
+        edit(&mut v);
+        std::fs::write(&refine, serde_json::to_string(&v).unwrap()).unwrap();
+        let o = compare();
+        assert_eq!(o.code, 2, "{want}: {}", o.stderr);
+        assert!(!o.stderr.contains("panicked"), "{want}: {}", o.stderr);
+        assert!(o.stderr.contains(want) && o.stderr.contains("refine.json"), "{want}: {}", o.stderr);
+    }
 }
 
 /// Issue 45, 2: a reader refuses what is not a regular file (a named pipe hung `simulate`,

@@ -418,7 +418,7 @@ fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     }
     let _owned = RunDir::acquire(&a.out, campaign::KIND, Access::Exclusive).context("--out")?;
     if let Some(levels) = a.refine {
-        if !(1..=3).contains(&levels) {
+        if !(1..=crate::dem::refine::MAX_LEVELS as u32).contains(&levels) {
             bail!("--refine must lie in [1, 3] levels, got {levels}");
         }
         if a.runs < 2 {
@@ -426,7 +426,11 @@ fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         }
     }
     let results = campaign::run(&a.out, &plan, jobs, &|line| eprintln!("dem: {line}"))?;
-    let c = compare(&plan.scenario, &plan.design, &results, campaign::law(&a.out)?.as_ref())?;
+    let mut c = compare(&plan.scenario, &plan.design, &results, campaign::law(&a.out)?.as_ref())?;
+    if a.refine.is_none() {
+        // with --refine the ladder follows the table
+        c.attach_numerics(crate::dem::refine::read_refinement(&a.out)?.as_ref());
+    }
     write_table(out, &c)?;
     writeln!(
         out,
@@ -511,7 +515,8 @@ fn compare_cmd(a: CompareArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> 
         return Ok(ExitCode::SUCCESS);
     }
     let (plan, results) = load_campaign(&a.dir)?;
-    let c = compare(&plan.scenario, &plan.design, &results, campaign::law(&a.dir)?.as_ref())?;
+    let mut c = compare(&plan.scenario, &plan.design, &results, campaign::law(&a.dir)?.as_ref())?;
+    c.attach_numerics(crate::dem::refine::read_refinement(&a.dir)?.as_ref());
     let _owned = RunDir::acquire(&a.dir, campaign::KIND, Access::Exclusive).context("DIR")?;
     let json = serde_json::to_string_pretty(&c)?;
     write_atomic(&a.dir.join("compare.json"), json.as_bytes())?;
@@ -592,10 +597,11 @@ fn write_table(out: &mut dyn Write, c: &Comparison) -> anyhow::Result<()> {
     )?;
     writeln!(
         out,
-        "d_avg: model {:.2} mm, DEM {:.2} ± {:.2} mm{}",
+        "d_avg: model {:.2} mm, DEM {:.2} ± {:.2} mm{}{}",
         c.model_d_avg_mm,
         c.dem_d_avg_mm.mean,
         c.dem_d_avg_mm.sd,
+        c.numerics_error_mm.map_or(String::new(), |e| format!(" (numerics ± {e:.2} mm, refine.json)")),
         c.d_avg_error_pct.map_or(String::new(), |e| format!(" ({e:+.1} %)"))
     )?;
     writeln!(

@@ -20,6 +20,7 @@ use serde::Serialize;
 
 use super::gather::RunResult;
 use super::losses::LeftBy;
+use super::refine::{Level, Refinement};
 use crate::engine::{evaluate_detailed, evaluate_detailed_from, make_engine_for, EngineKind};
 use crate::model::design::DesignRow;
 use crate::model::outcome::centre_and_dispersion;
@@ -88,8 +89,55 @@ pub struct Comparison {
     /// run wrote no track.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dem_left_by: Option<LeftBy>,
+    /// The DEM's numerics: the last level of the campaign's refinement (`dem run --refine`,
+    /// refine.json) with its moves and verdict; None when the campaign was not refined (a
+    /// warning then says so).
+    pub numerics: Option<Level>,
+    /// The discretisation error of the DEM's d_avg, mm: the larger of the last level's two
+    /// moves; None without a refinement.
+    pub numerics_error_mm: Option<f64>,
     /// Why this comparison may not be like for like (a mesh too short, ...).
     pub warnings: Vec<String>,
+}
+
+impl Comparison {
+    /// Give the comparison the DEM's discretisation error from the campaign's refinement,
+    /// or a warning that it has none (issue 42: every DEM figure carries its numerics' error).
+    /// A ladder whose base is not these runs (d_avg differs) is not used.
+    pub fn attach_numerics(&mut self, refinement: Option<&Refinement>) {
+        let Some(r) = refinement else {
+            self.warnings.push(
+                "the DEM's numerics are not checked on this campaign (no refine.json): `dem run --refine` runs it at \
+                 half the overlap and twice the grains; on a held-out lunar design twice the grains moved d_avg by \
+                 +39 % (docs/dem.md, \"Converged numerics\")"
+                    .into(),
+            );
+            return;
+        };
+        let (Some(first), Some(last)) = (r.levels.first(), r.levels.last()) else { return };
+        if (first.base.d_avg_mm - self.dem_d_avg_mm.mean).abs() > 1e-6 * self.dem_d_avg_mm.mean.abs().max(1.0) {
+            self.warnings.push(format!(
+                "refine.json was made from other runs (its base d_avg {:.2} mm, these runs' {:.2} mm): its numerics \
+                 are not used; run `dem run --refine` again",
+                first.base.d_avg_mm, self.dem_d_avg_mm.mean
+            ));
+            return;
+        }
+        if !r.converged {
+            self.warnings.push(format!(
+                "the DEM's numerics are not converged: at {} grains and {} overlap, half the overlap moved d_avg by \
+                 {:+.1} mm and twice the grains by {:+.1} mm, against {:.1} mm allowed (refine.json): the finer \
+                 levels' d_avg are the better figures",
+                last.base.particles,
+                last.base.max_overlap_fraction,
+                last.overlap_move_mm,
+                last.grains_move_mm,
+                last.allowed_mm
+            ));
+        }
+        self.numerics_error_mm = Some(last.overlap_move_mm.abs().max(last.grains_move_mm.abs()));
+        self.numerics = Some(last.clone());
+    }
 }
 
 /// Share of the loaded mass past the mesh's end above which a comparison warns.
@@ -209,6 +257,8 @@ pub fn compare(
         model_dem_law_d_avg_mm,
         model_dem_law_pct,
         dem_left_by,
+        numerics: None,
+        numerics_error_mm: None,
         warnings,
     })
 }
@@ -438,5 +488,63 @@ mod tests {
         assert_eq!(warned.len(), 1, "{warned:?}");
         assert!(warned[0].starts_with("the DEM loses 2.0 % of its mass past the mesh's last tooth (18)"), "{warned:?}");
         assert!(truncation_warnings(18, 1.0, 1.0).is_empty(), "at the threshold: no warning");
+    }
+
+    #[test]
+    fn a_comparison_carries_the_numerics_error_of_its_own_refinement_or_warns_that_it_has_none() {
+        use crate::dem::refine::{judge, Rung};
+        let rung = |d_avg_mm: f64, particles| Rung {
+            max_overlap_fraction: 0.025,
+            particles,
+            dir: ".".into(),
+            d_avg_mm,
+            d_avg_sd_mm: 2.0,
+            wall_s: 1.0,
+        };
+        let runs = |d: &[f64]| -> Vec<RunResult> {
+            d.iter()
+                .map(|&d_avg_mm| RunResult {
+                    teeth_g: vec![1.0; 4],
+                    input_mass_g: 4.0,
+                    grains: 10,
+                    lost: 0,
+                    left_box: 0,
+                    past_end: 0,
+                    left_by: None,
+                    seed: 0,
+                    moving: 0,
+                    d_avg_m: d_avg_mm * 1e-3,
+                    wall_s: 1.0,
+                    settled_xy_m: Vec::new(),
+                })
+                .collect()
+        };
+        let base = || compare(&Scenario::earth(), &Design::validation_rig(), &runs(&[99.0, 101.0]), None).unwrap();
+        // none: a warning that says how to get one
+        let mut c = base();
+        c.attach_numerics(None);
+        assert!(c.numerics.is_none() && c.numerics_error_mm.is_none());
+        assert!(c.warnings.iter().any(|w| w.contains("not checked") && w.contains("--refine")), "{:?}", c.warnings);
+        // converged: the larger move is the error, no warning
+        let ok = judge(rung(100.0, 150), rung(101.0, 150), rung(98.5, 300));
+        assert!(ok.converged);
+        let mut c = base();
+        let before = c.warnings.len();
+        c.attach_numerics(Some(&Refinement { levels: vec![ok.clone()], converged: true }));
+        assert_eq!(c.numerics_error_mm, Some(1.5));
+        assert_eq!(c.numerics.as_ref(), Some(&ok));
+        assert_eq!(c.warnings.len(), before, "{:?}", c.warnings);
+        // not converged: the moves and the allowance in the warning
+        let far = judge(rung(100.0, 150), rung(101.0, 150), rung(139.0, 300));
+        let mut c = base();
+        c.attach_numerics(Some(&Refinement { levels: vec![far], converged: false }));
+        assert_eq!(c.numerics_error_mm, Some(39.0));
+        assert!(c.warnings.iter().any(|w| w.contains("not converged") && w.contains("+39.0 mm")), "{:?}", c.warnings);
+        // a ladder of other runs is not this campaign's error
+        let other = judge(rung(120.0, 150), rung(121.0, 150), rung(119.0, 300));
+        let mut c = base();
+        c.attach_numerics(Some(&Refinement { levels: vec![other], converged: true }));
+        assert!(c.numerics.is_none());
+        assert!(c.warnings.iter().any(|w| w.contains("other runs")), "{:?}", c.warnings);
     }
 }

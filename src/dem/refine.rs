@@ -12,8 +12,12 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use anyhow::Context as _;
+
 use super::campaign::{self, Plan};
 use super::gather::RunResult;
+use crate::io::bounded::read_text_if_present;
+use crate::schema;
 
 /// The relative change of d_avg a refinement may make, however small the seed spread.
 pub const REL_TOL: f64 = 0.03;
@@ -160,6 +164,53 @@ pub fn refine(
 
 /// The ladder's record in the base campaign's folder.
 pub const REFINE: &str = "refine.json";
+
+/// Most levels a ladder climbs (`dem run --refine` takes 1 to this).
+pub const MAX_LEVELS: usize = 3;
+
+impl Refinement {
+    /// Every rule a ladder read back must keep: 1 to [`MAX_LEVELS`] levels, finite lengths,
+    /// non-negative spreads and allowances, grain counts of at least one, overlaps in (0, 1).
+    pub fn validate(&self) -> Result<(), String> {
+        if self.levels.is_empty() || self.levels.len() > MAX_LEVELS {
+            return Err(format!("`levels` must hold 1 to {MAX_LEVELS} levels, got {}", self.levels.len()));
+        }
+        for (i, l) in self.levels.iter().enumerate() {
+            for (name, r) in [("base", &l.base), ("half_overlap", &l.half_overlap), ("double_grains", &l.double_grains)]
+            {
+                let at = format!("levels[{i}].{name}");
+                if !(r.max_overlap_fraction > 0.0 && r.max_overlap_fraction < 1.0) {
+                    return Err(format!(
+                        "{at}.max_overlap_fraction must lie in (0, 1), got {}",
+                        r.max_overlap_fraction
+                    ));
+                }
+                if r.particles == 0 {
+                    return Err(format!("{at}.particles must be at least 1"));
+                }
+                if !r.d_avg_mm.is_finite() || !(r.d_avg_sd_mm.is_finite() && r.d_avg_sd_mm >= 0.0) {
+                    return Err(format!("{at}: d_avg_mm must be finite and d_avg_sd_mm finite and >= 0"));
+                }
+            }
+            if !(l.overlap_move_mm.is_finite() && l.grains_move_mm.is_finite())
+                || !(l.allowed_mm.is_finite() && l.allowed_mm >= 0.0)
+            {
+                return Err(format!("levels[{i}]: the moves must be finite and allowed_mm finite and >= 0"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The ladder `dem run --refine` left in the campaign folder `dir`, if it left one: read
+/// within its bound and checked by every rule; a broken file is refused naming it.
+pub fn read_refinement(dir: &Path) -> anyhow::Result<Option<Refinement>> {
+    let path = dir.join(REFINE);
+    let Some(text) = read_text_if_present(&path, &schema::DEM_REFINE_FILE)? else { return Ok(None) };
+    let r: Refinement = serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
+    r.validate().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok(Some(r))
+}
 
 #[cfg(test)]
 mod tests {
