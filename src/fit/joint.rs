@@ -12,7 +12,7 @@ use anyhow::bail;
 use serde::Serialize;
 
 use crate::calibrate::{
-    Condition, Covariate, Effort, Model, ObjectiveKind, Param, Search, Simulator, Solver, Space, Varying,
+    Condition, Covariate, Effort, Model, ObjectiveKind, Param, Search, Simulator, Solver, Space, Target, Varying,
 };
 use crate::engine::BatchEvaluator;
 
@@ -173,7 +173,10 @@ pub fn fit_joint(
         for (c, fit) in fits.iter_mut().enumerate() {
             let others: Vec<Condition> =
                 conditions.iter().enumerate().filter(|(i, _)| *i != c).map(|(_, o)| o.clone()).collect();
-            match leave_out(engine, &solver, &others, &conditions[c], params, settings, log)? {
+            let others_targets: Vec<Target> =
+                targets.iter().enumerate().filter(|(i, _)| *i != c).map(|(_, t)| t.clone()).collect();
+            let held = (&conditions[c], &targets[c]);
+            match leave_out(engine, &solver, (&others, &others_targets), held, params, settings, log)? {
                 Ok((left, n)) => {
                     evaluations += n;
                     fit.left_out = Some(left);
@@ -202,8 +205,8 @@ pub fn fit_joint(
 fn leave_out(
     engine: &dyn BatchEvaluator,
     solver: &Solver,
-    others: &[Condition],
-    held: &Condition,
+    (others, targets): (&[Condition], &[Target]),
+    (held, target): (&Condition, &Target),
     params: &[Param],
     settings: &JointSettings,
     log: &mut dyn FnMut(String),
@@ -213,11 +216,10 @@ fn leave_out(
         Err(e) => return Ok(Err(format!("not predicted: without it, {e}"))),
     };
     log(format!("fit: {} left out, the others fitted alone", held.name));
-    let targets: Vec<_> = others.iter().map(Condition::target_all).collect();
     let sim = Simulator { engine, conditions: others };
     let model = Model {
         space: &space,
-        targets: &targets,
+        targets,
         starts: vec![setup_start(&space, others)],
         search: Search::Global { stream: 0 },
     };
@@ -228,7 +230,6 @@ fn leave_out(
     let Some(Some(bins)) = one.simulate(&[(&space, fit.x.clone())], solver.particles, solver.seed).pop() else {
         return Ok(Err("not predicted: the engine rejected it at the others' fit".into()));
     };
-    let target = held.target_all();
     let compared = target.after_handling(&bins[0]).1;
     let scenario = space.scenario_at(held, &fit.x);
     Ok(Ok((
