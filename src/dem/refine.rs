@@ -188,13 +188,12 @@ impl Refinement {
                 if r.particles == 0 {
                     return Err(format!("{at}.particles must be at least 1"));
                 }
-                if !r.d_avg_mm.is_finite() || !(r.d_avg_sd_mm.is_finite() && r.d_avg_sd_mm >= 0.0) {
+                if !(r.d_avg_mm.is_finite() && r.d_avg_sd_mm.is_finite() && r.d_avg_sd_mm >= 0.0) {
                     return Err(format!("{at}: d_avg_mm must be finite and d_avg_sd_mm finite and >= 0"));
                 }
             }
-            if !(l.overlap_move_mm.is_finite() && l.grains_move_mm.is_finite())
-                || !(l.allowed_mm.is_finite() && l.allowed_mm >= 0.0)
-            {
+            let finite = l.overlap_move_mm.is_finite() && l.grains_move_mm.is_finite() && l.allowed_mm.is_finite();
+            if !(finite && l.allowed_mm >= 0.0) {
                 return Err(format!("levels[{i}]: the moves must be finite and allowed_mm finite and >= 0"));
             }
         }
