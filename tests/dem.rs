@@ -155,6 +155,22 @@ fn designs_and_scenarios_the_mesh_cannot_represent_are_refused_by_name() {
         assert!(err.contains(expected), "{extra:?}: {err}");
         assert!(!err.contains("panicked"), "{err}");
     }
+    // a grain stated for one count (a campaign's setup.toml states both) is not silently
+    // given to another count: the mass would not be the fill's
+    let stated = dir.with_extension("stated.toml");
+    let rig = read(std::path::Path::new(RIG));
+    std::fs::write(&stated, format!("{rig}\n[dem]\nparticles = 150\ngrain_diameter_m = 5e-4\n")).unwrap();
+    let config = stated.to_str().unwrap();
+    let (code, _, err) = sawtooth(&["dem", "write", "--config", config, "--particles", "300", "--out", out]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--particles 300 differs from the config's [dem] particles 150"), "{err}");
+    assert!(err.contains("grain_diameter_m (0.500 mm)") && err.contains("--grain-diameter-um"), "{err}");
+    for fine in [vec!["--particles", "150"], vec!["--particles", "300", "--grain-diameter-um", "400"]] {
+        let mut args = vec!["dem", "write", "--config", config, "--out", out];
+        args.extend(fine.iter());
+        let (code, _, err) = sawtooth(&args);
+        assert_eq!(code, 0, "{fine:?}: {err}");
+    }
 }
 
 /// Without LIGGGHTS the message names the Debian package and the `dem write` alternative.
@@ -554,6 +570,24 @@ fn a_design_of_experiments_draws_spread_designs_and_runs_them_as_a_check() {
         assert_eq!(f["campaign"]["scenario"]["environment"]["alpha_deg"], 35.0, "{f}");
     }
     assert_ne!(finalists[0]["campaign"]["design"], finalists[1]["campaign"]["design"]);
+    for f in finalists {
+        // the plan states each design's mesh, so that a later rule cannot move it
+        assert!(f["campaign"]["settings"]["teeth"].as_u64().is_some_and(|t| t >= 5), "{f}");
+    }
+    // the same draw remade at twice the grains, judged at the count it was drawn at
+    let finer = d.path().join("doe-finer");
+    let mut finer_args = plan_args.clone();
+    let at = finer_args.iter().position(|a| *a == "30").unwrap();
+    finer_args[at] = "60";
+    *finer_args.iter_mut().find(|a| **a == doe_s).unwrap() = finer.to_str().unwrap();
+    finer_args.extend(["--draw-particles", "30"]);
+    let (code, _, err) = sawtooth(&finer_args);
+    assert_eq!(code, 0, "{err}");
+    let remade: serde_json::Value = serde_json::from_str(&read(&finer.join("plan.json"))).unwrap();
+    for (a, b) in finalists.iter().zip(remade["finalists"].as_array().unwrap()) {
+        assert_eq!(a["campaign"]["design"], b["campaign"]["design"]);
+        assert_eq!(b["campaign"]["settings"]["particles"], 60);
+    }
     let (code, status, err) = sawtooth(&["campaign", "status", doe_s]);
     assert_eq!(code, 0, "{err}");
     assert!(status.contains("finished 0, not finished 2"), "{status}");
@@ -587,6 +621,24 @@ fn a_design_of_experiments_draws_spread_designs_and_runs_them_as_a_check() {
         assert_eq!(code, 0, "{label}: {err}");
         assert!(cmp.contains("d_avg: model"), "{cmp}");
     }
+    // a drawn design's folder is a campaign `dem run` resumes from its setup.toml (the way to
+    // `--refine` it): its runs are read back, nothing runs again
+    let first = doe.join("doe-01");
+    let setup = first.join("setup.toml");
+    let (code, _, err) = sawtooth(&[
+        "dem",
+        "run",
+        "--config",
+        setup.to_str().unwrap(),
+        "--runs",
+        "1",
+        "--jobs",
+        "1",
+        "--out",
+        first.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("settling"), "nothing runs again: {err}");
 }
 
 /// The loop's check (issue 43, 4): a run optimised on the corrected lunar model

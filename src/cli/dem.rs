@@ -301,14 +301,33 @@ type KnownReturn = Option<(f64, f64)>;
 /// The config file (not a run folder's manifest, which has no `[dem]`) and the DEM settings:
 /// its `[dem]` table over the defaults, `--particles` over that; not yet validated (the
 /// caller adds its own flags first).
-fn dem_settings(config: Option<&Path>, particles: Option<u32>) -> anyhow::Result<(Option<ConfigFile>, DemSettings)> {
+fn dem_settings(
+    config: Option<&Path>,
+    particles: Option<u32>,
+    grain_diameter_um: Option<f64>,
+) -> anyhow::Result<(Option<ConfigFile>, DemSettings)> {
     let file = match config {
         Some(p) if crate::optim::manifest::manifest_in(p)?.is_none() => Some(ConfigFile::load(p)?),
         _ => None,
     };
     let mut settings = DemSettings::from_table(file.as_ref().and_then(|f| f.dem.as_ref()));
     if let Some(n) = particles {
+        // a stated grain belongs to the config's count: another count of that grain would not
+        // carry the model's fill mass (a campaign's setup.toml states both)
+        if let (Some(d), true, None) = (settings.grain_diameter_m, n != settings.particles, grain_diameter_um) {
+            bail!(
+                "--particles {n} differs from the config's [dem] particles {}, for which its [dem] grain_diameter_m \
+                 ({:.3} mm) was chosen: {n} grains of that size would not carry the model's fill mass; remove \
+                 grain_diameter_m from the config (the diameter then follows the count) or state the grain with \
+                 --grain-diameter-um",
+                settings.particles,
+                d * 1e3
+            );
+        }
         settings.particles = n;
+    }
+    if let Some(um) = grain_diameter_um {
+        settings.grain_diameter_m = Some(um * 1e-6);
     }
     Ok((file, settings))
 }
@@ -326,13 +345,12 @@ fn resolve(a: &CaseArgs) -> anyhow::Result<(Scenario, Design, DemSettings, Known
             bail!("no design: pass --design l_c,l_a,l_b,r,omega_deg,delta_deg,v0,a or a config file with [design]")
         }
     };
-    let (file, mut settings) = dem_settings(a.scenario.config.as_deref(), grains)?;
-    if let Some(um) = a.grain_diameter_um {
-        settings.grain_diameter_m = Some(um * 1e-6);
-    }
+    let (file, settings) = dem_settings(a.scenario.config.as_deref(), grains, a.grain_diameter_um)?;
     settings.validate().map_err(|e| {
         anyhow::anyhow!(e.replace("[dem] grain_diameter_m", "--grain-diameter-um / [dem] grain_diameter_m"))
     })?;
+    // a new case states its mesh (the plan records it), so a later rule cannot move it
+    let settings = crate::dem::case::with_stated_mesh(&settings, &scenario, &design);
     let known = file
         .as_ref()
         .and_then(|f| f.measurement.as_ref())
@@ -711,7 +729,7 @@ fn doe(a: DoeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let mut scenario_args = a.scenario.clone();
     let grains = scenario_args.particles.take();
     let (scenario, _) = scenario_args.resolve()?;
-    let (_, settings) = dem_settings(a.scenario.config.as_deref(), grains)?;
+    let (_, settings) = dem_settings(a.scenario.config.as_deref(), grains, None)?;
     settings.validate().map_err(anyhow::Error::msg)?;
     let requirements = match &a.requirements {
         Some(spec) => Some(crate::io::config::load_requirements(spec).context("--requirements")?),

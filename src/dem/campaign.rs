@@ -125,7 +125,38 @@ pub fn parse_plan(text: &str, name: &str) -> anyhow::Result<(Plan, Case)> {
     Ok((plan, case))
 }
 
+/// Relative difference below which two designs' variables are the same design.
+const SAME_DESIGN_REL: f64 = 1e-12;
+
 impl Plan {
+    /// The plan with the settings it leaves to the case stated as the case derives them:
+    /// the mesh's teeth (the model's reach) and the grain diameter (the fill's mass over the
+    /// grain count). A campaign's setup.toml states both, so a `dem run --config setup.toml`
+    /// of a campaign whose plan left them derived is the same campaign ([`record_plan`]).
+    fn resolved(&self) -> Result<Plan, String> {
+        let case = self.case(0)?;
+        let mut p = self.clone();
+        p.settings.teeth = Some(case.teeth);
+        p.settings.grain_diameter_m = Some(case.placement.diameter_m);
+        Ok(p)
+    }
+
+    /// Whether `other` runs the same cases as this plan: equal, or equal once each states
+    /// what it left to the case ([`Plan::resolved`]) and the designs agree to
+    /// [`SAME_DESIGN_REL`] (setup.toml states the design in mm, and mm read back are not
+    /// always the metres written, in the last bit).
+    pub fn same_campaign(&self, other: &Plan) -> bool {
+        if self == other {
+            return true;
+        }
+        let (x, y) = (self.design.to_cli_units(), other.design.to_cli_units());
+        if x.iter().zip(&y).any(|(a, b)| (a - b).abs() > SAME_DESIGN_REL * a.abs().max(b.abs())) {
+            return false;
+        }
+        let other = Plan { design: self.design, ..other.clone() };
+        matches!((self.resolved(), other.resolved()), (Ok(a), Ok(b)) if a == b)
+    }
+
     /// Run `run`'s periodic conveyor (a steady plan's).
     pub fn conveyor(&self, run: u32) -> Result<Conveyor, String> {
         Conveyor::build(&self.scenario, self.case(run)?, self.period_teeth, self.strokes)
@@ -265,7 +296,7 @@ pub fn record_plan(dir: &Path, plan: &Plan) -> anyhow::Result<()> {
     if std::fs::symlink_metadata(&path).is_ok() {
         let old: Plan = serde_json::from_str(&read_text(&path, &schema::PLAN_FILE)?)
             .with_context(|| format!("reading {}", path.display()))?;
-        if &old != plan {
+        if !old.same_campaign(plan) {
             bail!(
                 "{} holds a DEM campaign of another plan ({}): resuming needs the same config, design, [dem] settings, --runs and --seed; choose another --out",
                 dir.display(),
@@ -522,5 +553,54 @@ fn remove_if_present(p: &Path) -> anyhow::Result<()> {
             Err(e).with_context(|| format!("removing {}", p.display()))
         }
         _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lunar(settings: DemSettings) -> Plan {
+        Plan {
+            scenario: Scenario::lunar(),
+            design: Design::lunar_solution_c(),
+            settings,
+            runs: 2,
+            first_seed: 0,
+            known_return: None,
+            strokes: 0,
+            period_teeth: 0,
+        }
+    }
+
+    #[test]
+    fn a_campaigns_setup_read_back_is_the_same_campaign_as_the_plan_that_left_its_mesh_and_grain_derived() {
+        let derived = lunar(DemSettings { particles: 150, ..Default::default() });
+        let case = derived.case(0).unwrap();
+        // what setup.toml states: the mesh and the grain the case derived
+        let stated = lunar(DemSettings {
+            particles: 150,
+            teeth: Some(case.teeth),
+            grain_diameter_m: Some(case.placement.diameter_m),
+            ..Default::default()
+        });
+        assert_ne!(derived, stated);
+        assert!(derived.same_campaign(&stated) && stated.same_campaign(&derived));
+        // the design as setup.toml's millimetres give it back: the last bit may differ
+        let mut x = derived.design.to_cli_units();
+        x[2] *= 1.0 + 1e-15;
+        let read_back = Plan { design: Design::from_cli_units(x), ..stated.clone() };
+        assert_ne!(read_back.design, derived.design);
+        assert!(derived.same_campaign(&read_back));
+        x[2] *= 1.0 + 1e-9;
+        assert!(!derived.same_campaign(&Plan { design: Design::from_cli_units(x), ..stated.clone() }));
+        // another mesh, another grain, another count or other seeds are other campaigns
+        let longer = lunar(DemSettings { teeth: Some(case.teeth + 1), ..stated.settings.clone() });
+        let coarser =
+            lunar(DemSettings { grain_diameter_m: Some(case.placement.diameter_m * 1.01), ..stated.settings.clone() });
+        let finer = lunar(DemSettings { particles: 300, ..Default::default() });
+        for other in [&longer, &coarser, &finer, &Plan { first_seed: 1, ..derived.clone() }] {
+            assert!(!derived.same_campaign(other), "{:?}", other.settings);
+        }
     }
 }

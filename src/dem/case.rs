@@ -80,9 +80,10 @@ const CHUNK_S: f64 = 0.02;
 const MAX_SETTLE_S: f64 = 1.0;
 /// Teeth the mesh keeps beyond the model's farthest resting grain: at least this many ...
 const REACH_MARGIN_TEETH: u32 = 3;
-/// ... and at least this share of the reach. A fixed 3 was short on a held-out lunar design
-/// (draw 2's doe-04, reach 15: 2.0 % of the DEM's grains at 150, 2.5 % at 300 left past tooth
-/// 18, docs/dem.md): the DEM's grains fly further than the model's as they get finer.
+/// ... and at least this share of the reach ([`mesh_teeth`]). A fixed 3 was short on a
+/// held-out lunar design (draw 2's doe-04, reach 15: 2.0 % of the DEM's grains at 150, 2.5 % at
+/// 300 left past tooth 18, docs/dem.md): the DEM's grains fly further than the model's as
+/// they get finer.
 const REACH_MARGIN_SHARE: f64 = 0.5;
 /// The conveyor the model's reach is measured on, teeth: longer than any flight of the
 /// optimiser's range (lunar pick B, v0 1.93 m/s, rests within 40 teeth).
@@ -135,7 +136,9 @@ impl Case {
         let prep = prepare(scenario, design).map_err(|e| format!("invalid design ({}): {e}", e.rule()))?;
         let teeth = match settings.teeth {
             Some(t) => t,
-            None => model_reach(scenario, design)?,
+            // a plan that left the mesh to the case (every plan before plans stated it,
+            // [`with_stated_mesh`]) keeps the mesh its runs were made on
+            None => unstated_mesh_teeth(farthest_resting_tooth(scenario, design)?),
         };
         let m = &scenario.material;
         let mono_d = || fill_grain_diameter(scenario, prep.fill.area, settings);
@@ -410,26 +413,42 @@ pub(crate) fn rig_case(particles: u32, teeth: u32, seed: u64) -> Case {
     Case::build(&s, &Design::validation_rig(), &settings, seed, None).unwrap()
 }
 
+/// The settings with the mesh stated ([`mesh_teeth`]) where `[dem] teeth` leaves it unset:
+/// what a new campaign's plan records, so that a later change of the rule cannot change the
+/// mesh of runs already made. A design the model rejects is left as it is, for
+/// [`Case::build`] to refuse by its rule.
+pub fn with_stated_mesh(settings: &DemSettings, s: &Scenario, d: &Design) -> DemSettings {
+    let mut out = settings.clone();
+    if out.teeth.is_none() && check_representable(s).is_ok() {
+        out.teeth = mesh_teeth(s, d).ok();
+    }
+    out
+}
+
 /// Teeth the mesh needs: the model's farthest resting grain on a conveyor long enough that
-/// none of its grains leaves past the end ([`REACH_CONVEYOR_TEETH`]), plus a margin, so that
-/// neither side truncates (issue 42: a 20-tooth mesh cut the lunar rig's flights short, and
-/// compared one truncation with another). `[dem] teeth` states the mesh instead; `dem
-/// compare` judges the model on the DEM's mesh and warns where either side loses grains
-/// past its end.
-fn model_reach(s: &Scenario, d: &Design) -> Result<u32, String> {
+/// none of its grains leaves past the end ([`REACH_CONVEYOR_TEETH`]), plus a margin
+/// ([`mesh_teeth_for_reach`]), so that neither side truncates (issue 42: a 20-tooth mesh cut
+/// the lunar rig's flights short, and compared one truncation with another). `[dem] teeth`
+/// states the mesh instead; `dem compare` judges the model on the DEM's mesh and warns where
+/// either side loses grains past its end.
+pub fn mesh_teeth(s: &Scenario, d: &Design) -> Result<u32, String> {
+    Ok(mesh_teeth_for_reach(farthest_resting_tooth(s, d)?))
+}
+
+/// The tooth of the model's farthest resting particle on a long conveyor.
+fn farthest_resting_tooth(s: &Scenario, d: &Design) -> Result<u32, String> {
     let engine = make_engine(EngineKind::Cpu).map_err(|e| e.to_string())?;
     let mut long = s.clone();
     long.sim.teeth = long.sim.teeth.max(REACH_CONVEYOR_TEETH);
     let det = evaluate_detailed(engine.as_ref(), &long, d, false)
         .map_err(|e| format!("invalid design ({}): {e}", e.rule()))?;
-    let far = det
+    Ok(det
         .particles
         .iter()
         .filter(|p| p.state != ParticleState::Lost)
         .map(|p| crate::model::outcome::end_tooth(&det.prepared.profile, p.end))
         .max()
-        .unwrap_or(1);
-    Ok(mesh_teeth_for_reach(far))
+        .unwrap_or(1))
 }
 
 /// The mesh for a model whose farthest resting grain is in tooth `far`: the reach plus a
@@ -437,6 +456,12 @@ fn model_reach(s: &Scenario, d: &Design) -> Result<u32, String> {
 fn mesh_teeth_for_reach(far: u32) -> u32 {
     let margin = REACH_MARGIN_TEETH.max((f64::from(far) * REACH_MARGIN_SHARE).ceil() as u32);
     far.saturating_add(margin).max(2 + REACH_MARGIN_TEETH).min(crate::schema::DEM_TEETH.max as u32)
+}
+
+/// The mesh of a case whose settings leave it unset: the rule plans were made with before
+/// they stated the mesh (the reach plus [`REACH_MARGIN_TEETH`]), so that their runs read back.
+fn unstated_mesh_teeth(far: u32) -> u32 {
+    far.saturating_add(REACH_MARGIN_TEETH).max(2 + REACH_MARGIN_TEETH).min(crate::schema::DEM_TEETH.max as u32)
 }
 
 /// The box: the mesh over its whole motion, room behind tooth 0 and below the profile for
@@ -513,11 +538,17 @@ mod tests {
         }
         assert_eq!(mesh_teeth_for_reach(1), 5, "a short reach keeps room for a bounce");
         assert!(mesh_teeth_for_reach(u32::MAX / 4) <= crate::schema::DEM_TEETH.max as u32);
-        // and the case takes it when `[dem] teeth` is unset
+        // a new plan states it where `[dem] teeth` is unset; a plan that left it unset keeps
+        // the mesh its runs were made on (the reach plus 3)
         let (s, d) = rig();
         let unset = DemSettings { particles: 60, teeth: None, ..Default::default() };
-        let case = Case::build(&s, &d, &unset, 0, None).unwrap();
-        assert_eq!(case.teeth, model_reach(&s, &d).unwrap(), "the reach's mesh, not `sim.teeth`");
+        let far = farthest_resting_tooth(&s, &d).unwrap();
+        let stated = with_stated_mesh(&unset, &s, &d);
+        assert_eq!(stated.teeth, Some(mesh_teeth_for_reach(far)), "the reach's mesh, not `sim.teeth`");
+        assert_eq!(with_stated_mesh(&stated, &s, &d), stated);
+        let set = DemSettings { teeth: Some(7), ..unset.clone() };
+        assert_eq!(with_stated_mesh(&set, &s, &d).teeth, Some(7), "a stated mesh stays");
+        assert_eq!(Case::build(&s, &d, &unset, 0, None).unwrap().teeth, (far + 3).max(5));
     }
 
     #[test]

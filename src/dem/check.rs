@@ -247,10 +247,11 @@ pub fn plan(
     for (label, p) in chosen(&front, k) {
         let mut scenario = physics.unwrap_or(&manifest.scenario).clone();
         scenario.environment.alpha_deg = p.alpha_deg;
+        let settings = super::case::with_stated_mesh(settings, &scenario, &p.design);
         let campaign = Plan {
             scenario,
             design: p.design,
-            settings: settings.clone(),
+            settings,
             runs: seeds,
             first_seed: manifest.seed,
             known_return: None,

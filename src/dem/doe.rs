@@ -259,10 +259,12 @@ pub fn plan(
             break;
         }
         let c = &pool[i];
+        let design = Design::from_cli_units(c.x);
+        let settings = super::case::with_stated_mesh(settings, scenario, &design);
         let campaign = Plan {
             scenario: scenario.clone(),
-            design: Design::from_cli_units(c.x),
-            settings: settings.clone(),
+            design,
+            settings,
             runs: r.seeds,
             first_seed: 0,
             known_return: None,
