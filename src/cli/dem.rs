@@ -428,6 +428,7 @@ fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     if plan.is_steady() {
         plan.conveyor(0).map_err(anyhow::Error::msg)?;
         let _owned = RunDir::acquire(&a.out, campaign::KIND, Access::Exclusive).context("--out")?;
+        let plan = campaign::recorded_or(&a.out, &plan)?;
         let runs = campaign::run_steady(&a.out, &plan, jobs, &|line| eprintln!("dem: {line}"))?;
         let report = steady_report(&plan, &runs)?;
         write_atomic(&a.out.join("steady.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
@@ -435,9 +436,11 @@ fn run_campaign(a: RunArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
     let _owned = RunDir::acquire(&a.out, campaign::KIND, Access::Exclusive).context("--out")?;
+    // a campaign already there goes on with the plan its runs were made on
+    let plan = campaign::recorded_or(&a.out, &plan)?;
     if let Some(levels) = a.refine {
         if !(1..=crate::dem::refine::MAX_LEVELS as u32).contains(&levels) {
-            bail!("--refine must lie in [1, 3] levels, got {levels}");
+            bail!("--refine must lie in [1, {}] levels, got {levels}", crate::dem::refine::MAX_LEVELS);
         }
         if a.runs < 2 {
             bail!("--refine needs --runs >= 2: a refinement is judged against the seeds' spread");
@@ -701,7 +704,7 @@ fn plan_only(
     all_here: &str,
     out: &mut dyn Write,
 ) -> anyhow::Result<ExitCode> {
-    let _owned = crate::dem::check::write_plan(root, plan)?;
+    let (_owned, plan) = crate::dem::check::write_plan(root, plan)?;
     let n = plan.members();
     let dir = root.display();
     writeln!(

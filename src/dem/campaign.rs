@@ -289,6 +289,26 @@ pub fn results(dir: &Path, plan: &Plan, case: &Case) -> anyhow::Result<Vec<Optio
     (0..plan.runs).map(|r| read_result(dir, plan, case, r)).collect()
 }
 
+/// Whether a campaign recorded as `old` continues as `new`: the same campaign
+/// ([`Plan::same_campaign`]), also where `new` states a mesh that `old` left to the case (a
+/// plan recorded before plans stated their mesh keeps the mesh its runs were made on).
+pub fn continues(old: &Plan, new: &Plan) -> bool {
+    old.same_campaign(new)
+        || (old.settings.teeth.is_none()
+            && old
+                .same_campaign(&Plan { settings: DemSettings { teeth: None, ..new.settings.clone() }, ..new.clone() }))
+}
+
+/// The plan a campaign in `dir` goes on with: the one recorded there where `plan`
+/// [`continues`] it (its runs were made on it), else `plan` (which [`record_plan`] then
+/// refuses where another is recorded).
+pub fn recorded_or(dir: &Path, plan: &Plan) -> anyhow::Result<Plan> {
+    let path = dir.join(PLAN);
+    let Some(text) = read_text_if_present(&path, &schema::PLAN_FILE)? else { return Ok(plan.clone()) };
+    let (old, _) = parse_plan(&text, &path.display().to_string())?;
+    Ok(if continues(&old, plan) { old } else { plan.clone() })
+}
+
 /// Record `plan` in `dir`, or check that it is the plan already there.
 pub fn record_plan(dir: &Path, plan: &Plan) -> anyhow::Result<()> {
     let path = dir.join(PLAN);
@@ -296,7 +316,7 @@ pub fn record_plan(dir: &Path, plan: &Plan) -> anyhow::Result<()> {
     if std::fs::symlink_metadata(&path).is_ok() {
         let old: Plan = serde_json::from_str(&read_text(&path, &schema::PLAN_FILE)?)
             .with_context(|| format!("reading {}", path.display()))?;
-        if !old.same_campaign(plan) {
+        if !continues(&old, plan) {
             bail!(
                 "{} holds a DEM campaign of another plan ({}): resuming needs the same config, design, [dem] settings, --runs and --seed; choose another --out",
                 dir.display(),
@@ -602,5 +622,26 @@ mod tests {
         for other in [&longer, &coarser, &finer, &Plan { first_seed: 1, ..derived.clone() }] {
             assert!(!derived.same_campaign(other), "{:?}", other.settings);
         }
+        // a plan recorded with its mesh unset goes on under a command that now states one
+        let mut rule = derived.clone();
+        rule.settings.teeth = Some(case.teeth + 4);
+        assert!(!derived.same_campaign(&rule) && continues(&derived, &rule));
+        assert!(!continues(
+            &stated,
+            &Plan {
+                settings: DemSettings { teeth: Some(case.teeth + 4), ..stated.settings.clone() },
+                ..stated.clone()
+            }
+        ));
+        assert!(!continues(&derived, &Plan { first_seed: 1, ..rule.clone() }));
+        // and the folder's recorded plan is the one it goes on with
+        let dir = tempfile::tempdir().unwrap();
+        assert_eq!(recorded_or(dir.path(), &rule).unwrap(), rule, "nothing recorded: the new plan");
+        record_plan(dir.path(), &derived).unwrap();
+        assert_eq!(recorded_or(dir.path(), &rule).unwrap(), derived);
+        record_plan(dir.path(), &rule).unwrap();
+        let other = Plan { first_seed: 1, ..rule.clone() };
+        assert_eq!(recorded_or(dir.path(), &other).unwrap(), other);
+        assert!(record_plan(dir.path(), &other).is_err());
     }
 }

@@ -288,25 +288,34 @@ pub fn is_check(dir: &Path) -> bool {
     kind_of(dir).as_deref() == Some(CHECK_KIND) && dir.join(CHECK_PLAN).is_file()
 }
 
-/// Own `root` and write `plan` there; a folder holding another plan is refused (the members
-/// of a check must all come from one plan). The plan's `command` is left out of the
-/// comparison: the same check made by `dem check --plan` and resumed by `dem check` is one.
-pub fn write_plan(root: &Path, plan: &CheckPlan) -> anyhow::Result<RunDir> {
+/// Own `root` and write `plan` there, returning the plan the check goes on with; a folder
+/// holding another plan is refused (the members of a check must all come from one plan). The
+/// plan's `command` is left out of the comparison: the same check made by `dem check --plan`
+/// and resumed by `dem check` is one; so is each design's campaign where the new plan states
+/// a mesh the recorded one left to the case (`campaign::continues`): the recorded plan, on
+/// which its runs were made, goes on.
+pub fn write_plan(root: &Path, plan: &CheckPlan) -> anyhow::Result<(RunDir, CheckPlan)> {
     let owned = RunDir::acquire(root, CHECK_KIND, Access::Exclusive).context("--out")?;
     let path = root.join(CHECK_PLAN);
     if path.is_file() {
         let old = CheckPlan { command: plan.command.clone(), ..read_plan(root)? };
-        if old != *plan {
+        let same_designs = old.finalists.len() == plan.finalists.len()
+            && old.finalists.iter().zip(&plan.finalists).all(|(o, n)| {
+                campaign::continues(&o.campaign, &n.campaign)
+                    && Finalist { campaign: o.campaign.clone(), ..n.clone() } == *o
+            });
+        let rest_same = CheckPlan { finalists: old.finalists.clone(), ..plan.clone() } == old;
+        if !(same_designs && rest_same) {
             bail!(
                 "{} holds a DEM check of another plan ({}): resuming needs the same run, --seeds, --front and --particles; choose another --out",
                 root.display(),
                 path.display()
             );
         }
-        return Ok(owned);
+        return Ok((owned, old));
     }
     write_atomic(&path, (serde_json::to_string_pretty(plan)? + "\n").as_bytes())?;
-    Ok(owned)
+    Ok((owned, plan.clone()))
 }
 
 /// Read and check `root/plan.json`.
@@ -418,8 +427,8 @@ pub fn gather(root: &Path, plan: &CheckPlan) -> anyhow::Result<CheckReport> {
 /// with up to `jobs` LIGGGHTS processes, `check.json` rewritten after every design (so a
 /// long check shows its first designs early); the final report is [`gather`]'s.
 pub fn check(root: &Path, plan: &CheckPlan, jobs: usize, say: &(dyn Fn(String) + Sync)) -> anyhow::Result<CheckReport> {
-    let _owned = write_plan(root, plan)?;
-    check_owned(root, plan, jobs, say)
+    let (_owned, plan) = write_plan(root, plan)?;
+    check_owned(root, &plan, jobs, say)
 }
 
 /// [`check`] in a folder the caller holds exclusively, its plan there.
@@ -574,6 +583,28 @@ mod tests {
             requirements: None,
             finalists: vec![finalist("A+C"), finalist("B")],
         }
+    }
+
+    #[test]
+    fn a_check_recorded_with_its_meshes_unset_goes_on_with_that_plan_under_a_command_that_states_them() {
+        let d = tempfile::tempdir().unwrap();
+        let old = a_plan();
+        drop(write_plan(d.path(), &old).unwrap());
+        let mut stated = a_plan();
+        for f in &mut stated.finalists {
+            f.campaign.settings.teeth = Some(40);
+        }
+        stated.command = "dem check again".into();
+        let (_owned, going_on) = write_plan(d.path(), &stated).unwrap();
+        assert_eq!(going_on.finalists, old.finalists, "the recorded designs' campaigns go on");
+        drop(_owned);
+        let mut other = stated.clone();
+        other.finalists[1].campaign.first_seed = 6;
+        let e = write_plan(d.path(), &other).unwrap_err().to_string();
+        assert!(e.contains("another plan"), "{e}");
+        let mut fewer = stated.clone();
+        fewer.finalists.pop();
+        assert!(write_plan(d.path(), &fewer).is_err());
     }
 
     #[test]
