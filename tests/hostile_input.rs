@@ -321,6 +321,26 @@ fn a_users_folder_is_never_written_into_and_a_killed_runs_is_rerun() {
 /// An edit of a loaded JSON document (a checkpoint, a plan).
 type JsonEdit = Box<dyn Fn(&mut serde_json::Value)>;
 
+/// Write each edit of `good` to `path` in turn and run `reader` on it: each is refused with
+/// exit status 2 and no panic, naming the edit's rule (`want`) and `file`.
+fn each_edit_is_refused(
+    path: &Path,
+    good: &serde_json::Value,
+    edits: Vec<(&str, JsonEdit)>,
+    file: &str,
+    reader: &dyn Fn() -> Outcome,
+) {
+    for (want, edit) in edits {
+        let mut v = good.clone();
+        edit(&mut v);
+        std::fs::write(path, serde_json::to_string(&v).unwrap()).unwrap();
+        let o = reader();
+        assert_eq!(o.code, 2, "{want}: {}", o.stderr);
+        assert!(!o.stderr.contains("panicked"), "{want}: {}", o.stderr);
+        assert!(o.stderr.contains(want) && o.stderr.contains(file), "{want}: {}", o.stderr);
+    }
+}
+
 /// Finding 4 and 7, and what-to-build 3: checkpoints and plans are validated as input.
 #[test]
 fn edited_checkpoints_and_plans_are_refused_by_field() {
@@ -357,14 +377,7 @@ fn edited_checkpoints_and_plans_are_refused_by_field() {
         ("`population[0].x` has 9", Box::new(|v| v["population"][0]["x"].as_array_mut().unwrap().push("1".into()))),
         ("`generation` 999999", Box::new(|v| v["generation"] = 999_999.into())),
     ];
-    for (want, edit) in edits {
-        let mut v = good.clone();
-        edit(&mut v);
-        std::fs::write(&ck, serde_json::to_string(&v).unwrap()).unwrap();
-        let o = resume(&[]);
-        assert_eq!(o.code, 2, "{want}: {}", o.stderr);
-        assert!(o.stderr.contains(want) && o.stderr.contains("checkpoint.json"), "{want}: {}", o.stderr);
-    }
+    each_edit_is_refused(&ck, &good, edits, "checkpoint.json", &|| resume(&[]));
     std::fs::write(&ck, serde_json::to_string(&good).unwrap()).unwrap();
     let o = resume(&["--engine", "gpu"]);
     assert_eq!(o.code, 2, "{}", o.stderr);
@@ -580,15 +593,7 @@ fn edited_dem_results_and_plans_are_refused_by_field() {
         ("`d_avg_m`", Box::new(|v| v["d_avg_m"] = 1e308.into())),
     ];
     assert!(teeth != 9, "the edit that lengthens teeth_g must lengthen it");
-    for (want, edit) in edits {
-        let mut v = good.clone();
-        edit(&mut v);
-        std::fs::write(&result, serde_json::to_string(&v).unwrap()).unwrap();
-        let o = compare();
-        assert_eq!(o.code, 2, "{want}: {}", o.stderr);
-        assert!(!o.stderr.contains("panicked"), "{want}: {}", o.stderr);
-        assert!(o.stderr.contains(want) && o.stderr.contains("run-002/result.json"), "{want}: {}", o.stderr);
-    }
+    each_edit_is_refused(&result, &good, edits, "run-002/result.json", &compare);
     std::fs::write(&result, serde_json::to_string(&good).unwrap()).unwrap();
     let plan_path = out.join("plan.json");
     let plan: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&plan_path).unwrap()).unwrap();
@@ -607,14 +612,7 @@ fn edited_dem_results_and_plans_are_refused_by_field() {
             }),
         ),
     ];
-    for (want, edit) in edits {
-        let mut v = plan.clone();
-        edit(&mut v);
-        std::fs::write(&plan_path, serde_json::to_string(&v).unwrap()).unwrap();
-        let o = compare();
-        assert_eq!(o.code, 2, "{want}: {}", o.stderr);
-        assert!(o.stderr.contains(want) && o.stderr.contains("plan.json"), "{want}: {}", o.stderr);
-    }
+    each_edit_is_refused(&plan_path, &plan, edits, "plan.json", &compare);
     std::fs::write(&plan_path, serde_json::to_string(&plan).unwrap()).unwrap();
     // a refinement's ladder (refine.json, as `dem run --refine` writes it) is read within its
     // rules: its numerics join the comparison; an edited one is refused by field
@@ -652,15 +650,7 @@ fn edited_dem_results_and_plans_are_refused_by_field() {
             Box::new(|v| v["levels"][0]["double_grains"]["particles"] = 0.into()),
         ),
     ];
-    for (want, edit) in edits {
-        let mut v = ladder.clone();
-        edit(&mut v);
-        std::fs::write(&refine, serde_json::to_string(&v).unwrap()).unwrap();
-        let o = compare();
-        assert_eq!(o.code, 2, "{want}: {}", o.stderr);
-        assert!(!o.stderr.contains("panicked"), "{want}: {}", o.stderr);
-        assert!(o.stderr.contains(want) && o.stderr.contains("refine.json"), "{want}: {}", o.stderr);
-    }
+    each_edit_is_refused(&refine, &ladder, edits, "refine.json", &compare);
 }
 
 /// Issue 45, 2: a reader refuses what is not a regular file (a named pipe hung `simulate`,
