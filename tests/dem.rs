@@ -206,6 +206,38 @@ fn an_engine_error_is_its_error_line_and_the_case_is_kept() {
     assert!(e.contains("case folder is kept") && dir.join("sled.stl").is_file(), "{e}");
 }
 
+/// Fine grains make a thin slab (four diameters deep): the rig at 600 grains is 1.0 mm deep,
+/// at 2 400 grains 0.5 mm. With 2 mm facets LIGGGHTS 3.8 stopped at set-up on the 1.0 mm slab
+/// (`region_neighbor_list_I.h:165`, issue 42); facets no longer than the depth pass. Set-up
+/// only (every `run` made `run 0`): the mesh is read, binned and checked, no step is taken.
+#[test]
+fn a_thin_slab_of_fine_grains_passes_the_engines_mesh_set_up() {
+    if !liggghts_present("dem::a_thin_slab_of_fine_grains_passes_the_engines_mesh_set_up") {
+        return;
+    }
+    let binary = sawtooth::dem::run::find_liggghts().unwrap();
+    for particles in ["600", "2400"] {
+        let (_d, dir) = tmp("case");
+        let (code, _, err) =
+            sawtooth(&["dem", "write", "--config", RIG, "--particles", particles, "--out", dir.to_str().unwrap()]);
+        assert_eq!(code, 0, "{err}");
+        let script: String = read(&dir.join("in.sawtooth"))
+            .lines()
+            .map(|l| if l.starts_with("run ") { "run 0".to_string() } else { l.to_string() })
+            .collect::<Vec<_>>()
+            .join("\n");
+        std::fs::write(dir.join("in.sawtooth"), script).unwrap();
+        let out = Command::new(&binary)
+            .args(["-in", "in.sawtooth", "-echo", "none", "-log", "none"])
+            .current_dir(&dir)
+            .output()
+            .expect("run LIGGGHTS");
+        let text = String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success() && !text.contains("ERROR"), "{particles} grains: {text}");
+        assert!(text.contains(&format!("{particles} atoms")), "{particles} grains: {text}");
+    }
+}
+
 /// The real engine, CI-sized: grains launched from tooth 0 of the validation rig land in
 /// later teeth, with d_avg within the model's order of magnitude; the campaign is measured
 /// data `fit` reads; `compare` draws it; the same command again resumes (nothing to do).

@@ -2,17 +2,28 @@
 //! ramp, the catch arc from p2 down to p4, the base on to the next p1; Eq. 4.21-4.28,
 //! `model::geometry::Profile`) extruded over the periodic depth.
 //!
-//! Facets are kept short: LIGGGHTS 3.8's mesh neighbour build tripped an assertion
-//! (region_neighbor_list_I.h:165) on facets much longer than a thin periodic depth, and did
-//! not with facets of about 2 mm (issue 31). Every segment is cut into pieces no longer than
-//! `max_facet_m`.
+//! Facets are kept short: LIGGGHTS 3.8's mesh neighbour build (`SurfaceMesh`'s topology
+//! pass over a `RegionNeighborList` binned at 4 × the largest facet's bounding radius) stops
+//! with an assertion (region_neighbor_list_I.h:165) when facets are much longer than the thin
+//! periodic depth: the periodic images of a long facet land more than one bin outside the
+//! box. Measured on the rig's 600-grain case (2 mm facets): depths of 1.25 mm and more pass,
+//! 1.10 mm and less stop (issue 31 at 2 mm facets, issue 42 at 600 grains). Every segment is
+//! therefore cut into pieces no longer than the smaller of 2 mm and the depth
+//! (`facet_length_m`).
 
 use std::fmt::Write as _;
 
 use crate::model::geometry::{Profile, V2};
 
-/// Longest facet edge along the profile, m (issue 31: ≤ ~2 mm passed LIGGGHTS's check).
+/// Longest facet edge along the profile on a deep slab, m (issue 31: ≤ ~2 mm passed
+/// LIGGGHTS's check).
 pub const MAX_FACET_M: f64 = 2e-3;
+
+/// Longest facet edge along the profile for a slab `depth_m` deep: 2 mm, and never longer
+/// than the depth (a thin slab's long facets trip LIGGGHTS's mesh binning, module note).
+pub fn facet_length_m(depth_m: f64) -> f64 {
+    MAX_FACET_M.min(depth_m)
+}
 
 /// Points per radian of the catch arc before subdivision (a 60° arc gets 12 chords).
 const ARC_POINTS_PER_RAD: f64 = 12.0;
@@ -135,6 +146,14 @@ mod tests {
         let c = p.p3;
         let on_circle = line.iter().filter(|v| ((v[0] - c[0]).hypot(v[1] - c[1]) - p.radius).abs() < 1e-12).count();
         assert!(on_circle >= 5, "{on_circle}");
+    }
+
+    #[test]
+    fn facets_are_never_longer_than_a_thin_slab_is_deep() {
+        assert_eq!(facet_length_m(5e-3), MAX_FACET_M);
+        assert_eq!(facet_length_m(1e-3), 1e-3);
+        let line = subdivide(&profile_polyline(&rig(35.0), 5), facet_length_m(0.7e-3));
+        assert!(line.windows(2).all(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]) <= 0.7e-3 + 1e-12));
     }
 
     #[test]
