@@ -78,12 +78,15 @@ fn rung(plan: &Plan, dir: PathBuf, runs: &[RunResult]) -> Rung {
 }
 
 /// The plan with the overlap and grain count of a rung; a stated grain diameter shrinks with
-/// the count so that the grains keep the fill's volume (a refinement of the same bed).
+/// the count as the derived one does (`grains::mass_matching_diameter`, d ∝ N^(-1/2)): the
+/// slab is `depth_grains` diameters deep, so N grains of d carry a mass per unit depth
+/// ∝ N d², which this keeps — the same bed, finer. (Keeping N d³, the grains' volume, put
+/// 2^(1/3) = 1.26 times the fill per unit depth into a slab that thinned with the grain.)
 fn variant(plan: &Plan, overlap: f64, particles: u32) -> Plan {
     let mut p = plan.clone();
     p.settings.max_overlap_fraction = overlap;
     let ratio = particles as f64 / plan.settings.particles as f64;
-    p.settings.grain_diameter_m = plan.settings.grain_diameter_m.map(|d| d * ratio.powf(-1.0 / 3.0));
+    p.settings.grain_diameter_m = plan.settings.grain_diameter_m.map(|d| d / ratio.sqrt());
     p.settings.particles = particles;
     p
 }
@@ -217,6 +220,34 @@ mod tests {
 
     fn r(d: f64, sd: f64) -> Rung {
         Rung { max_overlap_fraction: 0.1, particles: 150, dir: ".".into(), d_avg_mm: d, d_avg_sd_mm: sd, wall_s: 1.0 }
+    }
+
+    /// A refined rung of a campaign that states its grain diameter is the same bed in finer
+    /// grains: the fill's mass per unit slab depth is the base's, as when the diameter is
+    /// derived from the count.
+    #[test]
+    fn more_grains_of_a_stated_diameter_carry_the_same_fill_per_unit_depth() {
+        use crate::dem::settings::DemSettings;
+        use crate::model::{Design, Scenario};
+        let base = Plan {
+            scenario: Scenario::lunar(),
+            design: Design::lunar_solution_c(),
+            settings: DemSettings { particles: 150, grain_diameter_m: Some(4.5e-3), ..Default::default() },
+            runs: 1,
+            first_seed: 0,
+            known_return: None,
+            strokes: 0,
+            period_teeth: 0,
+        };
+        let per_depth = |p: &Plan| {
+            let c = p.case(0).unwrap();
+            c.placement.grains.len() as f64 * c.placement.grain_mass_kg / c.placement.depth_m
+        };
+        let fine = variant(&base, 0.025, 600);
+        assert_eq!(fine.settings.particles, 600);
+        assert!((fine.settings.grain_diameter_m.unwrap() - 2.25e-3).abs() < 1e-15);
+        let (a, b) = (per_depth(&base), per_depth(&fine));
+        assert!((b / a - 1.0).abs() < 1e-9, "{a} kg/m, refined {b}");
     }
 
     #[test]
