@@ -188,9 +188,11 @@ pub struct DoeArgs {
     #[arg(long, default_value_t = 1)]
     pub draw_seed: u64,
     /// Only designs whose DEM grains are at least this wide, mm: the DEM's time step scales
-    /// with the grain, and a fill too small for the grain count costs hours a run.
-    #[arg(long, default_value_t = 3.0, allow_negative_numbers = true)]
-    pub min_grain_mm: f64,
+    /// with the grain, and a fill too small for the grain count costs hours a run [default:
+    /// 3 mm at 150 grains, 3·√(150/N) mm at N (1.5 mm at 600): a rule on the fill's size, the
+    /// same designs at any count].
+    #[arg(long, allow_negative_numbers = true)]
+    pub min_grain_mm: Option<f64>,
     /// The grain count --min-grain-mm is judged at [default: --particles]: a draw remade at
     /// more grains (a convergence check) keeps the designs it was drawn with at fewer, e.g.
     /// `--particles 300 --draw-particles 150`.
@@ -721,10 +723,18 @@ fn plan_only(
     Ok(ExitCode::SUCCESS)
 }
 
+/// `dem doe`'s grain floor when --min-grain-mm is not given: 3 mm at 150 grains (the draws of
+/// docs/design-on-the-evidence.md), scaled as the fill's mass-matching diameter scales
+/// (d ∝ N^(-1/2), `dem::grains::mass_matching_diameter`), so the floor is a floor on the
+/// fill's size and a draw keeps its designs at any grain count.
+fn default_min_grain_mm(draw_particles: u32) -> f64 {
+    3.0 * (150.0 / f64::from(draw_particles)).sqrt()
+}
+
 fn doe(a: DoeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let jobs = jobs(a.jobs)?;
-    if !(a.min_grain_mm.is_finite() && (0.0..=50.0).contains(&a.min_grain_mm)) {
-        bail!("--min-grain-mm must lie in [0, 50] mm, got {}", a.min_grain_mm);
+    if let Some(m) = a.min_grain_mm.filter(|m| !(m.is_finite() && (0.0..=50.0).contains(m))) {
+        bail!("--min-grain-mm must lie in [0, 50] mm, got {m}");
     }
     if let Some(m) = a.max_d_avg_mm.filter(|m| !(m.is_finite() && *m > 0.0)) {
         bail!("--max-d-avg-mm must be a length > 0 mm, got {m}");
@@ -734,6 +744,8 @@ fn doe(a: DoeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
     let (scenario, _) = scenario_args.resolve()?;
     let (_, settings) = dem_settings(a.scenario.config.as_deref(), grains, None)?;
     settings.validate().map_err(anyhow::Error::msg)?;
+    let min_grain_mm =
+        a.min_grain_mm.unwrap_or_else(|| default_min_grain_mm(a.draw_particles.unwrap_or(settings.particles)));
     let requirements = match &a.requirements {
         Some(spec) => Some(crate::io::config::load_requirements(spec).context("--requirements")?),
         None => None,
@@ -742,7 +754,7 @@ fn doe(a: DoeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         designs: a.designs,
         seeds: a.seeds,
         draw_seed: a.draw_seed,
-        min_grain_m: a.min_grain_mm * 1e-3,
+        min_grain_m: min_grain_mm * 1e-3,
         draw_particles: a.draw_particles,
         max_d_avg_m: a.max_d_avg_mm.map(|m| m * 1e-3),
         requirements,
@@ -753,7 +765,7 @@ fn doe(a: DoeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         a.designs,
         a.seeds,
         a.draw_seed,
-        a.min_grain_mm,
+        min_grain_mm,
         a.draw_particles.map_or(String::new(), |n| format!(" --draw-particles {n}")),
         a.max_d_avg_mm.map_or(String::new(), |m| format!(" --max-d-avg-mm {m}")),
         settings.particles,
@@ -770,7 +782,7 @@ fn doe(a: DoeArgs, out: &mut dyn Write) -> anyhow::Result<ExitCode> {
         tally.rejected_by_model,
         tally.no_mass_flow,
         tally.grains_too_small,
-        a.min_grain_mm,
+        min_grain_mm,
         tally.flight_too_long,
         tally.requirements
     );
@@ -802,4 +814,27 @@ fn report_check(
         crate::dem::check::write_summary(out, report, dir)?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::default_min_grain_mm;
+    use crate::dem::grains::mass_matching_diameter;
+
+    /// The default floor passes the same fills at any grain count: a fill whose 150 grains are
+    /// at least 3 mm wide has grains at least the floor wide at 600 or 1 200, and one whose
+    /// 150 grains are narrower has not.
+    #[test]
+    fn the_default_grain_floor_is_a_floor_on_the_fills_size() {
+        assert_eq!(default_min_grain_mm(150), 3.0);
+        assert!((default_min_grain_mm(600) - 1.5).abs() < 1e-12);
+        let d = |area: f64, n: u32| mass_matching_diameter(area, n, 4.0, 890.0, 2850.0) * 1e3;
+        for area in [2e-4, 5e-4, 8e-4, 1.2e-3, 3e-3] {
+            let passes_at_150 = d(area, 150) >= default_min_grain_mm(150);
+            for n in [300, 600, 1200] {
+                assert_eq!(d(area, n) >= default_min_grain_mm(n) - 1e-12, passes_at_150, "{area} m2 at {n} grains");
+            }
+        }
+        assert!(d(2e-4, 150) < 3.0 && d(3e-3, 150) > 3.0, "the areas straddle the floor");
+    }
 }
