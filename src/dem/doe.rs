@@ -55,7 +55,7 @@ pub struct DoeRequest {
     /// grains, to check its convergence, keeps the designs it was drawn with at fewer.
     pub draw_particles: Option<u32>,
     /// Longest model d_avg a design may have, m (None: any): a long flight needs a long mesh
-    /// and a long run (pick B's 2 m take hours a run at the converged default).
+    /// and a long run (pick B's 2 m take hours a run at 2.5 % overlap).
     pub max_d_avg_m: Option<f64>,
     /// Keep only designs the model says meet these at the scenario's slope.
     pub requirements: Option<Requirements>,
