@@ -998,5 +998,5 @@ fn fit_fits_small_campaigns_and_dem_help_names_its_grains() {
     let o = sawtooth_in(repo(), &["dem", "run", "--help"]);
     assert_eq!(o.code, 0);
     let help = o.stdout.split("--particles").nth(1).unwrap_or_default();
-    assert!(help.contains("DEM grains per run") && help.contains("[dem] particles, else 200]"), "{}", o.stdout);
+    assert!(help.contains("DEM grains per run") && help.contains("[dem] particles, else 600]"), "{}", o.stdout);
 }
