@@ -12,6 +12,12 @@ this script makes it.
     python3 scripts/planted_benchmark.py run OUT [--seeds 1,2] [--heldout 3] [-- DIAGNOSE FLAGS]
     python3 scripts/planted_benchmark.py score OUT        # the table (OUT/table.md)
 
+The detection rate at the limit itself (does the limit detect with the 90 % it claims?): every
+candidate at 1 × its limit over many seeds, with each seed's controls (the false-alarm rate)
+and without the reshapes:
+
+    python3 scripts/planted_benchmark.py run OUT --seeds 1 --heldout 2,3,4,5,6 --factors 1 --no-reshapes
+
 `run` is resumable: a campaign whose diagnosis.json exists is not made again. The limits are
 those of the first seed's controls (OUT/limits.json), used for every seed. `score` grades
 each campaign with the practice campaigns' rule (right: `best` is the planted effect, or the
@@ -152,14 +158,16 @@ def run(args):
     for seed in seeds:
         for k, (key, limit) in enumerate(sorted(limits.items())):
             effect, param = key.split("|")
-            for j, f in enumerate(FACTORS):
+            for f in args.factors:
+                # the campaign's seed keeps its place in FACTORS, so a subset remakes the same data
+                j = FACTORS.index(f) if f in FACTORS else len(FACTORS) + args.factors.index(f)
                 s = strength(limit, f, param)
                 name = f"s{seed}/{effect}-{param}-x{f:g}"
                 form = FORMS[(effect, param)].format(s=f"{s:.6g}")
                 campaign(out, name, 1000 * seed + 100 * (k + 1) + 10 * j, form, effect != "sled-motion", flags)
                 plan["cases"][name] = {"seed": seed, "effect": effect, "param": param, "factor": f,
                                        "strength": s, "kind": "planted"}
-        for r, shape in RESHAPES.items():
+        for r, shape in ({} if args.no_reshapes else RESHAPES).items():
             name = f"s{seed}/{r}"
             campaign(out, name, 0, None, True, flags, plain_from=os.path.join(out, f"s{seed}/control-stated"),
                      shape=shape)
@@ -227,9 +235,16 @@ def score(args):
     print(text)
 
 
+def factors(text):
+    return [float(f) for f in text.split(",") if f]
+
+
 def run_arguments(r):
     r.add_argument("--seeds", default="1,2")
     r.add_argument("--heldout", default="3")
+    r.add_argument("--factors", type=factors, default=FACTORS,
+                   help="strengths as multiples of each limit (default 0.5,1,2)")
+    r.add_argument("--no-reshapes", action="store_true", help="leave out the out-of-family reshapes")
 
 
 if __name__ == "__main__":

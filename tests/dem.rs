@@ -606,7 +606,9 @@ fn a_design_of_experiments_draws_spread_designs_and_runs_them_as_a_check() {
         // the plan states each design's mesh, so that a later rule cannot move it
         assert!(f["campaign"]["settings"]["teeth"].as_u64().is_some_and(|t| t >= 5), "{f}");
     }
-    // the same draw remade at twice the grains, judged at the count it was drawn at
+    // the same draw remade at twice the grains, judged at the count it was drawn at (at 30
+    // grains the floor is 6.7 mm, and some drawn fills cannot seat 30 grains that coarse: the
+    // draw skips them, and so must its remake, where 60 finer grains would seat)
     let finer = d.path().join("doe-finer");
     let mut finer_args = plan_args.clone();
     let at = finer_args.iter().position(|a| *a == "30").unwrap();

@@ -271,7 +271,13 @@ pub fn plan(
             strokes: 0,
             period_teeth: 0,
         };
-        if let Err(e) = campaign.check() {
+        // refused at the run's count, or at the count the draw is judged at: a draw remade at
+        // more grains (`draw_particles`) skips the designs the draw skipped, and keeps its own
+        let at_draw_count = r
+            .draw_particles
+            .filter(|&n| n != campaign.settings.particles)
+            .map(|n| Plan { settings: DemSettings { particles: n, ..campaign.settings.clone() }, ..campaign.clone() });
+        if let Err(e) = campaign.check().and_then(|_| at_draw_count.map_or(Ok(()), |p| p.check().map(drop))) {
             refused.push(e);
             continue;
         }
