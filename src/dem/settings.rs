@@ -40,8 +40,9 @@ impl Default for DemSettings {
     fn default() -> Self {
         DemSettings {
             // converged on both lunar picks and the rig (docs/dem.md, "Converged numerics"):
-            // twice the grains moved A+C +0.1 %, front-1 +1.3 %, the rig 300 -> 600 -0.2 %;
-            // 150 grains were 5 % short on the picks
+            // from 600, twice the grains moved A+C +0.2 % and front-1 +1.3 %, half the overlap
+            // moved A+C -3.5 % (inside two seed spreads); the rig 300 -> 600 -0.2 %; 150 grains
+            // were 5 % short on the picks
             particles: 600,
             grain_diameter_m: None,
             depth_grains: 4.0,

@@ -4,9 +4,9 @@
 //!
 //! Facets are kept short: LIGGGHTS 3.8's mesh neighbour build (`SurfaceMesh`'s topology
 //! pass over a `RegionNeighborList` binned at 4 × the largest facet's bounding radius) stops
-//! with an assertion (region_neighbor_list_I.h:165) when facets are much longer than the thin
-//! periodic depth: the periodic images of a long facet land more than one bin outside the
-//! box. Measured on the rig's 600-grain case (2 mm facets): depths of 1.25 mm and more pass,
+//! with an assertion (region_neighbor_list_I.h:165: a facet centre's 27-bin stencil leaves
+//! the bins) when facets are much longer than the thin periodic depth; which facet and why
+//! was not traced further. Measured on the rig's 600-grain case (2 mm facets): depths of 1.25 mm and more pass,
 //! 1.10 mm and less stop (issue 31 at 2 mm facets, issue 42 at 600 grains). Every segment is
 //! therefore cut into pieces no longer than the smaller of 2 mm and the depth
 //! (`facet_length_m`).
