@@ -16,7 +16,8 @@ The detection rate at the limit itself (does the limit detect with the 90 % it c
 candidate at 1 × its limit over many seeds, with each seed's controls (the false-alarm rate)
 and without the reshapes:
 
-    python3 scripts/planted_benchmark.py run OUT --seeds 1 --heldout 2,3,4,5,6 --factors 1 --no-reshapes
+    python3 scripts/planted_benchmark.py run OUT --seeds 1 --heldout 2,3,4,5 --factors 1 --no-reshapes
+    python3 scripts/planted_benchmark.py run OUT ... --factors 1.5,2 --only speed_spread   # one effect further up
 
 `run` is resumable: a campaign whose diagnosis.json exists is not made again. The limits are
 those of the first seed's controls (OUT/limits.json), used for every seed. `score` grades
@@ -137,6 +138,9 @@ def run(args):
     seeds = [int(s) for s in args.seeds.split(",") if s] + [int(s) for s in args.heldout.split(",") if s]
     plan = {"tuning": [int(s) for s in args.seeds.split(",") if s],
             "heldout": [int(s) for s in args.heldout.split(",") if s], "flags": flags, "cases": {}}
+    # a second run into OUT (other factors, --only) adds its cases to the first's
+    if os.path.exists(os.path.join(out, "plan.json")):
+        plan["cases"] = json.load(open(os.path.join(out, "plan.json")))["cases"]
     # 1. the controls, stated and unstated motion; the first seed's give the limits
     for seed in seeds:
         for stated in (True, False):
@@ -158,6 +162,8 @@ def run(args):
     for seed in seeds:
         for k, (key, limit) in enumerate(sorted(limits.items())):
             effect, param = key.split("|")
+            if args.only and param not in args.only:
+                continue
             for f in args.factors:
                 # the campaign's seed keeps its place in FACTORS, so a subset remakes the same data
                 j = FACTORS.index(f) if f in FACTORS else len(FACTORS) + args.factors.index(f)
@@ -245,6 +251,8 @@ def run_arguments(r):
     r.add_argument("--factors", type=factors, default=FACTORS,
                    help="strengths as multiples of each limit (default 0.5,1,2)")
     r.add_argument("--no-reshapes", action="store_true", help="leave out the out-of-family reshapes")
+    r.add_argument("--only", type=lambda t: [p for p in t.split(",") if p], default=[],
+                   help="plant only these parameters (e.g. speed_spread,return_speed_m_s)")
 
 
 if __name__ == "__main__":
