@@ -577,10 +577,11 @@ fn remove_if_present(p: &Path) -> anyhow::Result<()> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn lunar(settings: DemSettings) -> Plan {
+    /// A single-stroke campaign of lunar solution C with `settings` (also refine's tests).
+    pub(crate) fn lunar(settings: DemSettings) -> Plan {
         Plan {
             scenario: Scenario::lunar(),
             design: Design::lunar_solution_c(),

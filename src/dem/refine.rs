@@ -228,17 +228,11 @@ mod tests {
     #[test]
     fn more_grains_of_a_stated_diameter_carry_the_same_fill_per_unit_depth() {
         use crate::dem::settings::DemSettings;
-        use crate::model::{Design, Scenario};
-        let base = Plan {
-            scenario: Scenario::lunar(),
-            design: Design::lunar_solution_c(),
-            settings: DemSettings { particles: 150, grain_diameter_m: Some(4.5e-3), ..Default::default() },
-            runs: 1,
-            first_seed: 0,
-            known_return: None,
-            strokes: 0,
-            period_teeth: 0,
-        };
+        let base = campaign::tests::lunar(DemSettings {
+            particles: 150,
+            grain_diameter_m: Some(4.5e-3),
+            ..Default::default()
+        });
         let per_depth = |p: &Plan| {
             let c = p.case(0).unwrap();
             c.placement.grains.len() as f64 * c.placement.grain_mass_kg / c.placement.depth_m
