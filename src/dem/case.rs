@@ -20,7 +20,7 @@ use super::grains::{mass_matching_diameter, place, place_sized, Placement};
 use super::motion::SledMotion;
 use super::settings::{check_representable, DemSettings};
 use super::sizes::{reference_diameter, size_classes};
-use super::stl::{extrude, facet_length_m, profile_polyline, stl_text, subdivide};
+use super::stl::{extrude, facet_line, profile_polyline, stl_text};
 use crate::engine::{evaluate_detailed, make_engine, EngineKind};
 use crate::io::atomic::write_atomic;
 use crate::io::config::DemRestitution;
@@ -179,7 +179,7 @@ impl Case {
         }
         let drag_gamma_kg_s = k_drag.map(|k| placement.grain_mass_kg * k);
         let profile = Profile::new(design, prep.profile.local, scenario.environment.alpha_deg, teeth);
-        let line = subdivide(&profile_polyline(&profile, teeth), facet_length_m(placement.depth_m));
+        let line = facet_line(&profile_polyline(&profile, teeth), placement.depth_m);
         let bounds = bounds(&line, &motion, design, scenario.environment.g, placement.depth_m);
         Ok(Case {
             scenario: scenario.clone(),
@@ -206,7 +206,7 @@ impl Case {
 
     pub fn files(&self) -> anyhow::Result<CaseFiles> {
         let profile = self.profile();
-        let line = subdivide(&profile_polyline(&profile, self.teeth), facet_length_m(self.placement.depth_m));
+        let line = facet_line(&profile_polyline(&profile, self.teeth), self.placement.depth_m);
         let stl = stl_text("sled", &extrude(&line, self.placement.depth_m));
         Ok(CaseFiles { script: self.script(), stl, data: self.data(), manifest: serde_json::to_string_pretty(self)? })
     }

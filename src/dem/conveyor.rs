@@ -36,7 +36,7 @@ use super::case::{drag_commands, stop_when_every_grain_is_gone, Case, ALL_LOST, 
 use super::contact::{property_commands, CONTACT_MODEL};
 use super::grains::{Grain, Placement};
 use super::losses::{classify_on_conveyor, read_sightings, LeftBy, TRACK};
-use super::stl::{extrude, facet_length_m, profile_polyline, stl_text, subdivide};
+use super::stl::{extrude, facet_line, profile_polyline, stl_text};
 use crate::io::atomic::write_atomic;
 use crate::model::geometry::Profile;
 use crate::model::Scenario;
@@ -142,7 +142,7 @@ impl Conveyor {
     /// Write the case into `dir` (each file atomically).
     pub fn write(&self, dir: &Path) -> anyhow::Result<()> {
         let profile = local_profile(&self.tooth, self.period_teeth);
-        let line = subdivide(&periodic_line(&profile, self.period_teeth), facet_length_m(self.bounds[2][1]));
+        let line = facet_line(&periodic_line(&profile, self.period_teeth), self.bounds[2][1]);
         write_atomic(&dir.join(MESH), stl_text("conveyor", &extrude(&line, self.bounds[2][1])).as_bytes())?;
         write_atomic(&dir.join(GRAINS), self.data().as_bytes())?;
         write_atomic(&dir.join("conveyor.json"), serde_json::to_string_pretty(self)?.as_bytes())?;

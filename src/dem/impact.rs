@@ -22,7 +22,7 @@ use super::case::{Case, DUMP, SCRIPT};
 use super::contact::{property_commands, CONTACT_MODEL};
 use super::gather::parse_dump;
 use super::run::run_case;
-use super::stl::{extrude, facet_length_m, stl_text, subdivide};
+use super::stl::{extrude, facet_line, stl_text};
 use crate::io::atomic::write_atomic;
 use crate::model::collision::{Restitution, TANGENTIAL_NODES, TANGENTIAL_PSI};
 use crate::model::{Collision, ContactLaw};
@@ -77,7 +77,7 @@ fn impact_files(case: &Case, vn: f64, vt: f64) -> (String, String, String) {
     let t_end = GAP_RADII * r / vn.max(1e-3) + CONTACT_DURATIONS * t_contact;
     let travel = vt * t_end + 4.0 * d;
     let (x0, x1) = (-4.0 * d, travel);
-    let plate = subdivide(&[[x1, 0.0], [x0, 0.0]], facet_length_m(d));
+    let plate = facet_line(&[[x1, 0.0], [x0, 0.0]], d);
     let stl = stl_text("plate", &extrude(&plate, depth));
     let data = format!(
         "sawtooth dem impact grain\n\n1 atoms\n2 atom types\n\n{:e} {:e} xlo xhi\n{:e} {:e} ylo yhi\n0 {:e} zlo zhi\n\nAtoms\n\n1 1 {:e} {} 0 {:e} {:e}\n\nVelocities\n\n1 {:e} {:e} 0 0 0 0\n",

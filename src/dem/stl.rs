@@ -9,7 +9,7 @@
 //! was not traced further. Measured on the rig's 600-grain case (2 mm facets): depths of 1.25 mm and more pass,
 //! 1.10 mm and less stop (issue 31 at 2 mm facets, issue 42 at 600 grains). Every segment is
 //! therefore cut into pieces no longer than the smaller of 2 mm and the depth
-//! (`facet_length_m`).
+//! (`facet_line`).
 
 use std::fmt::Write as _;
 
@@ -19,9 +19,15 @@ use crate::model::geometry::{Profile, V2};
 /// LIGGGHTS's check).
 pub const MAX_FACET_M: f64 = 2e-3;
 
+/// `line` cut into the facets of a slab `depth_m` deep: every mesh writer's one way to its
+/// facets, so that none can forget the thin slab's rule ([`facet_length_m`]).
+pub fn facet_line(line: &[V2], depth_m: f64) -> Vec<V2> {
+    subdivide(line, facet_length_m(depth_m))
+}
+
 /// Longest facet edge along the profile for a slab `depth_m` deep: 2 mm, and never longer
 /// than the depth (a thin slab's long facets trip LIGGGHTS's mesh binning, module note).
-pub fn facet_length_m(depth_m: f64) -> f64 {
+fn facet_length_m(depth_m: f64) -> f64 {
     MAX_FACET_M.min(depth_m)
 }
 
@@ -49,7 +55,7 @@ pub fn profile_polyline(profile: &Profile, teeth: u32) -> Vec<V2> {
 }
 
 /// `line` with every segment cut into equal pieces no longer than `max_len`.
-pub fn subdivide(line: &[V2], max_len: f64) -> Vec<V2> {
+fn subdivide(line: &[V2], max_len: f64) -> Vec<V2> {
     let mut out = Vec::with_capacity(line.len() * 4);
     for w in line.windows(2) {
         let (a, b) = (w[0], w[1]);
@@ -152,7 +158,7 @@ mod tests {
     fn facets_are_never_longer_than_a_thin_slab_is_deep() {
         assert_eq!(facet_length_m(5e-3), MAX_FACET_M);
         assert_eq!(facet_length_m(1e-3), 1e-3);
-        let line = subdivide(&profile_polyline(&rig(35.0), 5), facet_length_m(0.7e-3));
+        let line = facet_line(&profile_polyline(&rig(35.0), 5), 0.7e-3);
         assert!(line.windows(2).all(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]) <= 0.7e-3 + 1e-12));
     }
 
