@@ -454,7 +454,8 @@ fn the_text_summary_shows_the_score_it_ranks_by() {
 /// Each candidate's detection limit comes with the diagnosis (diagnosis.json's
 /// `detection_limits`, report.md's section): per parameter a ladder of strengths from the top
 /// of the effect's search box down, each with a detection probability, and the limit read
-/// where the probability reaches 90 % (or none inside the box); a `no-gap` verdict names
+/// where the probability reaches 90 % (or none inside the box), the rungs around it refitted
+/// by simulation and the interval halved by rungs in between; a `no-gap` verdict names
 /// them. `--suggest` ranks additional conditions by how far apart they would put what the
 /// diagnosis leaves, best first. A tiny budget: this checks the outputs' form and their
 /// rules, the planted-effect benchmark their numbers.
@@ -477,7 +478,13 @@ fn detection_limits_and_suggestions_come_with_the_diagnosis() {
         let ladder = x["ladder"].as_array().unwrap();
         let s: Vec<f64> = ladder.iter().map(|r| r["strength"].as_f64().unwrap()).collect();
         let p: Vec<f64> = ladder.iter().map(|r| r["probability"].as_f64().unwrap()).collect();
-        assert!(s.len() >= 4 && s.windows(2).all(|w| (w[1] / w[0] - 2.0).abs() < 1e-9), "{x}");
+        // halving from the top of the box, the crossing's interval halved again (in log
+        // strength) by rungs in between: steps of 2, √2 or 2^(1/4)
+        let octaves = |w: &[f64]| (w[1] / w[0]).log2();
+        assert!(
+            s.len() >= 4 && s.windows(2).all(|w| [1.0, 0.5, 0.25].iter().any(|o| (octaves(w) - o).abs() < 1e-9)),
+            "{x}"
+        );
         assert!(p.iter().all(|p| (0.0..=1.0).contains(p)), "{x}");
         // the limit: where every stronger rung is detected with 90 %, inside the ladder
         match x["limit"].as_f64() {
@@ -485,6 +492,8 @@ fn detection_limits_and_suggestions_come_with_the_diagnosis() {
                 let first = p.iter().rposition(|p| *p < 0.9).map_or(0, |i| i + 1);
                 assert!(first < p.len(), "{x}");
                 assert!(lim <= s[first] * (1.0 + 1e-12) && (first == 0 || lim >= s[first - 1]), "{x}");
+                // the rung at the crossing was refitted by simulation, not only to first order
+                assert_eq!(ladder[first]["refitted"], true, "{x}");
             }
             None => assert!(p.last().unwrap() < &0.9, "{x}"),
         }

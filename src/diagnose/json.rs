@@ -659,13 +659,17 @@ struct RungJson {
     strength: f64,
     probability: f64,
     expected_gap: f64,
+    /// The baseline refitted to the rung by simulation, not only to first order.
+    refitted: bool,
 }
 
 /// How the limits are found, in one line (src/diagnose/limits.rs has the method).
 pub const LIMITS_METHOD: &str = "the fitted baseline with the candidate at a ladder of strengths on common particle \
-     streams; the part of its signature no linearised refit of the baseline (nor a handling loss) removes, with \
+     streams; the part of its signature no linearised refit of the baseline (nor a handling loss) removes, and \
+     around the 90 % crossing no simulated refit (the baseline polished to the rung's bins) removes, with \
      Gaussian draws of the measured means' and the fresh streams' noise; detected where the judged gap exceeds \
-     3x its floor";
+     3x its floor; the limit where the signal, grown as a power of the strength between the two rungs around \
+     the crossing, is detected with 90 % probability";
 
 impl<'a> LimitsJson<'a> {
     fn new(l: &'a DetectionLimits) -> Self {
@@ -691,6 +695,7 @@ impl<'a> LimitsJson<'a> {
                             strength: r.strength,
                             probability: r.probability,
                             expected_gap: r.expected_gap,
+                            refitted: r.refitted,
                         })
                         .collect(),
                 })

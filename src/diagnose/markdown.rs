@@ -485,8 +485,10 @@ fn limits(s: &mut String, d: &Diagnosis) {
         "The smallest strength of each candidate at which this campaign's baseline gap would be well above its \
          noise floor (not `no-gap`) with {:.0} % probability: the fitted baseline with the candidate at a ladder of \
          strengths ({} particles, common random numbers), less what a refit of the baseline and a handling loss \
-         absorb (linearised), against {} Gaussian draws of the measured means' and the fresh streams' noise \
-         (floor {} %²).\n",
+         absorb (linearised; around the crossing, marked *, the baseline refitted to the rung by simulation), \
+         against {} Gaussian draws of the measured means' and the fresh streams' noise (floor {} %²); the limit \
+         where the signal, grown as a power of the strength between the two rungs around the crossing, is \
+         detected with that probability.\n",
         100.0 * PROBABILITY,
         l.particles,
         l.draws,
@@ -496,8 +498,11 @@ fn limits(s: &mut String, d: &Diagnosis) {
     let _ = writeln!(s, "|---|---|---|---|---|");
     for x in &l.limits {
         let held: Vec<String> = x.held.iter().map(|(n, v)| format!("{n} {}", sig3(*v))).collect();
-        let ladder: Vec<String> =
-            x.ladder.iter().map(|r| format!("{}: {:.2}", sig3(r.strength), r.probability)).collect();
+        let ladder: Vec<String> = x
+            .ladder
+            .iter()
+            .map(|r| format!("{}: {:.2}{}", sig3(r.strength), r.probability, if r.refitted { "*" } else { "" }))
+            .collect();
         let _ = writeln!(
             s,
             "| {} | {} | {} | {} | {} |",
