@@ -360,8 +360,9 @@ struct Rungs {
 }
 
 impl Rungs {
-    fn probabilities(&self) -> Vec<Rung> {
-        self.rungs.iter().map(|m| m.rung.clone()).collect()
+    /// [`crossing`] of this ladder.
+    fn crossing(&self) -> usize {
+        crossing(self.rungs.iter().map(|m| m.rung.probability))
     }
 
     /// The rungs a simulated refit decides and none has checked yet: the first from which on
@@ -372,16 +373,35 @@ impl Rungs {
         if n == 0 {
             return Vec::new();
         }
-        let first = crossing(&self.probabilities()).min(n - 1);
+        let first = self.crossing().min(n - 1);
         (first.saturating_sub(1)..=first).filter(|i| !self.rungs[*i].rung.refitted).collect()
     }
 
     /// The strength half way (in log strength) between the rungs around the crossing, where
     /// there is a crossing inside the ladder.
     fn midpoint_of_crossing(&self) -> Option<f64> {
-        let first = crossing(&self.probabilities());
+        let first = self.crossing();
         (first > 0 && first < self.rungs.len())
             .then(|| (self.rungs[first - 1].rung.strength * self.rungs[first].rung.strength).sqrt())
+    }
+
+    /// The limit and how it was found: inside the ladder, where the signal grown as a power
+    /// between the two rungs around the crossing is detected ([`crossing_between`]); at its
+    /// ends, or where the signals give no growing power, as [`limit_of`] reads it.
+    fn limit(&self, eps: &[Vec<f64>], eta: &[Vec<f64>], floor: f64) -> (Option<f64>, &'static str) {
+        let first = self.crossing();
+        if first > 0 && first < self.rungs.len() {
+            let (a, b) = (&self.rungs[first - 1], &self.rungs[first]);
+            let (below, above) = ((a.rung.strength, a.signal.as_slice()), (b.rung.strength, b.signal.as_slice()));
+            if let Some(s) = crossing_between(below, above, eps, eta, floor) {
+                return (
+                    Some(s),
+                    "where the signal, grown as a power of the strength between the two refitted rungs around the \
+                     90 % crossing, is detected with 90 % probability",
+                );
+            }
+        }
+        limit_of(&self.rungs.iter().map(|m| m.rung.clone()).collect::<Vec<_>>())
     }
 
     /// Add a rung in its place by strength.
@@ -392,9 +412,10 @@ impl Rungs {
 }
 
 /// The index of the first rung from which on every rung is detected with [`PROBABILITY`]
-/// (the ladder's length where the top one is not).
-fn crossing(ladder: &[Rung]) -> usize {
-    ladder.iter().rposition(|r| r.probability < PROBABILITY).map_or(0, |i| i + 1)
+/// (the ladder's length where the top one is not), from the rungs' probabilities, weakest
+/// first.
+fn crossing(mut probabilities: impl DoubleEndedIterator<Item = f64> + ExactSizeIterator) -> usize {
+    probabilities.rposition(|p| p < PROBABILITY).map_or(0, |i| i + 1)
 }
 
 /// The strength between a rung not detected (`below`: strength, signal) and the next one,
@@ -436,7 +457,7 @@ fn crossing_between(
 /// interpolated in log(strength) between the rung below it and it; None when the top rung
 /// is not.
 fn limit_of(ladder: &[Rung]) -> (Option<f64>, &'static str) {
-    let first = crossing(ladder);
+    let first = crossing(ladder.iter().map(|r| r.probability));
     if first >= ladder.len() {
         return (None, "not detected with 90 % probability at the top of the effect's search box");
     }
@@ -738,18 +759,8 @@ pub fn detection_limits(run: &Run, baseline: &Baseline, log: &mut dyn FnMut(Stri
         .into_iter()
         .zip(measured)
         .map(|(l, m)| {
-            let ladder: Vec<Rung> = m.rungs.iter().map(|r| r.rung.clone()).collect();
-            let (mut limit, mut found) = limit_of(&ladder);
-            let first = crossing(&ladder);
-            if first > 0 && first < ladder.len() {
-                let (a, b) = (&m.rungs[first - 1], &m.rungs[first]);
-                let (below, above) = ((a.rung.strength, a.signal.as_slice()), (b.rung.strength, b.signal.as_slice()));
-                if let Some(s) = crossing_between(below, above, &stage.eps, &stage.eta, stage.floor) {
-                    limit = Some(s);
-                    found = "where the signal, grown as a power of the strength between the two refitted rungs \
-                             around the 90 % crossing, is detected with 90 % probability";
-                }
-            }
+            let (limit, found) = m.limit(&stage.eps, &stage.eta, stage.floor);
+            let ladder = m.rungs.into_iter().map(|r| r.rung).collect();
             DetectionLimit { effect: l.effect, param: l.param, held: l.held, limit, found, ladder }
         })
         .collect();
