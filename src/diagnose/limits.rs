@@ -507,8 +507,7 @@ struct Stage<'r, 'a> {
     eps: Vec<Vec<f64>>,
     eta: Vec<Vec<f64>>,
     floor: f64,
-    /// The handling loss each condition lets a refit take: what its runs did not recover
-    /// (loaded-mass conditions), else none.
+    /// The handling loss each condition lets a refit take, as the fit allows it.
     losses: Vec<f64>,
 }
 
@@ -676,16 +675,10 @@ pub fn detection_limits(run: &Run, baseline: &Baseline, log: &mut dyn FnMut(Stri
         let r = REFIT_REACH * (hi - lo);
         reach.push(((lo - x).max(-r), (hi - x).min(r)));
     }
-    let losses: Vec<f64> = conditions
-        .iter()
-        .map(|c| {
-            if c.normalise == Normalise::Loaded {
-                c.target_all().bins.last().copied().unwrap_or(0.0).max(0.0)
-            } else {
-                0.0
-            }
-        })
-        .collect();
+    // the handling loss each condition lets the fit take (`Target::max_handling_loss`: what its
+    // runs did not recover, within the setup's `handling_loss_max`; none for recovered-mass
+    // fractions)
+    let losses: Vec<f64> = run.targets.iter().map(|t| t.max_handling_loss).collect();
     let mut offset = 0;
     for (c, loss) in conditions.iter().zip(&losses) {
         let n = c.teeth() + 1;
