@@ -41,8 +41,8 @@ impl Default for DemSettings {
         DemSettings {
             // converged on both lunar picks and the rig (docs/dem.md, "Converged numerics"):
             // from 600, twice the grains moved A+C +0.2 % and front-1 +1.3 %, half the overlap
-            // moved A+C -3.5 % (inside two seed spreads); the rig 300 -> 600 -0.2 %; 150 grains
-            // were 5 % short on the picks
+            // moved A+C -3.5 % and front-1 -2.4 % (inside two seed spreads); the rig 300 -> 600
+            // -0.2 %; 150 grains were 5 % short on the picks
             particles: 600,
             grain_diameter_m: None,
             depth_grains: 4.0,
