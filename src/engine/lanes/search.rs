@@ -12,7 +12,7 @@ use crate::engine::kernel::{
 use crate::lane::{F64Lane, Lane, LaneMask};
 use crate::lane_math::{atan2, exp_m1, ln, ln_1p, sin_cos};
 use crate::model::collision::Restitution;
-use crate::model::rng::pcg4d;
+use crate::model::rng::pcg4d_keys;
 
 /// Up to two crossing times per lane: how many (as f64), the first and the second
 /// (`flight::Roots`).
@@ -621,9 +621,10 @@ pub(super) fn randomise<L: F64Lane>(
 }
 
 /// The first word of `pcg4d(pcg4d([particle, bounce, draw, seed_word]))` for sixteen
-/// particles, as `rng::uniform01` hashes its key: `rng::pcg4d` itself, sixteen times, which
-/// the compiler vectorises (integer arithmetic, so the same words on any instruction set).
+/// particles, as `rng::uniform01` hashes its key: the hash's one code (`rng::pcg4d_keys`) on
+/// sixteen keys side by side, inlined here so that it is compiled for these lanes'
+/// instruction set (integer arithmetic, so the same words on any).
 #[inline(always)]
 pub(super) fn uniform_bits(seed_word: u32, ids: &[u32; 16], bounce: u32, draw: u32) -> [u32; 16] {
-    std::array::from_fn(|l| pcg4d(pcg4d([ids[l], bounce, draw, seed_word]))[0])
+    pcg4d_keys(pcg4d_keys([*ids, [bounce; 16], [draw; 16], [seed_word; 16]]))[0]
 }
