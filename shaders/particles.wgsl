@@ -410,13 +410,21 @@ fn fly_particle(d: Design, p: ptr<function, Particle>, index: u32, bounce: u32) 
     let n_true = normal_of(d, hit.surface);
     var v_out = bounce_velocity(d, v_in, n_true);
     if (IMPACT_SCATTER && d.scatter_sigma > 0.0) {
-        // impact-scatter effect (CPU twin: kernel.rs step_particle): the tilt is admissible
-        // when the grain arrives against the tilted facet and leaves the true surface
-        let sc = ksin_cos(d.scatter_sigma * normal01(ph.seed, index, bounce, DRAW_SCATTER));
-        let tilted = vec2<f32>(sc.y * n_true.x - sc.x * n_true.y, sc.x * n_true.x + sc.y * n_true.y);
-        if (dot(v_in, tilted) < 0.0) {
-            let out = bounce_velocity(d, v_in, tilted);
-            if (dot(out, n_true) > 0.0) { v_out = out; }
+        // impact-scatter effect (CPU twin: kernel.rs `land`): a tilt is admissible when the
+        // grain arrives against the tilted facet and leaves the true surface; one it cannot
+        // meet is drawn again (the shadow rule), up to TILT_DRAWS times
+        for (var k = 0u; k < TILT_DRAWS; k += 1u) {
+            var draw = DRAW_SCATTER;
+            if (k > 0u) { draw = DRAW_SCATTER_AGAIN + 2u * (k - 1u); }
+            let sc = ksin_cos(d.scatter_sigma * normal01(ph.seed, index, bounce, draw));
+            let tilted = vec2<f32>(sc.y * n_true.x - sc.x * n_true.y, sc.x * n_true.x + sc.y * n_true.y);
+            if (dot(v_in, tilted) < 0.0) {
+                let out = bounce_velocity(d, v_in, tilted);
+                if (dot(out, n_true) > 0.0) {
+                    v_out = out;
+                    break;
+                }
+            }
         }
     }
     (*p).hop = abs(hit.pos.x - pos.x);         // Eq. 4.50 per particle

@@ -48,6 +48,12 @@ shared_u32! {
     /// Random launch points (`LaunchPoints::Random`): x and y (9 and 10) of candidate i,
     /// keyed (i, PER_PARTICLE).
     DRAW_LAUNCH_POINT = 9;
+    /// The impact tilt drawn again (impact scatter's shadow rule, `kernel::land`): the k-th
+    /// redraw of a bounce is the normal deviate of draws 16 + 2 (k − 1) and the one after.
+    DRAW_SCATTER_AGAIN = 16;
+    /// The most tilts an impact draws (the first at `DRAW_SCATTER`, the rest at
+    /// `DRAW_SCATTER_AGAIN`) before it takes the untilted bounce.
+    TILT_DRAWS = 8;
     /// The bounce key of draws made once per particle.
     PER_PARTICLE = u32::MAX;
 }
