@@ -39,8 +39,9 @@ pub fn pcg4d_keys<const N: usize>(mut v: [[u32; N]; 4]) -> [[u32; N]; 4] {
 #[inline(always)]
 fn mix<const N: usize>(v: &mut [[u32; N]; 4]) {
     for (to, a, b) in [(0, 1, 3), (1, 2, 0), (2, 0, 1), (3, 1, 2)] {
-        for k in 0..N {
-            v[to][k] = v[to][k].wrapping_add(v[a][k].wrapping_mul(v[b][k]));
+        let (x, y) = (v[a], v[b]);
+        for ((t, x), y) in v[to].iter_mut().zip(x).zip(y) {
+            *t = t.wrapping_add(x.wrapping_mul(y));
         }
     }
 }
