@@ -2,8 +2,9 @@
 //! (`data/practice_campaigns`, issue 11): data this project's code did not make,
 //! with its own numerical choices. A CI-sized subset runs here: a subtle effect (a normal
 //! tilt of 8° at every impact, where the refitted baseline misses by ~6× the true model), a
-//! strong one (15°) and the control without an effect. All six, at the default budget, with the grading of that
-//! folder's README: `bash scripts/diagnose-independent.sh` (docs/calibrate-and-diagnose.md).
+//! strong one (15°) and the control without an effect. All six, at the default budget, with
+//! the grading of that folder's README: `bash scripts/diagnose-independent.sh`
+//! (docs/calibrate-and-diagnose.md).
 //! The tests belong to the full tier (`bash scripts/test.sh`); plain `cargo test` skips them.
 
 use std::path::PathBuf;
