@@ -65,15 +65,20 @@ fn graded_right(v: &Value, truth: &str) -> bool {
     v["best"] == truth || (!v["best"].is_null() && together.contains(&truth) && together.len() <= 3)
 }
 
+/// Diagnose campaign `name` and grade it against its withheld effect.
+fn the_withheld_effect_is_named(name: &str) {
+    let truth = answer(name).unwrap_or_else(|| panic!("{name} withholds an effect"));
+    let v = diagnose(name);
+    eprintln!("{name} ({truth}): {}", summary(&v));
+    assert!(graded_right(&v, &truth), "{truth} not found: {}", summary(&v));
+}
+
 #[test]
 fn a_subtle_impact_scatter_from_another_simulator_is_named() {
     if !common::full_tier("independent_campaigns::a_subtle_impact_scatter_from_another_simulator_is_named", HEAVY) {
         return;
     }
-    let truth = answer("campaign_1").expect("campaign_1 withholds an effect");
-    let v = diagnose("campaign_1");
-    eprintln!("campaign_1 ({truth}): {}", summary(&v));
-    assert!(graded_right(&v, &truth), "{truth} not found: {}", summary(&v));
+    the_withheld_effect_is_named("campaign_1");
 }
 
 /// A 15° tilt (campaign 6): the candidate that kept the untilted bounce wherever the first
@@ -84,10 +89,7 @@ fn a_strong_impact_scatter_from_another_simulator_is_named() {
     if !common::full_tier("independent_campaigns::a_strong_impact_scatter_from_another_simulator_is_named", HEAVY) {
         return;
     }
-    let truth = answer("campaign_6").expect("campaign_6 withholds an effect");
-    let v = diagnose("campaign_6");
-    eprintln!("campaign_6 ({truth}): {}", summary(&v));
-    assert!(graded_right(&v, &truth), "{truth} not found: {}", summary(&v));
+    the_withheld_effect_is_named("campaign_6");
 }
 
 #[test]
